@@ -1,0 +1,124 @@
+"""The downward camera: which piece of pipe is in view, and the observation it gives (paper §4).
+
+Camera coordinates follow the paper: ``x`` lateral (body y, positive to starboard), ``y``
+forward (body x), origin at the AUV's centre. The footprint is the rectangle
+``x ∈ [-half_width, half_width]``, ``y ∈ [0, depth]``. The pipeline polyline is clipped to it
+(Liang–Barsky per segment); consecutive clipped segments that meet at a vertex inside the
+footprint form one visible piece. The observation uses the piece that continues from the AUV's
+progress along the pipe:
+
+* ``(x1, y1)``: the piece's far end (furthest along the pipe's direction),
+* ``x2``: lateral position of its near end (``y_near`` is its forward position),
+* ``e_dist = (x1 + x2) / 2`` and ``e_angl = atan2(x1 − x2, y1 − y_near)`` (DESIGN.md).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+from numba import njit
+
+
+class CameraParams(NamedTuple):
+    """Camera footprint in the body frame (DESIGN.md; matches the paper's state ranges)."""
+
+    half_width: float = 1.0  # lateral half-width of the footprint (m)
+    depth: float = 3.0  # forward extent of the footprint from the AUV's centre (m)
+
+
+PAPER_CAMERA = CameraParams()
+
+
+@njit(cache=True)
+def to_camera(px, py, x, y, psi):
+    """Earth point ``(px, py)`` in camera coordinates ``(lateral, forward)`` of pose (x, y, ψ)."""
+    dx, dy = px - x, py - y
+    cs, sn = math.cos(psi), math.sin(psi)
+    return -sn * dx + cs * dy, cs * dx + sn * dy
+
+
+@njit(cache=True)
+def clip_segment(ax, ay, bx, by, xmin, xmax, ymin, ymax):
+    """Liang–Barsky: parameters ``(t0, t1)`` of the part of a→b inside the box, or ``(1, 0)``."""
+    t0, t1 = 0.0, 1.0
+    dx, dy = bx - ax, by - ay
+    for i in range(4):
+        if i == 0:
+            p, q = -dx, ax - xmin
+        elif i == 1:
+            p, q = dx, xmax - ax
+        elif i == 2:
+            p, q = -dy, ay - ymin
+        else:
+            p, q = dy, ymax - ay
+        if p == 0.0:
+            if q < 0.0:
+                return 1.0, 0.0
+        else:
+            t = q / p
+            if p < 0.0:
+                if t > t1:
+                    return 1.0, 0.0
+                if t > t0:
+                    t0 = t
+            else:
+                if t < t0:
+                    return 1.0, 0.0
+                if t < t1:
+                    t1 = t
+    return t0, t1
+
+
+@njit(cache=True)
+def observe(points, cum, x, y, psi, progress, cam):
+    """What the camera sees from pose (x, y, ψ).
+
+    Returns ``(in_view, x1, y1, x2, y_near, s_near, s_far)``: the far end, the near end's lateral
+    and forward position, and the arc lengths of the near and far ends of the chosen piece.
+    When nothing is in view, ``in_view`` is False and the other values are zero.
+    """
+    w, depth = cam.half_width, cam.depth
+    # best piece so far: (gap to progress, x1, y1, x2, y_near, s_near, s_far)
+    best = (math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    piece = best  # the piece being assembled; piece[0] unused
+    open_piece = False
+    continues = False  # the open piece reached the end of its last segment
+    ax, ay = to_camera(points[0, 0], points[0, 1], x, y, psi)
+    for i in range(points.shape[0] - 1):
+        bx, by = to_camera(points[i + 1, 0], points[i + 1, 1], x, y, psi)
+        t0, t1 = clip_segment(ax, ay, bx, by, -w, w, 0.0, depth)
+        seg = cum[i + 1] - cum[i]
+        if t0 <= t1:
+            if not (open_piece and continues and t0 == 0.0):
+                if open_piece:
+                    best = _closer(best, piece, progress)
+                near_x, near_y = ax + t0 * (bx - ax), ay + t0 * (by - ay)
+                piece = (0.0, 0.0, 0.0, near_x, near_y, cum[i] + t0 * seg, 0.0)
+                open_piece = True
+            far_x, far_y = ax + t1 * (bx - ax), ay + t1 * (by - ay)
+            piece = (0.0, far_x, far_y, piece[3], piece[4], piece[5], cum[i] + t1 * seg)
+            continues = t1 == 1.0
+        elif open_piece:
+            best = _closer(best, piece, progress)
+            open_piece = False
+        ax, ay = bx, by
+    if open_piece:
+        best = _closer(best, piece, progress)
+    return best[0] < math.inf, best[1], best[2], best[3], best[4], best[5], best[6]
+
+
+@njit(cache=True)
+def _closer(best, piece, progress):
+    """The better of two pieces: the smaller arc-length gap to the AUV's progress (first wins ties)."""
+    s_near, s_far = piece[5], piece[6]
+    gap = s_near - progress if progress < s_near else max(progress - s_far, 0.0)
+    if gap < best[0]:
+        return (gap, piece[1], piece[2], piece[3], piece[4], piece[5], piece[6])
+    return best
+
+
+@njit(cache=True)
+def tracking_errors(x1, y1, x2, y_near):
+    """``e_dist`` (m) and ``e_angl`` (rad) of DESIGN.md: pipe centred and vertical in the frame."""
+    return 0.5 * (x1 + x2), math.atan2(x1 - x2, y1 - y_near)
