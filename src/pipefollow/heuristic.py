@@ -22,11 +22,15 @@ def heuristic_action(x1, y1):
 class Heuristic:
     """The heuristic as an agent: ``act`` looks at the pipe, ``update`` learns nothing."""
 
+    algorithm = "heuristic"
     name = "heuristic"
 
     def act(self, observation: np.ndarray, explore: bool = False) -> float:
         """Action for an observation ``(x1, y1, x2, v_x)``."""
         return heuristic_action(float(observation[0]), float(observation[1]))
+
+    def begin_episode(self, sigma: float) -> None:
+        """Nothing to prepare: the heuristic does not explore."""
 
     def update(self, *args, **kwargs) -> None:
         """Nothing to learn."""

@@ -88,6 +88,10 @@ def read_camera(s, points, cum, p):
     s[VX] = s[U]
     s[IN_VIEW] = 1.0 if seen else 0.0
     if seen:
+        # Clipping puts the ends on the footprint's edges; clamp away floating-point dust there.
+        w, depth = p.camera.half_width, p.camera.depth
+        x1, x2 = min(max(x1, -w), w), min(max(x2, -w), w)
+        y1, y_near = min(max(y1, 0.0), depth), min(max(y_near, 0.0), depth)
         s[X1], s[Y1], s[X2], s[Y_NEAR] = x1, y1, x2, y_near
         s[E_DIST], s[E_ANGL] = tracking_errors(x1, y1, x2, y_near)
         s[LAST_SIDE] = 1.0 if x1 >= 0.0 else -1.0

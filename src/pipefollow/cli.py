@@ -1,0 +1,201 @@
+"""The ``pipefollow`` command line."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+
+from pipefollow.pipeline import PipelineError
+from pipefollow.policy import PolicyError
+
+USER_ERRORS: tuple[type[Exception], ...] = (PipelineError, PolicyError)
+
+
+class UserError(click.ClickException):
+    """A one-line error about the user's input, exit status 2."""
+
+    exit_code = 2
+
+    def show(self, file=None) -> None:  # noqa: D102
+        click.echo(f"pipefollow: error: {self.message}", err=True)
+
+
+def _guard(fn):
+    """Turn the library's input errors into one-line CLI errors (exit 2, no traceback)."""
+    import functools
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except USER_ERRORS as e:
+            raise UserError(str(e)) from None
+
+    return wrapper
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+@click.version_option(package_name="pipefollow")
+def main() -> None:
+    """Learn and evaluate AUV pipeline-following controllers (Fjerdingen et al., 2010)."""
+
+
+def _default_seconds(pipeline: str, seconds: float | None) -> float:
+    if seconds is not None:
+        return seconds
+    return 60.0 if pipeline == "paper-validation" else 20.0
+
+
+def load_controller(spec: str, seed: int):
+    """``heuristic`` or a policy file → an agent."""
+    if spec == "heuristic":
+        from pipefollow.heuristic import Heuristic
+
+        return Heuristic()
+    from pipefollow.policy import load_policy
+
+    return load_policy(spec, seed=seed)
+
+
+def _summary(stats) -> dict:
+    rows = [
+        {"return": s.ret, "pipe_in_view": s.pipe_in_view, "progress_m": s.progress_m,
+         "time_lost_s": s.time_lost_s}  # fmt: skip
+        for s in stats
+    ]
+    return {
+        "mean_return": float(np.mean([r["return"] for r in rows])),
+        "mean_pipe_in_view": float(np.mean([r["pipe_in_view"] for r in rows])),
+        "mean_progress_m": float(np.mean([r["progress_m"] for r in rows])),
+        "episodes": rows,
+    }
+
+
+@main.command()
+@click.option("--controller", default="heuristic", show_default=True,
+              help="'heuristic' or a policy file (.npz) written by 'pipefollow train'.")
+@click.option("--pipeline", default="paper-left", show_default=True,
+              help="Built-in name (paper-left, paper-right, paper-validation) or a JSON file.")
+@click.option("--episodes", default=1, show_default=True, type=click.IntRange(min=1))
+@click.option("--seconds", type=click.FloatRange(min=1.0), default=None,
+              help="Episode length in seconds [default: 60 on paper-validation, else 20].")
+@click.option("--seed", default=0, show_default=True, type=int, help="Seed of the start perturbation.")
+@click.option("--start-noise", default=0.0, show_default=True, type=click.FloatRange(min=0.0),
+              help="Uniform random lateral start offset up to this many metres.")
+@click.option("--heading-noise", default=0.0, show_default=True, type=click.FloatRange(min=0.0),
+              help="Uniform random start heading offset up to this many degrees.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+              help="Save a trajectory plot (PNG) of the first episode.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@_guard
+def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading_noise, plot_path,
+             as_json):  # fmt: skip
+    """Evaluate a controller deterministically (σ = 0) on a pipeline."""
+    from pipefollow.env import PipelineFollowingEnv
+    from pipefollow.pipeline import resolve
+    from pipefollow.training import run_episode
+
+    pipe = resolve(pipeline)
+    agent = load_controller(controller, seed)
+    env = PipelineFollowingEnv(pipe, _default_seconds(pipeline, seconds), start_noise, heading_noise)
+    stats = []
+    for e in range(episodes):
+        stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
+    result = {"controller": controller, "pipeline": pipeline, "seconds": env.episode_seconds,
+              **_summary(stats)}  # fmt: skip
+    if plot_path:
+        from pipefollow.render import plot_trajectories
+
+        name = "heuristic" if controller == "heuristic" else Path(controller).stem
+        plot_trajectories(pipe, {name: stats[0].poses}, plot_path,
+                          title=f"{name} on {pipe.name}: return {stats[0].ret:.2f}")  # fmt: skip
+        result["plot"] = str(plot_path)
+    if as_json:
+        click.echo(json.dumps(result))
+        return
+    click.echo(f"{controller} on {pipeline}, {episodes} episode(s) of {env.episode_seconds:g} s")
+    click.echo(f"{'episode':>7} {'return':>9} {'in view':>8} {'progress':>9}")
+    for i, row in enumerate(result["episodes"]):
+        click.echo(f"{i:>7} {row['return']:>9.3f} {row['pipe_in_view']:>8.1%} {row['progress_m']:>8.2f}m")
+    click.echo(f"{'mean':>7} {result['mean_return']:>9.3f} {result['mean_pipe_in_view']:>8.1%} "
+               f"{result['mean_progress_m']:>8.2f}m")  # fmt: skip
+    if plot_path:
+        click.echo(f"plot: {plot_path}")
+
+
+@main.command()
+@click.option("--algorithm", type=click.Choice(["sarsa", "cacla"]), required=True)
+@click.option("--skew", type=click.FloatRange(min=0.0), default=0.0, show_default=True,
+              help="CACLA skew step Δγ in degrees (eq. 15): 11.25, 22.5 or 45 in the paper; 0 = Gaussian.")
+@click.option("--supervised", is_flag=True, help="Supervised CACLA with the heuristic as supervisor.")
+@click.option("--pipeline", default="paper-left", show_default=True,
+              help="Built-in name or JSON file to train on.")
+@click.option("--episodes", default=500, show_default=True, type=click.IntRange(min=1))
+@click.option("--seconds", default=20.0, show_default=True, type=click.FloatRange(min=1.0),
+              help="Episode length in seconds.")
+@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), required=True,
+              help="Folder for policy.npz and learning_curve.csv.")
+@click.option("--init", "init_policy", type=click.Path(dir_okay=False), default=None,
+              help="Continue training from this policy file (e.g. left turns, then right turns).")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
+@_guard
+def train(algorithm, skew, supervised, pipeline, episodes, seconds, seed, out_dir, init_policy, as_json):
+    """Train a learner; writes the policy and its learning curve."""
+    from pipefollow.agents import make_agent
+    from pipefollow.pipeline import resolve
+    from pipefollow.training import STAT_NAMES, train_compiled
+
+    if algorithm == "sarsa" and (skew or supervised):
+        raise UserError("--skew and --supervised apply to --algorithm cacla only")
+    pipe = resolve(pipeline)
+    rng = np.random.default_rng(seed)
+    if init_policy:
+        from pipefollow.policy import load_policy
+
+        agent = load_policy(init_policy)
+        if agent.algorithm != algorithm:
+            raise UserError(f"--init {init_policy}: holds a {agent.name} policy, not {algorithm}")
+        if algorithm == "cacla" and (skew != agent.params.skew * 45.0 or supervised != agent.params.supervised):
+            raise UserError(f"--init {init_policy}: holds a {agent.name} policy; --skew/--supervised differ")
+        agent.rng = rng
+    else:
+        agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng)
+    show = not as_json and sys.stderr.isatty()
+    with click.progressbar(length=episodes, label=f"training {agent.name}", file=sys.stderr,
+                           hidden=not show) as bar:  # fmt: skip
+        done = [0]
+
+        def progress(n):
+            bar.update(n - done[0])
+            done[0] = n
+
+        stats = train_compiled(agent, pipe, episodes, episode_seconds=seconds, progress=progress)
+    out = Path(out_dir)
+    from pipefollow.policy import save_policy
+    from pipefollow.results import write_learning_curve
+
+    policy_path = save_policy(agent, out / "policy.npz", pipeline=pipe.name, episodes=episodes, seed=seed)
+    curve_path = write_learning_curve(out / "learning_curve.csv", stats, episodes)
+    result = {
+        "algorithm": agent.name,
+        "policy": str(policy_path),
+        "learning_curve": str(curve_path),
+        "returns": stats[:, 0].tolist(),
+        **{f"final_mean_{n}": float(stats[-min(50, episodes):, i].mean()) for i, n in enumerate(STAT_NAMES)},
+    }
+    if as_json:
+        click.echo(json.dumps(result))
+        return
+    k = min(10, episodes)
+    click.echo(f"{agent.name}: mean return of the first {k} episodes {stats[:k, 0].mean():.2f}, "
+               f"of the last {k} {stats[-k:, 0].mean():.2f}")  # fmt: skip
+    click.echo(f"policy: {policy_path}\nlearning curve: {curve_path}")
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

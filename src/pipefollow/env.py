@@ -1,0 +1,189 @@
+"""The Gymnasium environment ``pipefollow/PipelineFollowing-v0``."""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from pipefollow import simulation as sim
+from pipefollow.pipeline import Pipeline, resolve
+
+
+class PipelineFollowingEnv(gym.Env):
+    """An AUV following a subsea pipeline with a downward camera (Fjerdingen et al., 2010).
+
+    ## Description
+
+    The AUV of the paper's §3 (3-DOF model of eq. 16, PD waypoint controller) swims above a
+    pipeline laid out as a polyline. Once per second the agent chooses where to put the next
+    waypoint: on a circle of radius 3 m around the AUV, at a bearing between 90° to port and
+    90° to starboard of its heading. A camera sees the part of the pipe inside a 2 m × 3 m
+    footprint ahead of the AUV. If the pipe leaves the footprint, a search behaviour takes over
+    (the AUV turns on the spot towards the side where it last saw the pipe) until the pipe is
+    back in view.
+
+    ## Action Space
+
+    ``Box(-1, 1, (1,), float32)``: the waypoint bearing relative to the heading in units of 90°;
+    positive turns to starboard, negative to port. Actions outside [-1, 1] are clipped; a NaN
+    action raises ``ValueError``. While the pipe is lost the action is ignored.
+
+    ## Observation Space
+
+    ``Box(4,)`` of float64, in camera coordinates (x lateral, positive to starboard; y forward):
+
+    | index | observation                                   | min   | max  | unit |
+    |-------|-----------------------------------------------|-------|------|------|
+    | 0     | x1: lateral position of the far end of the pipe in view  | -1 | 1 | m |
+    | 1     | y1: forward position of the far end of the pipe in view  | 0  | 3 | m |
+    | 2     | x2: lateral position of the near end of the pipe in view | -1 | 1 | m |
+    | 3     | v_x: surge speed                                  | -1 | 1 | m/s |
+
+    While the pipe is out of view, (x1, y1, x2) hold the last sighting; ``info["pipe_in_view"]``
+    tells the two apart.
+
+    ## Rewards
+
+    Eq. 19: ``v_x − e_dist² − e_angl² − (a − a_prev)²`` with ``e_dist = (x1 + x2)/2`` (m),
+    ``e_angl = atan2(x1 − x2, y1 − y_near)`` (rad) and ``a_prev`` the previously executed action.
+    Every decision in which the pipe is lost (at its start or its end) gives −10.
+
+    ## Starting State
+
+    At rest on the first point of the pipeline, heading along the first segment. With
+    ``start_lateral_noise`` / ``start_heading_noise_deg`` the lateral offset (m) and heading
+    offset (deg) are drawn uniformly from ±those values with the environment's seeded generator.
+    ``reset(options={"lateral_offset": m, "heading_offset_deg": deg})`` sets them exactly.
+
+    ## Episode End
+
+    The episode is truncated after ``episode_seconds`` (one decision per second; 20 in the
+    paper's training). There is no terminal state: agents should bootstrap from the last state.
+
+    ## Arguments
+
+    * ``pipeline``: built-in name (``paper-left``, ``paper-right``, ``paper-validation``), path of a
+      JSON file ``{"points": [[x, y], ...]}`` or a :class:`~pipefollow.pipeline.Pipeline`.
+      ``reset(options={"pipeline": ...})`` switches it.
+    * ``episode_seconds``: episode length in seconds (default 20).
+    * ``start_lateral_noise``, ``start_heading_noise_deg``: start perturbation (default 0).
+    * ``render_mode``: ``None`` or ``"rgb_array"`` (the paper's Fig. 2 view).
+    * ``params``: a :class:`~pipefollow.simulation.SimParams` (default: the paper's system).
+
+    ## Info
+
+    ``pipe_in_view``, ``overridden`` (the search behaviour acted), ``e_dist``, ``e_angl``,
+    ``progress_m`` (arc length reached along the pipe), ``pose`` (x north, y east, ψ),
+    ``nu`` (u, v, r), ``waypoint``, ``executed_action``, ``time_s``.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
+
+    def __init__(
+        self,
+        pipeline: str | os.PathLike | Pipeline = "paper-left",
+        episode_seconds: float = 20.0,
+        start_lateral_noise: float = 0.0,
+        start_heading_noise_deg: float = 0.0,
+        render_mode: str | None = None,
+        params: sim.SimParams = sim.PAPER_SIM,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        decision_seconds = params.dt * params.substeps
+        if not (math.isfinite(episode_seconds) and episode_seconds >= decision_seconds):
+            raise ValueError(f"episode_seconds must be at least {decision_seconds:g}, got {episode_seconds}")
+        for name, value in (("start_lateral_noise", start_lateral_noise),
+                            ("start_heading_noise_deg", start_heading_noise_deg)):  # fmt: skip
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"{name} must be a finite number ≥ 0, got {value}")
+        self.pipeline = resolve(pipeline)
+        self.episode_seconds = float(episode_seconds)
+        self.max_decisions = int(round(self.episode_seconds / decision_seconds))
+        self.start_lateral_noise = float(start_lateral_noise)
+        self.start_heading_noise_deg = float(start_heading_noise_deg)
+        self.render_mode = render_mode
+        self.params = params
+        self._packed = sim.pack_params(params)
+        cam = params.camera
+        self.observation_space = spaces.Box(
+            low=np.array([-cam.half_width, 0.0, -cam.half_width, -1.0]),
+            high=np.array([cam.half_width, cam.depth, cam.half_width, 1.0]),
+            dtype=np.float64,
+        )
+        self.action_space = spaces.Box(-1.0, 1.0, (1,), dtype=np.float32)
+        self.state = np.zeros(sim.STATE_SIZE)
+        self._decisions = 0
+        self.trail: list[tuple[float, float, float]] = []
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        """Start an episode; see the class docstring for the options."""
+        super().reset(seed=seed)
+        options = dict(options or {})
+        if "pipeline" in options:
+            self.pipeline = resolve(options.pop("pipeline"))
+        lateral = options.pop("lateral_offset", None)
+        heading_deg = options.pop("heading_offset_deg", None)
+        if options:
+            raise ValueError(
+                f"unknown reset option(s) {sorted(options)}; "
+                "allowed: pipeline, lateral_offset, heading_offset_deg"
+            )
+        if lateral is None:
+            lateral = self.np_random.uniform(-1.0, 1.0) * self.start_lateral_noise
+        if heading_deg is None:
+            heading_deg = self.np_random.uniform(-1.0, 1.0) * self.start_heading_noise_deg
+        p0 = self.pipeline.points[0]
+        h = self.pipeline.start_heading
+        # positive lateral offset = to starboard of the pipe's direction
+        x = p0[0] - math.sin(h) * float(lateral)
+        y = p0[1] + math.cos(h) * float(lateral)
+        psi = h + math.radians(float(heading_deg))
+        sim.init_state_packed(
+            self.state, self.pipeline.points, self.pipeline.cumulative, x, y, psi, self._packed
+        )
+        self._decisions = 0
+        self.trail = [(x, y, psi)]
+        return self.state[:4].copy(), self._info()
+
+    def step(self, action):
+        """One 1-s decision; see the class docstring."""
+        a = float(np.asarray(action, dtype=np.float64).reshape(-1)[0])
+        if math.isnan(a):
+            raise ValueError("action is NaN")
+        a = min(1.0, max(-1.0, a))
+        s = self.state
+        r = sim.decide_packed(s, a, self.pipeline.points, self.pipeline.cumulative, self._packed)
+        self._decisions += 1
+        self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
+        truncated = self._decisions >= self.max_decisions
+        return s[:4].copy(), r, False, truncated, self._info()
+
+    def _info(self) -> dict[str, Any]:
+        s = self.state
+        return {
+            "pipe_in_view": bool(s[sim.IN_VIEW]),
+            "overridden": bool(s[sim.OVERRIDDEN]),
+            "e_dist": s[sim.E_DIST],
+            "e_angl": s[sim.E_ANGL],
+            "progress_m": s[sim.PROGRESS_MAX],
+            "pose": s[sim.X : sim.PSI + 1].copy(),
+            "nu": s[sim.U : sim.R + 1].copy(),
+            "waypoint": s[sim.WP_X : sim.WP_Y + 1].copy(),
+            "executed_action": s[sim.A_PREV],
+            "time_s": s[sim.TIME],
+        }
+
+    def render(self):
+        """The paper's Fig. 2 view as an RGB array (``render_mode="rgb_array"``)."""
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
+            return None
+        from pipefollow.render import draw_scene
+
+        return draw_scene(self.pipeline, self.state, np.array(self.trail), self.params)

@@ -1,0 +1,273 @@
+"""Experiment configuration: frozen dataclasses read from TOML (the paper's grid: ``paper.toml``).
+
+Every field carries its unit and source in ``metadata["help"]``; ``pipefollow reproduce --help``
+and the report use it. An unknown key or an invalid value raises :class:`ConfigError` naming
+the file, the key and what is allowed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+ALGORITHMS = ("sarsa", "cacla")
+RBF_FORMS = ("normalized", "literal")
+
+
+class ConfigError(ValueError):
+    """An experiment configuration that cannot be used."""
+
+
+def _f(default, help: str, **kw):
+    return field(default=default, metadata={"help": help, **kw})
+
+
+@dataclass(frozen=True)
+class Phase:
+    """One stretch of training on one pipeline."""
+
+    pipeline: str = _f("paper-left", "pipeline to train on: built-in name or JSON file")
+    episodes: int = _f(500, "episodes of this phase; σ runs from sigma_start to sigma_end over them")
+
+
+@dataclass(frozen=True)
+class TrialConfig:
+    """One learner set-up; a trial is this set-up trained once with one seed."""
+
+    name: str = _f("trial", "identifier, used in file names (letters, digits, '-', '_', '.')")
+    label: str = _f("", "label in figures and the report (default: the name)")
+    algorithm: str = _f("cacla", "learner: sarsa (eq. 3) or cacla (eqs. 5-7)", choices=ALGORITHMS)
+    skew_deg: float = _f(0.0, "CACLA skew step Δγ (deg, eq. 15); 0 = Gaussian exploration (paper §4.1)")
+    supervised: bool = _f(False, "supervised CACLA with the heuristic as supervisor (eqs. 10-13)")
+    phases: tuple[Phase, ...] = _f((Phase(),), "training phases in order (paper §4.2: left, then right)")
+    episode_seconds: float = _f(20.0, "episode length (s); one decision per second (paper §4.1)")
+    sigma_start: float = _f(1.0, "exploration σ of the first episode, normalized action units (paper §4)")
+    sigma_end: float = _f(0.01, "exploration σ of the last episode of each phase (paper §4)")
+    alpha_v: float = _f(0.4, "CACLA critic step size α_V (paper §4)")
+    alpha_pi: float = _f(0.2, "CACLA actor step size α_π (paper §4)")
+    alpha_q: float = _f(0.4, "SARSA step size α (paper §4)")
+    discount: float = _f(0.8, "discount factor γ_d (paper §4)")
+    delta_k: float = _f(0.05, "supervised CACLA: increment Δk of k(s) per visit (paper §4.1)")
+    forgetting: float = _f(0.0, "supervised CACLA: per-update decay of k's weights; the paper uses none")
+    rbf: str = _f("normalized", "RBF features: normalized Gaussians or the literal eq. 18", choices=RBF_FORMS)
+    evaluate_on: str = _f("", "after training, evaluate deterministically on this pipeline ('' = none)")
+    evaluate_seconds: float = _f(60.0, "length of the evaluation episode (s) (paper §4.2)")
+    figures: tuple[str, ...] = _f((), "figures/tables of the report that use this trial (fig5, fig6, ...)")
+
+    @property
+    def title(self) -> str:
+        """The label, or the name."""
+        return self.label or self.name
+
+    @property
+    def episodes(self) -> int:
+        """Episodes over all phases."""
+        return sum(p.episodes for p in self.phases)
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """A set of trials, each repeated with seeds ``seed, seed + 1, …``."""
+
+    name: str = _f("experiment", "identifier of the experiment")
+    repeats: int = _f(5, "repeats of every trial (paper §4.1: 5)")
+    seed: int = _f(2010, "seed of the first repeat; repeat k uses seed + k")
+    trials: tuple[TrialConfig, ...] = _f((), "the trials")
+
+    def seeds(self) -> list[int]:
+        """Seeds of the repeats."""
+        return [self.seed + k for k in range(self.repeats)]
+
+    def trial(self, name: str) -> TrialConfig:
+        """The trial called ``name``."""
+        for t in self.trials:
+            if t.name == name:
+                return t
+        raise KeyError(name)
+
+
+def field_help(cls) -> dict[str, str]:
+    """Field name → help text of a config dataclass."""
+    return {f.name: f.metadata.get("help", "") for f in dataclasses.fields(cls)}
+
+
+def _check_keys(data: dict, cls, where: str, extra: tuple[str, ...] = ()) -> None:
+    allowed = [f.name for f in dataclasses.fields(cls)] + list(extra)
+    for key in data:
+        if key not in allowed:
+            raise ConfigError(f"{where}: unknown key '{key}'; allowed: {', '.join(allowed)}")
+
+
+def _coerce(cls, data: dict, where: str):
+    """Build ``cls`` from a TOML table, checking each value's type and range."""
+    _check_keys(data, cls, where)
+    kwargs: dict[str, Any] = {}
+    for f in dataclasses.fields(cls):
+        if f.name not in data:
+            continue
+        value = data[f.name]
+        key = f"{where}: key '{f.name}'"
+        default = f.default
+        if f.name == "phases":
+            if not isinstance(value, list) or not value or not all(isinstance(v, dict) for v in value):
+                raise ConfigError(f"{key} must be a non-empty list of tables {{pipeline, episodes}}")
+            kwargs[f.name] = tuple(_coerce(Phase, v, f"{where}.phases[{i}]") for i, v in enumerate(value))
+            continue
+        if f.name == "figures":
+            if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+                raise ConfigError(f"{key} must be a list of strings")
+            kwargs[f.name] = tuple(value)
+            continue
+        if isinstance(default, bool):
+            if not isinstance(value, bool):
+                raise ConfigError(f"{key} must be true or false, got {value!r}")
+        elif isinstance(default, int):
+            if not isinstance(value, int) or isinstance(value, bool):
+                raise ConfigError(f"{key} must be an integer, got {value!r}")
+        elif isinstance(default, float):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ConfigError(f"{key} must be a finite number, got {value!r}")
+            value = float(value)
+        elif isinstance(default, str):
+            if not isinstance(value, str):
+                raise ConfigError(f"{key} must be a string, got {value!r}")
+        choices = f.metadata.get("choices")
+        if choices and value not in choices:
+            raise ConfigError(f"{key} must be one of {', '.join(choices)}, got {value!r}")
+        kwargs[f.name] = value
+    obj = cls(**kwargs)
+    validate(obj, where)
+    return obj
+
+
+def validate(obj, where: str) -> None:
+    """Range checks of a config record; raises :class:`ConfigError`."""
+
+    def bad(key: str, what: str, value) -> ConfigError:
+        return ConfigError(f"{where}: key '{key}' must be {what}, got {value!r}")
+
+    if isinstance(obj, Phase):
+        if obj.episodes < 1:
+            raise bad("episodes", "at least 1", obj.episodes)
+    elif isinstance(obj, TrialConfig):
+        import re
+
+        if not re.fullmatch(r"[A-Za-z0-9_.-]+", obj.name):
+            raise bad("name", "letters, digits, '-', '_' or '.'", obj.name)
+        if obj.algorithm == "sarsa" and (obj.skew_deg or obj.supervised):
+            raise ConfigError(f"{where}: skew_deg and supervised apply to algorithm 'cacla' only")
+        for key in ("alpha_v", "alpha_pi", "alpha_q", "discount"):
+            v = getattr(obj, key)
+            if not 0.0 < v <= 1.0:
+                raise bad(key, "in (0, 1]", v)
+        for key in ("skew_deg", "delta_k", "forgetting", "sigma_end"):
+            if getattr(obj, key) < 0.0:
+                raise bad(key, "≥ 0", getattr(obj, key))
+        if obj.forgetting >= 1.0:
+            raise bad("forgetting", "below 1", obj.forgetting)
+        if obj.sigma_start < obj.sigma_end:
+            raise bad("sigma_start", f"≥ sigma_end ({obj.sigma_end})", obj.sigma_start)
+        for key in ("episode_seconds", "evaluate_seconds"):
+            if getattr(obj, key) < 1.0:
+                raise bad(key, "at least 1 (s)", getattr(obj, key))
+    elif isinstance(obj, ExperimentConfig):
+        if obj.repeats < 1:
+            raise bad("repeats", "at least 1", obj.repeats)
+        names = [t.name for t in obj.trials]
+        dup = {n for n in names if names.count(n) > 1}
+        if dup:
+            raise ConfigError(f"{where}: trial names must be unique, repeated: {', '.join(sorted(dup))}")
+        if not obj.trials:
+            raise ConfigError(f"{where}: no [[trial]] tables")
+
+
+def parse_experiment(data: dict, source: str) -> ExperimentConfig:
+    """An :class:`ExperimentConfig` from parsed TOML (``[experiment]``, ``[defaults]``, ``[[trial]]``)."""
+    _check_keys(data, ExperimentConfig, source, extra=("experiment", "defaults", "trial"))
+    for key in ("name", "repeats", "seed", "trials"):
+        if key in data:
+            raise ConfigError(f"{source}: key '{key}' belongs in the [experiment] table")
+    head = data.get("experiment", {})
+    defaults = data.get("defaults", {})
+    if not isinstance(head, dict) or not isinstance(defaults, dict):
+        raise ConfigError(f"{source}: [experiment] and [defaults] must be tables")
+    _check_keys(head, ExperimentConfig, f"{source} [experiment]")
+    if "trials" in head:
+        raise ConfigError(f"{source} [experiment]: give trials as [[trial]] tables")
+    _check_keys(defaults, TrialConfig, f"{source} [defaults]")
+    tables = data.get("trial", [])
+    if not isinstance(tables, list):
+        raise ConfigError(f"{source}: 'trial' must be an array of tables [[trial]]")
+    trials = []
+    for i, table in enumerate(tables):
+        where = f"{source} [[trial]] #{i + 1}" + (f" '{table['name']}'" if "name" in table else "")
+        trials.append(_coerce(TrialConfig, {**defaults, **table}, where))
+    exp = _coerce(ExperimentConfig, head, f"{source} [experiment]")
+    exp = dataclasses.replace(exp, trials=tuple(trials))
+    validate(exp, source)
+    return exp
+
+
+def load_experiment(spec: str | Path = "paper") -> ExperimentConfig:
+    """Read an experiment: ``paper`` (the shipped ``paper.toml``) or a path to a TOML file."""
+    if str(spec) == "paper":
+        text = resources.files("pipefollow.experiments").joinpath("paper.toml").read_text()
+        source = "paper.toml"
+    else:
+        path = Path(spec)
+        source = f"experiment file '{path}'"
+        try:
+            text = path.read_text()
+        except FileNotFoundError:
+            raise ConfigError(f"{source}: no such file") from None
+        except OSError as e:
+            raise ConfigError(f"{source}: cannot read ({e.strerror})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ConfigError(f"{source}: not valid TOML ({e})") from None
+    return parse_experiment(data, source)
+
+
+def with_overrides(exp: ExperimentConfig, *, repeats: int | None = None, episodes: int | None = None,
+                   seed: int | None = None, trials: list[str] | None = None) -> ExperimentConfig:  # fmt: skip
+    """A copy with command-line overrides: repeats, episodes of every phase, seed, a subset of trials."""
+    out = exp
+    if trials:
+        known = [t.name for t in exp.trials]
+        for name in trials:
+            if name not in known:
+                raise ConfigError(f"--trial: unknown trial '{name}'; allowed: {', '.join(known)}")
+        out = dataclasses.replace(out, trials=tuple(t for t in out.trials if t.name in trials))
+    if repeats is not None:
+        out = dataclasses.replace(out, repeats=repeats)
+    if seed is not None:
+        out = dataclasses.replace(out, seed=seed)
+    if episodes is not None:
+        out = dataclasses.replace(out, trials=tuple(
+            dataclasses.replace(t, phases=tuple(dataclasses.replace(p, episodes=episodes) for p in t.phases))
+            for t in out.trials))  # fmt: skip
+    validate(out, "overrides")
+    for t in out.trials:
+        for p in t.phases:
+            validate(p, f"trial '{t.name}'")
+    return out
+
+
+def to_dict(obj) -> dict:
+    """Plain-data form (for the run folder's resolved config)."""
+    return dataclasses.asdict(obj)
+
+
+def from_dict(data: dict) -> ExperimentConfig:
+    """Inverse of :func:`to_dict`."""
+    trials = tuple(
+        TrialConfig(**{**t, "phases": tuple(Phase(**p) for p in t["phases"]), "figures": tuple(t["figures"])})
+        for t in data["trials"]
+    )
+    return ExperimentConfig(name=data["name"], repeats=data["repeats"], seed=data["seed"], trials=trials)

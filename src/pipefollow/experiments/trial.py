@@ -1,0 +1,116 @@
+"""The unit of work: ``run_trial(config, seed) -> TrialResult``, a pure function of its inputs."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pipefollow.agents import make_agent
+from pipefollow.cacla import Cacla
+from pipefollow.env import PipelineFollowingEnv
+from pipefollow.exploration import linear_sigma
+from pipefollow.experiments.config import TrialConfig
+from pipefollow.heuristic import Heuristic
+from pipefollow.pipeline import resolve
+from pipefollow.rbf import STATE_GRID, RBFGrid
+from pipefollow.training import run_episode, train_compiled
+
+
+@dataclass(frozen=True)
+class TrialResult:
+    """What one trial produced.
+
+    Attributes:
+        trial: the trial's name.
+        seed: its seed.
+        stats: (episodes, 4) per training episode: return, pipe_in_view, progress_m, time_lost_s.
+        phase: (episodes,) index of the training phase of each episode.
+        sigma: (episodes,) exploration σ of each episode.
+        weights: the learned weights (the policy; with the config it rebuilds the agent).
+        evaluation: controller → (return, pipe_in_view, progress_m, time_lost_s) of one deterministic
+            episode on the evaluation pipeline: ``learned`` (as executed, with the supervisor for
+            supervised agents), ``actor`` (supervised agents' pure actor) and ``heuristic``.
+        poses: controller → (n, 3) poses of those evaluation episodes.
+        evaluation_pipeline: name of the evaluation pipeline.
+        wall_seconds: time the trial took.
+    """
+
+    trial: str
+    seed: int
+    stats: np.ndarray
+    phase: np.ndarray
+    sigma: np.ndarray
+    weights: np.ndarray
+    evaluation: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+    poses: dict[str, np.ndarray] = field(default_factory=dict)
+    evaluation_pipeline: str = ""
+    wall_seconds: float = 0.0
+
+
+def build_agent(config: TrialConfig, rng: np.random.Generator | None = None):
+    """A fresh agent for ``config``."""
+    grid = STATE_GRID if config.rbf == "normalized" else RBFGrid(STATE_GRID.centres, form=config.rbf)
+    if config.algorithm == "sarsa":
+        agent = make_agent("sarsa", rng=rng, alpha=config.alpha_q, discount=config.discount)
+    else:
+        agent = make_agent("cacla", skew_deg=config.skew_deg, supervised=config.supervised, rng=rng,
+                           alpha_v=config.alpha_v, alpha_pi=config.alpha_pi, discount=config.discount,
+                           delta_k=config.delta_k, forgetting=config.forgetting)  # fmt: skip
+    if grid is not STATE_GRID:
+        agent = type(agent)(agent.params, grid=grid, rng=rng)
+    return agent
+
+
+class ActorOnly:
+    """A supervised CACLA agent's pure actor, clip(A(s)), as a deterministic controller."""
+
+    name = "actor"
+
+    def __init__(self, agent: Cacla) -> None:
+        self.agent = agent
+
+    def begin_episode(self, sigma: float) -> None:  # noqa: D102
+        pass
+
+    def act(self, obs, explore: bool = False) -> float:  # noqa: D102
+        return self.agent.actor(obs)
+
+
+def run_trial(config: TrialConfig, seed: int) -> TrialResult:
+    """Train the learner of ``config`` with ``seed`` (compiled path) and evaluate it deterministically."""
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(seed)
+    agent = build_agent(config, rng)
+    stats, phase, sigma = [], [], []
+    for i, ph in enumerate(config.phases):
+        pipe = resolve(ph.pipeline)
+        stats.append(train_compiled(agent, pipe, ph.episodes, episode_seconds=config.episode_seconds,
+                                    sigma_start=config.sigma_start, sigma_end=config.sigma_end))  # fmt: skip
+        phase.append(np.full(ph.episodes, i))
+        sigma.append([linear_sigma(e, ph.episodes, config.sigma_start, config.sigma_end)
+                      for e in range(ph.episodes)])  # fmt: skip
+    eval_name = config.evaluate_on or config.phases[-1].pipeline
+    eval_seconds = config.evaluate_seconds if config.evaluate_on else config.episode_seconds
+    env = PipelineFollowingEnv(resolve(eval_name), eval_seconds)
+    controllers = {"learned": agent, "heuristic": Heuristic()}
+    if config.algorithm == "cacla" and config.supervised:
+        controllers["actor"] = ActorOnly(agent)
+    evaluation, poses = {}, {}
+    for name, controller in controllers.items():
+        ep = run_episode(env, controller)
+        evaluation[name] = ep.as_row()
+        poses[name] = ep.poses
+    return TrialResult(
+        trial=config.name,
+        seed=seed,
+        stats=np.concatenate(stats),
+        phase=np.concatenate(phase),
+        sigma=np.concatenate([np.asarray(s, dtype=np.float64) for s in sigma]),
+        weights=agent.weights.copy(),
+        evaluation=evaluation,
+        poses=poses,
+        evaluation_pipeline=eval_name,
+        wall_seconds=time.perf_counter() - t0,
+    )

@@ -1,0 +1,104 @@
+"""Policy files: a learned agent in one ``.npz`` (loaded with ``allow_pickle=False``).
+
+A file holds ``format`` (``pipefollow-policy``), ``format_version``, ``package_version``,
+``algorithm`` (``cacla`` or ``sarsa``), ``params`` (JSON of the agent's parameter record),
+``grid`` and, for SARSA, ``action_grid`` (JSON feature specifications) and ``weights``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+import pipefollow
+from pipefollow.cacla import Cacla, CaclaParams
+from pipefollow.rbf import RBFGrid
+from pipefollow.sarsa import Sarsa, SarsaParams
+
+FORMAT = "pipefollow-policy"
+FORMAT_VERSION = 1
+
+
+class PolicyError(ValueError):
+    """A policy file that cannot be used; the message names the file and the problem."""
+
+
+def save_policy(agent: Cacla | Sarsa, path: str | os.PathLike, **metadata) -> Path:
+    """Write ``agent`` to ``path`` (``.npz``) atomically; extra string ``metadata`` is stored too."""
+    path = Path(path)
+    if isinstance(agent, Cacla):
+        algorithm, extra = "cacla", {}
+    elif isinstance(agent, Sarsa):
+        algorithm, extra = "sarsa", {"action_grid": json.dumps(agent.action_grid.to_dict())}
+    else:
+        raise TypeError(f"cannot save a policy of type {type(agent).__name__}")
+    params = {k: (bool(v) if isinstance(v, bool) else v) for k, v in agent.params._asdict().items()}
+    arrays = {
+        "format": np.array(FORMAT),
+        "format_version": np.array(FORMAT_VERSION),
+        "package_version": np.array(pipefollow.__version__),
+        "algorithm": np.array(algorithm),
+        "params": np.array(json.dumps(params)),
+        "grid": np.array(json.dumps(agent.grid.to_dict())),
+        "metadata": np.array(json.dumps({k: str(v) for k, v in metadata.items()})),
+        "weights": agent.weights,
+        **{k: np.array(v) for k, v in extra.items()},
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez_compressed(f, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def load_policy(path: str | os.PathLike, seed: int | None = None) -> Cacla | Sarsa:
+    """Read a policy file written by :func:`save_policy`; problems raise :class:`PolicyError`."""
+    path = Path(path)
+    src = f"policy file '{path}'"
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+    except FileNotFoundError:
+        raise PolicyError(f"{src}: no such file") from None
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
+        raise PolicyError(f"{src}: not a readable .npz file ({type(e).__name__})") from None
+    if str(data.get("format", "")) != FORMAT:
+        raise PolicyError(f"{src}: not a pipefollow policy (no '{FORMAT}' marker)")
+    try:
+        version = int(data["format_version"])
+        algorithm = str(data["algorithm"])
+        params = json.loads(str(data["params"]))
+        grid = RBFGrid.from_dict(json.loads(str(data["grid"])))
+        weights = np.asarray(data["weights"], dtype=np.float64)
+    except (KeyError, ValueError, TypeError) as e:
+        raise PolicyError(f"{src}: missing or malformed entry ({e})") from None
+    if version > FORMAT_VERSION:
+        raise PolicyError(f"{src}: format version {version} is newer than this pipefollow reads")
+    try:
+        if algorithm == "cacla":
+            agent = Cacla(CaclaParams(**params), grid=grid, seed=seed)
+        elif algorithm == "sarsa":
+            action_grid = RBFGrid.from_dict(json.loads(str(data["action_grid"])))
+            agent = Sarsa(SarsaParams(**params), grid=grid, action_grid=action_grid, seed=seed)
+        else:
+            raise PolicyError(f"{src}: unknown algorithm '{algorithm}' (expected cacla or sarsa)")
+    except (TypeError, KeyError, ValueError) as e:
+        if isinstance(e, PolicyError):
+            raise
+        raise PolicyError(f"{src}: parameters do not fit algorithm '{algorithm}' ({e})") from None
+    if weights.shape != agent.weights.shape:
+        raise PolicyError(f"{src}: weights have shape {weights.shape}, expected {agent.weights.shape}")
+    if not np.all(np.isfinite(weights)):
+        raise PolicyError(f"{src}: weights contain NaN or infinite values")
+    agent.weights[...] = weights
+    return agent

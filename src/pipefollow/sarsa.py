@@ -1,0 +1,160 @@
+"""Continuous-state SARSA (eq. 3) with a one-step search over the actions (Santamaría et al.).
+
+``Q(s, a) = Σ_ij W_ij φ_i(s) ψ_j(a)`` is linear in the 1,764 × 13 = 22,932 products of the RBF state
+features φ and the action features ψ (paper §4.1). Because the features separate, Q over all
+actions of the search grid costs one product ``q = φᵀW`` (13 numbers) and a 21 × 13 product,
+not 21 × 22,932 multiplications. The greedy action is the best of the 21-point grid −90°…90° in
+9° steps; exploration adds σ·N(0, 1) to it (clipped, not snapped back to the grid).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from pipefollow.rbf import ACTION_GRID, STATE_GRID, RBFGrid, dim_activations, grid_features
+
+
+class SarsaParams(NamedTuple):
+    """SARSA's step size, discount and search grid (paper §4, §4.1)."""
+
+    alpha: float = 0.4  # step size α (paper §4)
+    discount: float = 0.8  # discount factor γ_d (paper §4)
+    n_search: int = 21  # actions of the one-step search: −90°…90° in 9° steps (paper §4.1)
+
+
+@njit(cache=True)
+def action_features(a, centres, width, normalized):
+    """ψ(a): the action dimension's RBF activations."""
+    out = np.empty(centres.shape[0])
+    dim_activations(a, centres, width, normalized, out)
+    return out
+
+
+def search_table(p: SarsaParams, grid: RBFGrid = ACTION_GRID) -> tuple[np.ndarray, np.ndarray]:
+    """The search grid's actions and their action features (n_search × n_action_features)."""
+    actions = np.linspace(-1.0, 1.0, p.n_search)
+    psi = np.array([grid.features(np.array([a])) for a in actions])
+    return actions, psi
+
+
+@njit(cache=True)
+def greedy(W, phi, search_actions, search_psi):
+    """Greedy action of the one-step search and the state's action-weight vector q = φᵀW."""
+    q = phi @ W
+    values = search_psi @ q
+    return search_actions[np.argmax(values)], q
+
+
+@njit(cache=True)
+def choose(W, phi, search_actions, search_psi, sigma, z):
+    """Exploring action ``clip(greedy + σ z)`` (σ = 0: greedy)."""
+    a, _ = greedy(W, phi, search_actions, search_psi)
+    if sigma > 0.0:
+        a = min(1.0, max(-1.0, a + sigma * z))
+    return a
+
+
+@njit(cache=True)
+def update(W, phi, psi, reward, discount, phi_next, psi_next, alpha):
+    """Eq. 3: ``W += α δ φ ψᵀ`` with ``δ = r + discount·Q(s', a') − Q(s, a)``. Returns δ."""
+    q_sa = psi @ (phi @ W)
+    q_next = psi_next @ (phi_next @ W) if discount != 0.0 else 0.0
+    delta = reward + discount * q_next - q_sa
+    c = alpha * delta
+    for i in range(phi.shape[0]):
+        ci = c * phi[i]
+        if ci != 0.0:
+            for j in range(psi.shape[0]):
+                W[i, j] += ci * psi[j]
+    return delta
+
+
+class Sarsa:
+    """A SARSA agent on RBF state × action features (any env with a Box observation and
+    a 1-D action in [-1, 1]).
+
+    The update picks the next action a' (on-policy, with the current σ) and :meth:`act` then
+    returns that same action for that observation, as SARSA requires.
+    """
+
+    def __init__(
+        self,
+        params: SarsaParams = SarsaParams(),
+        grid: RBFGrid = STATE_GRID,
+        action_grid: RBFGrid = ACTION_GRID,
+        rng: np.random.Generator | None = None,
+        seed: int | None = None,
+    ) -> None:
+        self.params = params
+        self.grid = grid
+        self.action_grid = action_grid
+        self.rng = rng if rng is not None else np.random.default_rng(seed)
+        self.weights = np.zeros((grid.n_features, action_grid.n_features))
+        self.sigma = 1.0
+        self.search_actions, self.search_psi = search_table(params, action_grid)
+        self._grid_arrays = grid.packed
+        self._normalized = grid.form == "normalized"
+        ac, _, aw = action_grid.packed
+        self._action_centres, self._action_width = ac, float(aw[0])
+        self._action_normalized = action_grid.form == "normalized"
+        self._pending = None  # (obs, phi, action) chosen by the last update
+
+    algorithm = "sarsa"
+    name = "SARSA"
+
+    @property
+    def discount(self) -> float:
+        """The discount factor γ_d."""
+        return self.params.discount
+
+    def begin_episode(self, sigma: float) -> None:
+        """Set the exploration σ for the coming episode and forget any pending action."""
+        self.sigma = float(sigma)
+        self._pending = None
+
+    def features(self, obs) -> np.ndarray:
+        """φ(obs)."""
+        out = np.empty(self.grid.n_features)
+        c, o, wd = self._grid_arrays
+        grid_features(np.asarray(obs, dtype=np.float64), c, o, wd, self._normalized, out)
+        return out
+
+    def _psi(self, a: float) -> np.ndarray:
+        return action_features(a, self._action_centres, self._action_width, self._action_normalized)
+
+    def _choose(self, phi: np.ndarray, explore: bool) -> float:
+        sigma = self.sigma if explore else 0.0
+        z = self.rng.standard_normal() if sigma > 0.0 else 0.0
+        return choose(self.weights, phi, self.search_actions, self.search_psi, sigma, z)
+
+    def act(self, obs, explore: bool = True) -> float:
+        """The action for ``obs``: the pending on-policy action if the last update chose one."""
+        obs = np.asarray(obs, dtype=np.float64)
+        if explore and self._pending is not None and np.array_equal(self._pending[0], obs):
+            return self._pending[2]
+        phi = self.features(obs)
+        a = self._choose(phi, explore)
+        self._pending = (obs.copy(), phi, a) if explore else None
+        return a
+
+    def q_values(self, obs) -> np.ndarray:
+        """Q(obs, a) over the search grid."""
+        return self.search_psi @ (self.features(obs) @ self.weights)
+
+    def update(self, obs, action, reward: float, next_obs, discount: float) -> float:
+        """Eq. 3 for ``obs, action → next_obs``; chooses a' at ``next_obs``. Returns δ."""
+        obs = np.asarray(obs, dtype=np.float64)
+        if self._pending is not None and np.array_equal(self._pending[0], obs):
+            phi = self._pending[1]
+        else:
+            phi = self.features(obs)
+        next_obs = np.asarray(next_obs, dtype=np.float64)
+        phi_next = self.features(next_obs)
+        a_next = self._choose(phi_next, True) if discount != 0.0 else 0.0
+        delta = update(self.weights, phi, self._psi(float(action)), float(reward), float(discount),
+                       phi_next, self._psi(a_next), self.params.alpha)  # fmt: skip
+        self._pending = (next_obs.copy(), phi_next, a_next)
+        return delta
