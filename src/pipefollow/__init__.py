@@ -15,6 +15,55 @@ except PackageNotFoundError:  # running from a source tree
 ENV_ID = "pipefollow/PipelineFollowing-v0"
 
 
+def _configure_numba_cache() -> None:
+    """Keep numba's on-disk cache in step with all of the package's sources.
+
+    Numba revalidates a cached function against its own file only, not against the files of
+    the functions compiled into it: after an edit of ``controller.py`` a cached
+    ``simulation.decide`` would still run the old controller. A cache folder named after a
+    hash of every source file of the package rules that out. It lives under
+    ``$NUMBA_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/pipefollow`` (``~/.cache/pipefollow``);
+    if that is not writable, numba's default (``__pycache__``) is left in place.
+    """
+    import hashlib
+    import os
+    import shutil
+    from pathlib import Path
+
+    import numba
+
+    root = Path(__file__).parent
+    digest = hashlib.sha1()
+    for path in sorted(root.rglob("*.py")):
+        digest.update(path.relative_to(root).as_posix().encode())
+        digest.update(path.read_bytes())
+    base = Path(
+        os.environ.get("NUMBA_CACHE_DIR")
+        or Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "pipefollow"
+    )
+    target = base / f"numba-{digest.hexdigest()[:16]}"
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+        probe = target / f".probe-{os.getpid()}"
+        probe.touch()
+        probe.unlink()
+    except OSError:
+        return
+    numba.config.CACHE_DIR = str(target)
+    # keep the three most recently used caches of earlier source versions, drop the rest
+    try:
+        others = sorted(
+            (p for p in base.glob("numba-*") if p != target), key=lambda p: p.stat().st_mtime, reverse=True
+        )
+    except OSError:  # another process is pruning at the same time
+        return
+    for old in others[3:]:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+_configure_numba_cache()
+
+
 def register_envs() -> None:
     """Register the Gymnasium environment (idempotent)."""
     from gymnasium.envs.registration import register, registry

@@ -114,6 +114,18 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p):
     return delta
 
 
+@njit(cache=True)
+def act_packed(w, phi, sigma, z0, z1, a_sup, hp):
+    """:func:`act` with packed parameters: the cheap entry point from Python."""
+    return act(w, phi, sigma, z0, z1, a_sup, unpack(hp))
+
+
+@njit(cache=True)
+def update_packed(w, phi, a_rl, a_sup, reward, discount, phi_next, hp):
+    """:func:`update` with packed parameters: the cheap entry point from Python."""
+    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp))
+
+
 def _draw_count(p: CaclaParams) -> int:
     """Standard normals per exploring decision: skew-normal samples take two."""
     return 2 if p.skew > 0.0 else 1
@@ -188,7 +200,7 @@ class Cacla:
             z = self.rng.standard_normal(self._draws)
             z0, z1 = z[0], z[-1]
         a_sup = self.supervisor(obs) if self.params.supervised else 0.0
-        a, a_rl = act(self.weights, phi, sigma, z0, z1, a_sup, self._packed)
+        a, a_rl = act_packed(self.weights, phi, sigma, z0, z1, a_sup, self._packed)
         self._pending = (phi, a_rl, a_sup)
         return a
 
@@ -209,7 +221,7 @@ class Cacla:
             a_rl = float(action)
             a_sup = self.supervisor(obs) if self.params.supervised else 0.0
         self._pending = None
-        return update(self.weights, phi, a_rl, a_sup, float(reward), float(discount),
+        return update_packed(self.weights, phi, a_rl, a_sup, float(reward), float(discount),
                       self.features(next_obs), self._packed)  # fmt: skip
 
 

@@ -87,8 +87,12 @@ class Pipeline:
 def _validated_points(points, source: str) -> np.ndarray:
     try:
         pts = np.array(points, dtype=np.float64)
+    except OverflowError:  # a JSON integer beyond float range: not a ValueError
+        raise PipelineError(f"{source}: points contain a number too large for a float") from None
     except (TypeError, ValueError):
         raise PipelineError(f"{source}: points must be a list of [x, y] number pairs") from None
+    if pts.size == 0:  # an empty list has shape (0,): report the count, not the shape
+        raise PipelineError(f"{source}: needs at least two distinct points, got 0")
     if pts.ndim != 2 or pts.shape[1] != 2:
         raise PipelineError(f"{source}: points must be a list of [x, y] pairs, got shape {pts.shape}")
     if not np.all(np.isfinite(pts)):

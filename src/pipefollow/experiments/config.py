@@ -118,6 +118,9 @@ def _coerce(cls, data: dict, where: str):
                 raise ConfigError(f"{key} must be a non-empty list of tables {{pipeline, episodes}}")
             kwargs[f.name] = tuple(_coerce(Phase, v, f"{where}.phases[{i}]") for i, v in enumerate(value))
             continue
+        if f.name == "trials":
+            kwargs[f.name] = value
+            continue
         if f.name == "figures":
             if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
                 raise ConfigError(f"{key} must be a list of strings")
@@ -207,10 +210,7 @@ def parse_experiment(data: dict, source: str) -> ExperimentConfig:
     for i, table in enumerate(tables):
         where = f"{source} [[trial]] #{i + 1}" + (f" '{table['name']}'" if "name" in table else "")
         trials.append(_coerce(TrialConfig, {**defaults, **table}, where))
-    exp = _coerce(ExperimentConfig, head, f"{source} [experiment]")
-    exp = dataclasses.replace(exp, trials=tuple(trials))
-    validate(exp, source)
-    return exp
+    return _coerce(ExperimentConfig, {**head, "trials": tuple(trials)}, f"{source} [experiment]")
 
 
 def load_experiment(spec: str | Path = "paper") -> ExperimentConfig:

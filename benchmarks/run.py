@@ -1,0 +1,178 @@
+"""Benchmarks: medians of the hot paths, each beside its floor and target, in one run.
+
+Usage: ``python benchmarks/run.py [--repeats N] [--no-reproduce] [--json FILE]``
+
+The floors are estimates of what compiled C would need (issue "Speed near the physical limit"):
+an RK4 substep ≈ 0.09 µs; a 500-episode trial is 200,000 substeps plus 10,000 learning updates,
+so ≥ 0.04 s for CACLA and ≥ 0.1 s for SARSA; the 35-trial reproduction ≈ 1-2 s of compute on
+2 cores (we take 1.5 s). Times are medians over repeats; compare ratios within one run, as the
+machine is shared and noisy.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+
+def median_time(fn, repeats: int, inner: int = 1) -> float:
+    """Median over ``repeats`` of the time per call of ``fn`` (called ``inner`` times per repeat)."""
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        for _ in range(inner):
+            fn()
+        times.append((time.perf_counter() - t) / inner)
+    return statistics.median(times)
+
+
+def bench_substep(repeats):
+    from numba import njit
+
+    from pipefollow import simulation as sim
+
+    @njit(cache=False)
+    def substeps(s, n, p):
+        for _ in range(n):
+            sim.closed_loop_rk4(s, 3.0, 0.5, 0.0, True, p.dt, p)
+
+    s = np.zeros(sim.STATE_SIZE)
+    n = 100_000
+    substeps(s, 10, sim.PAPER_SIM)
+    return median_time(lambda: substeps(s, n, sim.PAPER_SIM), repeats) / n
+
+
+def bench_env_step(repeats):
+    import gymnasium as gym
+
+    import pipefollow  # noqa: F401  (registers the environment)
+
+    env = gym.make("pipefollow/PipelineFollowing-v0", episode_seconds=1e6)
+    env.reset(seed=0)
+    action = np.array([0.1], dtype=np.float32)
+    env.step(action)
+    return median_time(lambda: env.step(action), repeats, inner=2000)
+
+
+def bench_features(repeats):
+    from pipefollow.rbf import STATE_GRID
+
+    x = np.array([0.3, 2.1, -0.2, 0.35])
+    out = np.empty(STATE_GRID.n_features)
+    STATE_GRID.features(x, out)
+    return median_time(lambda: STATE_GRID.features(x, out), repeats, inner=5000)
+
+
+def _decision_bench(agent, repeats):
+    rng = np.random.default_rng(1)
+    obs = [rng.uniform([-1, 0, -1, 0], [1, 3, 1, 0.5]) for _ in range(64)]
+    state = {"i": 0}
+
+    def one():
+        i = state["i"] = (state["i"] + 1) % 63
+        a = agent.act(obs[i])
+        agent.update(obs[i], a, -0.3, obs[i + 1], 0.8)
+
+    one()
+    return median_time(one, repeats, inner=1000)
+
+
+def bench_cacla_decision(repeats):
+    from pipefollow.agents import make_agent
+
+    return _decision_bench(make_agent("cacla", skew_deg=22.5, supervised=True, rng=np.random.default_rng(0)),
+                           repeats)  # fmt: skip
+
+
+def bench_sarsa_decision(repeats):
+    from pipefollow.agents import make_agent
+
+    return _decision_bench(make_agent("sarsa", rng=np.random.default_rng(0)), repeats)
+
+
+def _trial_bench(algorithm, repeats, **kw):
+    from pipefollow.agents import make_agent
+    from pipefollow.pipeline import builtin
+    from pipefollow.training import train_compiled
+
+    pipe = builtin("paper-left")
+    train_compiled(make_agent(algorithm, rng=np.random.default_rng(0), **kw), pipe, 2)  # compile
+
+    def one():
+        train_compiled(make_agent(algorithm, rng=np.random.default_rng(0), **kw), pipe, 500, chunk=500)
+
+    return median_time(one, max(3, repeats // 3))
+
+
+def bench_reproduce(repeats):
+    exe = os.path.join(os.path.dirname(sys.executable), "pipefollow")
+    times = []
+    for _ in range(max(1, repeats // 5)):
+        with tempfile.TemporaryDirectory() as out:
+            t = time.perf_counter()
+            subprocess.run([exe, "reproduce", "--out", out, "--no-figures"], check=True,
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+            times.append(time.perf_counter() - t)
+    return statistics.median(times)
+
+
+# name, function, floor (s), target (s), unit for display
+BENCHES = [
+    ("RK4 substep (closed loop)", bench_substep, 0.09e-6, None),
+    ("env.step (1-s decision)", bench_env_step, 20 * 0.09e-6, 15e-6),
+    ("RBF features, 1,764", bench_features, None, 5e-6),
+    ("CACLA decision (act+update)", bench_cacla_decision, None, 10e-6),
+    ("SARSA decision (act+update)", bench_sarsa_decision, None, 40e-6),
+    ("CACLA trial, 500 episodes", lambda r: _trial_bench("cacla", r), 0.04, 0.1),
+    ("supervised skew CACLA trial", lambda r: _trial_bench("cacla", r, skew_deg=22.5, supervised=True),
+     0.04, 0.1),
+    ("SARSA trial, 500 episodes", lambda r: _trial_bench("sarsa", r), 0.1, 0.3),
+    ("pipefollow reproduce (warm)", bench_reproduce, 1.5, 8.0),
+]
+
+
+def fmt(seconds: float) -> str:
+    """Human units."""
+    if seconds < 1e-3:
+        return f"{seconds * 1e6:8.2f} µs"
+    if seconds < 1.0:
+        return f"{seconds * 1e3:8.2f} ms"
+    return f"{seconds:8.2f} s "
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=15, help="repeats per benchmark (median)")
+    ap.add_argument("--no-reproduce", action="store_true", help="skip the full-reproduction benchmark")
+    ap.add_argument("--json", help="also write the figures to this JSON file")
+    args = ap.parse_args(argv)
+    print(f"# {time.strftime('%Y-%m-%d')} · {platform.processor() or platform.machine()} · "
+          f"{os.cpu_count()} cores · Python {platform.python_version()}")  # fmt: skip
+    print(f"{'benchmark':<32}{'median':>12}{'floor':>12}{'×floor':>8}{'target':>12}  ok")
+    results = {}
+    for name, fn, floor, target in BENCHES:
+        if args.no_reproduce and "reproduce" in name:
+            continue
+        t = fn(args.repeats)
+        results[name] = {"median_s": t, "floor_s": floor, "target_s": target}
+        ratio = f"{t / floor:7.1f}×" if floor else " " * 8
+        ok = "" if target is None else ("yes" if t <= target else "NO")
+        print(f"{name:<32}{fmt(t):>12}{fmt(floor) if floor else '':>12}{ratio}"
+              f"{fmt(target) if target else '':>12}  {ok}", flush=True)  # fmt: skip
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(results, f, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,175 @@
+"""CACLA's update equations against hand-computed single steps, and learning a small task."""
+
+import math
+
+import numpy as np
+import pytest
+
+from pipefollow import cacla
+from pipefollow.agents import make_agent
+from pipefollow.cacla import A, G, K, V, Cacla, CaclaParams
+from pipefollow.exploration import skew_normal_from_normals
+from pipefollow.pipeline import builtin
+from pipefollow.rbf import RBFGrid
+from pipefollow.training import train_compiled
+
+PHI = np.array([0.2, 0.5, 0.3])
+PHI_NEXT = np.array([0.0, 0.4, 0.6])
+
+
+def weights():
+    w = np.zeros((4, 3))
+    w[V] = [1.0, -2.0, 0.5]  # V(s) = 0.2 - 1.0 + 0.15 = -0.65; V(s') = -0.8 + 0.3 = -0.5
+    w[A] = [0.5, 0.1, -0.2]  # A(s) = 0.1 + 0.05 - 0.06 = 0.09
+    return w
+
+
+def test_critic_and_actor_update_when_td_error_positive():
+    w = weights()
+    p = CaclaParams()
+    delta = cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
+    # δ = r + γ V(s') − V(s) = 0.3 + 0.8·(−0.5) + 0.65 = 0.55
+    assert delta == pytest.approx(0.55)
+    np.testing.assert_allclose(w[V], weights()[V] + 0.4 * 0.55 * PHI)
+    # actor moves towards the action taken: α_π (a − A(s)) φ = 0.2 · (0.6 − 0.09) φ
+    np.testing.assert_allclose(w[A], weights()[A] + 0.2 * 0.51 * PHI)
+
+
+def test_actor_unchanged_when_td_error_not_positive():
+    w = weights()
+    delta = cacla.update(w, PHI, 0.6, 0.0, -1.0, 0.8, PHI_NEXT, CaclaParams())
+    assert delta == pytest.approx(-1.0 - 0.4 + 0.65)
+    np.testing.assert_array_equal(w[A], weights()[A])
+    np.testing.assert_allclose(w[V], weights()[V] + 0.4 * delta * PHI)
+
+
+def test_skew_update_sign_and_cap():
+    p = CaclaParams(skew=0.5)
+    # δ > 0 and a > A(s): γ grows by Δγ φ
+    w = weights()
+    cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
+    np.testing.assert_allclose(w[G], 0.5 * PHI)
+    # δ > 0 and a < A(s): γ shrinks
+    w = weights()
+    cacla.update(w, PHI, -0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
+    np.testing.assert_allclose(w[G], -0.5 * PHI)
+    # δ < 0 and a > A(s): γ shrinks (explore away from the punished side)
+    w = weights()
+    cacla.update(w, PHI, 0.6, 0.0, -1.0, 0.8, PHI_NEXT, p)
+    np.testing.assert_allclose(w[G], -0.5 * PHI)
+    # at the cap γ(s) ≥ γ_max no further increase
+    w = weights()
+    w[G] = [2.0, 2.0, 2.0]  # γ(s) = 2 > 1
+    cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
+    np.testing.assert_array_equal(w[G], [2.0, 2.0, 2.0])
+    # ... but a decrease is still allowed
+    cacla.update(w, PHI, -0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
+    np.testing.assert_allclose(w[G], 2.0 - 0.5 * PHI)
+
+
+def test_supervised_actor_target_mixes_rl_and_supervisor_and_k_grows_to_cap():
+    p = CaclaParams(supervised=True)
+    w = weights()
+    w[K] = [0.5, 0.5, 0.5]  # k(s) = 0.5
+    a_rl, a_sup = 0.6, -0.4
+    cacla.update(w, PHI, a_rl, a_sup, 0.3, 0.8, PHI_NEXT, p)  # δ = 0.55 > 0
+    mu = 0.09
+    expected = 0.2 * (0.5 * (a_rl - mu) + 0.5 * (a_sup - mu))  # eq. 12
+    np.testing.assert_allclose(w[A], weights()[A] + expected * PHI)
+    np.testing.assert_allclose(w[K], 0.5 + 0.05 * PHI)  # eq. 13: Δk = 0.05
+    # δ ≤ 0: only the supervised part
+    w = weights()
+    w[K] = [0.5, 0.5, 0.5]
+    cacla.update(w, PHI, a_rl, a_sup, -1.0, 0.8, PHI_NEXT, p)
+    np.testing.assert_allclose(w[A], weights()[A] + 0.2 * 0.5 * (a_sup - mu) * PHI)
+    # k(s) at the cap: no increment
+    w = weights()
+    w[K] = [1.0, 1.0, 1.0]
+    cacla.update(w, PHI, a_rl, a_sup, 0.3, 0.8, PHI_NEXT, p)
+    np.testing.assert_array_equal(w[K], [1.0, 1.0, 1.0])
+
+
+def test_k_starts_at_zero_so_the_supervisor_acts_alone():
+    w = weights()
+    a, a_rl = cacla.act(w, PHI, 0.5, 1.3, 0.0, -0.7, CaclaParams(supervised=True))
+    assert a == pytest.approx(-0.7)
+    assert a_rl == pytest.approx(min(1.0, 0.09 + 0.5 * 1.3))
+
+
+def test_act_gaussian_skew_and_deterministic():
+    w = weights()
+    p = CaclaParams()
+    assert cacla.act(w, PHI, 0.0, 5.0, 5.0, 0.0, p)[0] == pytest.approx(0.09)  # σ = 0
+    assert cacla.act(w, PHI, 0.2, -0.5, 9.0, 0.0, p)[0] == pytest.approx(0.09 - 0.1)
+    assert cacla.act(w, PHI, 1.0, 3.0, 0.0, 0.0, p)[0] == 1.0  # clipped
+    ps = CaclaParams(skew=0.5)
+    w[G] = [1.0, 1.0, 1.0]  # γ(s) = 1
+    z = skew_normal_from_normals(1.0, -0.4, 0.3)
+    assert cacla.act(w, PHI, 0.2, -0.4, 0.3, 0.0, ps)[0] == pytest.approx(0.09 + 0.2 * z)
+
+
+def test_semi_markov_discount_is_used_for_bootstrap():
+    w = weights()
+    delta = cacla.update(w, PHI, 0.0, 0.0, -10.0 - 8.0, 0.8**3, PHI_NEXT, CaclaParams())
+    assert delta == pytest.approx(-18.0 + 0.512 * -0.5 + 0.65)
+
+
+class Bandit:
+    """One-step task: observe x ∈ [-1, 1], reward −(a − 0.5 x)²."""
+
+    def __init__(self, seed):
+        self.rng = np.random.default_rng(seed)
+
+    def sample(self):
+        return np.array([self.rng.uniform(-1, 1)])
+
+    @staticmethod
+    def reward(x, a):
+        return -((a - 0.5 * x[0]) ** 2)
+
+
+GRID_1D = RBFGrid((np.linspace(-1.0, 1.0, 9),))
+
+
+def _learn_bandit(agent, steps=4000, seed=0):
+    task = Bandit(seed)
+    for t in range(steps):
+        agent.begin_episode(max(0.05, 0.5 * (1 - t / steps)))
+        x = task.sample()
+        a = agent.act(x)
+        agent.update(x, a, task.reward(x, a), x, 0.0)
+    xs = np.linspace(-0.9, 0.9, 19)
+    return max(abs(agent.act(np.array([x]), explore=False) - 0.5 * x) for x in xs)
+
+
+@pytest.mark.parametrize(
+    "params",
+    [CaclaParams(), CaclaParams(skew=0.5), CaclaParams(supervised=True), CaclaParams(skew=0.25, supervised=True)],
+    ids=["cacla", "skew", "supervised", "supervised-skew"],
+)
+def test_learns_a_one_step_task(params):
+    # supervisor deliberately imperfect: the learned action must still approach the optimum
+    agent = Cacla(params, grid=GRID_1D, seed=3, supervisor=lambda x: 0.3 * x[0])
+    err = _learn_bandit(agent)
+    assert err < 0.1
+
+
+def test_same_seed_gives_identical_weights():
+    pipe = builtin("paper-left")
+    runs = []
+    for _ in range(2):
+        agent = make_agent("cacla", skew_deg=22.5, supervised=True, rng=np.random.default_rng(11))
+        stats = train_compiled(agent, pipe, 15)
+        runs.append((agent.weights.copy(), stats))
+    np.testing.assert_array_equal(runs[0][0], runs[1][0])
+    np.testing.assert_array_equal(runs[0][1], runs[1][1])
+    assert np.abs(runs[0][0]).sum() > 0
+
+
+def test_make_agent_validation():
+    with pytest.raises(ValueError, match="algorithm"):
+        make_agent("qlearning")
+    with pytest.raises(ValueError, match="CACLA only"):
+        make_agent("sarsa", supervised=True)
+    assert make_agent("cacla", skew_deg=22.5).params.skew == pytest.approx(0.5)
+    assert math.isclose(make_agent("cacla", skew_deg=45).params.skew, 1.0)

@@ -1,0 +1,148 @@
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import pipefollow
+from pipefollow import simulation as sim
+from pipefollow.env import PipelineFollowingEnv
+from pipefollow.heuristic import Heuristic
+from pipefollow.pipeline import Pipeline, builtin, random_pipeline
+from pipefollow.training import run_episode
+
+
+def test_check_env_passes():
+    env = gym.make(pipefollow.ENV_ID, start_lateral_noise=0.3, start_heading_noise_deg=10.0)
+    check_env(env.unwrapped)
+
+
+def test_registered_id_makes_the_env():
+    env = gym.make(pipefollow.ENV_ID, pipeline="paper-right", episode_seconds=5)
+    obs, info = env.reset(seed=1)
+    assert obs.shape == (4,)
+    assert isinstance(env.unwrapped, PipelineFollowingEnv)
+    assert env.unwrapped.pipeline.name == "paper-right"
+
+
+def _episode(env, seed):
+    obs, _ = env.reset(seed=seed)
+    env.action_space.seed(seed)
+    out = [obs]
+    done = False
+    while not done:
+        obs, r, term, trunc, info = env.step(env.action_space.sample())
+        out.append(np.concatenate([obs, [r], info["pose"]]))
+        done = term or trunc
+    return out
+
+
+def test_same_seed_gives_identical_episode_and_other_seed_differs():
+    env = PipelineFollowingEnv(start_lateral_noise=0.5, start_heading_noise_deg=20)
+    a, b, c = _episode(env, 7), _episode(env, 7), _episode(env, 8)
+    assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+    assert not np.array_equal(a[0], c[0])
+
+
+def test_nan_action_raises_and_out_of_range_is_clipped():
+    env = PipelineFollowingEnv()
+    env.reset()
+    with pytest.raises(ValueError, match="NaN"):
+        env.step(np.array([np.nan]))
+    env.reset()
+    clipped = env.step(np.array([5.0]))
+    env.reset()
+    limit = env.step(np.array([1.0]))
+    np.testing.assert_array_equal(clipped[0], limit[0])
+    assert clipped[4]["executed_action"] == 1.0
+
+
+def test_truncates_after_episode_seconds_and_never_terminates():
+    env = PipelineFollowingEnv(episode_seconds=7)
+    env.reset()
+    flags = [env.step([0.0])[2:4] for _ in range(7)]
+    assert flags[-1] == (False, True)
+    assert all(f == (False, False) for f in flags[:-1])
+
+
+def test_info_has_the_contract_keys():
+    env = PipelineFollowingEnv()
+    _, info = env.reset()
+    for key in ("pipe_in_view", "overridden", "e_dist", "e_angl", "progress_m", "pose"):
+        assert key in info
+    assert info["pose"].shape == (3,)
+
+
+def test_reset_options_place_the_auv_and_unknown_options_fail():
+    env = PipelineFollowingEnv()
+    _, info = env.reset(options={"lateral_offset": 0.5, "heading_offset_deg": 0.0})
+    # paper-left starts at the origin heading north: starboard is east (+y)
+    np.testing.assert_allclose(info["pose"], [0.0, 0.5, 0.0], atol=1e-12)
+    obs, _ = env.reset(options={"lateral_offset": 0.5})
+    assert obs[2] == pytest.approx(-0.5)  # the pipe appears 0.5 m to port
+    with pytest.raises(ValueError, match="unknown reset option"):
+        env.reset(options={"bogus": 1})
+
+
+def test_bad_constructor_arguments():
+    with pytest.raises(ValueError, match="episode_seconds"):
+        PipelineFollowingEnv(episode_seconds=0.5)
+    with pytest.raises(ValueError, match="render_mode"):
+        PipelineFollowingEnv(render_mode="human")
+
+
+def test_render_draws_an_image():
+    env = PipelineFollowingEnv(render_mode="rgb_array")
+    env.reset()
+    env.step([0.0])
+    img = env.render()
+    assert img.ndim == 3 and img.shape[2] == 3 and img.dtype == np.uint8
+    assert img.std() > 0  # not a blank canvas
+
+
+def test_heuristic_keeps_pipe_in_view_through_first_turn():
+    env = PipelineFollowingEnv("paper-left")
+    ep = run_episode(env, Heuristic())
+    assert ep.pipe_in_view == 1.0
+    assert ep.progress_m > 2.5  # the first turn is at 2 m
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    actions=st.lists(st.floats(-3, 3, allow_nan=False), min_size=1, max_size=40),
+)
+def test_random_actions_on_random_pipelines_keep_state_finite_and_bounded(seed, actions):
+    pipe = random_pipeline(np.random.default_rng(seed), n_segments=4, length_range=(1.0, 6.0),
+                           turn_range_deg=(0.0, 150.0))  # fmt: skip
+    env = PipelineFollowingEnv(pipe, episode_seconds=len(actions))
+    env.reset(seed=seed)
+    for a in actions:
+        obs, r, _, _, info = env.step([a])
+        assert np.all(np.isfinite(env.state))
+        assert np.isfinite(r)
+        assert env.observation_space.contains(obs)
+        u, v, yaw_rate = info["nu"]
+        assert abs(u) < 1.0 and abs(v) < 1.0 and abs(yaw_rate) < 2.0
+        assert r >= sim.PAPER_SIM.lost_reward
+
+
+def test_lost_pipe_triggers_search_and_penalty():
+    # a 1-m pipe north of the start; the AUV starts 1.5 m east of it, looking east: nothing in view
+    pipe = Pipeline(np.array([[0.0, 0.0], [1.0, 0.0]]))
+    env = PipelineFollowingEnv(pipe, episode_seconds=30)
+    _, info = env.reset(options={"lateral_offset": 1.5, "heading_offset_deg": 90.0})
+    assert not info["pipe_in_view"]
+    history = []
+    for _ in range(30):
+        _, r, _, _, info = env.step([-1.0])
+        history.append((r, info["overridden"], info["pipe_in_view"], info["pose"][2]))
+    r, overridden, _, psi = history[0]
+    assert overridden and r == -10.0
+    assert info["executed_action"] in (-1.0, 1.0)
+    # the search turns on the spot until the pipe is found again
+    assert any(seen for _, _, seen, _ in history)
+    for r, overridden, seen, _ in history:
+        if overridden or not seen:
+            assert r == -10.0
