@@ -32,8 +32,8 @@ class SimParams(NamedTuple):
     dt: float = 0.05  # RK4 step (s), DESIGN.md
     substeps: int = 20  # RK4 steps per decision: decisions every 1 s (paper §4.1)
     lost_reward: float = LOST_REWARD  # reward per decision while the pipe is lost (paper §4)
-    progress_back: float = 2.0  # progress search window behind the last progress (m)
-    progress_ahead: float = 3.0  # and ahead of it (m): more than one decision can travel
+    progress_back: float = 1.5  # progress search window behind the last progress (m)
+    progress_ahead: float = 1.5  # and ahead of it (m): ≥ 1 s of travel plus a corner cut (√2 × 1 m)
 
 
 PAPER_SIM = SimParams()
