@@ -166,6 +166,7 @@ class Cacla:
 
         self.supervisor = supervisor
         self._pending = None
+        self._phi_cache: tuple[tuple, np.ndarray] | None = None  # φ(s') of the last update
 
     algorithm = "cacla"
 
@@ -191,14 +192,25 @@ class Cacla:
         grid_features(np.asarray(obs, dtype=np.float64), c, o, wd, self._normalized, out)
         return out
 
+    def _cached_features(self, obs) -> np.ndarray:
+        """φ(obs), reusing φ(s') of the last update when ``obs`` is that s' (the usual case)."""
+        key = tuple(obs)
+        cache = self._phi_cache
+        if cache is not None and cache[0] == key:
+            return cache[1]
+        phi = self.features(obs)
+        self._phi_cache = (key, phi)
+        return phi
+
     def act(self, obs, explore: bool = True) -> float:
         """Executed action for ``obs``; with ``explore`` it samples with the current ``sigma``."""
-        phi = self.features(obs)
+        phi = self._cached_features(obs)
         sigma = self.sigma if explore else 0.0
         z0 = z1 = 0.0
         if sigma > 0.0:
-            z = self.rng.standard_normal(self._draws)
-            z0, z1 = z[0], z[-1]
+            z0 = z1 = self.rng.standard_normal()
+            if self._draws == 2:
+                z1 = self.rng.standard_normal()
         a_sup = self.supervisor(obs) if self.params.supervised else 0.0
         a, a_rl = act_packed(self.weights, phi, sigma, z0, z1, a_sup, self._packed)
         self._pending = (phi, a_rl, a_sup)
@@ -217,12 +229,12 @@ class Cacla:
         if self._pending is not None:
             phi, a_rl, a_sup = self._pending
         else:
-            phi = self.features(obs)
+            phi = self._cached_features(obs)
             a_rl = float(action)
             a_sup = self.supervisor(obs) if self.params.supervised else 0.0
         self._pending = None
         return update_packed(self.weights, phi, a_rl, a_sup, float(reward), float(discount),
-                      self.features(next_obs), self._packed)  # fmt: skip
+                             self._cached_features(next_obs), self._packed)  # fmt: skip
 
 
 def cacla_label(p: CaclaParams) -> str:
