@@ -89,8 +89,9 @@ def _decision_bench(agent, repeats):
 def bench_cacla_decision(repeats):
     from pipefollow.agents import make_agent
 
-    return _decision_bench(make_agent("cacla", skew_deg=22.5, supervised=True, rng=np.random.default_rng(0)),
-                           repeats)  # fmt: skip
+    return _decision_bench(
+        make_agent("cacla", skew_deg=22.5, supervised=True, rng=np.random.default_rng(0)), repeats
+    )
 
 
 def bench_sarsa_decision(repeats):
@@ -119,8 +120,12 @@ def bench_reproduce(repeats):
     for _ in range(max(1, repeats // 5)):
         with tempfile.TemporaryDirectory() as out:
             t = time.perf_counter()
-            subprocess.run([exe, "reproduce", "--out", out, "--no-figures"], check=True,
-                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+            subprocess.run(
+                [exe, "reproduce", "--out", out, "--no-figures"],
+                check=True,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
             times.append(time.perf_counter() - t)
     return statistics.median(times)
 
@@ -133,8 +138,12 @@ BENCHES = [
     ("CACLA decision (act+update)", bench_cacla_decision, None, 10e-6),
     ("SARSA decision (act+update)", bench_sarsa_decision, None, 40e-6),
     ("CACLA trial, 500 episodes", lambda r: _trial_bench("cacla", r), 0.04, 0.1),
-    ("supervised skew CACLA trial", lambda r: _trial_bench("cacla", r, skew_deg=22.5, supervised=True),
-     0.04, 0.1),
+    (
+        "supervised skew CACLA trial",
+        lambda r: _trial_bench("cacla", r, skew_deg=22.5, supervised=True),
+        0.04,
+        0.1,
+    ),
     ("SARSA trial, 500 episodes", lambda r: _trial_bench("sarsa", r), 0.1, 0.3),
     ("pipefollow reproduce (warm)", bench_reproduce, 1.5, 8.0),
 ]
@@ -155,8 +164,10 @@ def main(argv=None) -> int:
     ap.add_argument("--no-reproduce", action="store_true", help="skip the full-reproduction benchmark")
     ap.add_argument("--json", help="also write the figures to this JSON file")
     args = ap.parse_args(argv)
-    print(f"# {time.strftime('%Y-%m-%d')} · {platform.processor() or platform.machine()} · "
-          f"{os.cpu_count()} cores · Python {platform.python_version()}")  # fmt: skip
+    print(
+        f"# {time.strftime('%Y-%m-%d')} · {platform.processor() or platform.machine()} · "
+        f"{os.cpu_count()} cores · Python {platform.python_version()}"
+    )
     print(f"{'benchmark':<32}{'median':>12}{'floor':>12}{'×floor':>8}{'target':>12}  ok")
     results = {}
     for name, fn, floor, target in BENCHES:
@@ -166,8 +177,11 @@ def main(argv=None) -> int:
         results[name] = {"median_s": t, "floor_s": floor, "target_s": target}
         ratio = f"{t / floor:7.1f}×" if floor else " " * 8
         ok = "" if target is None else ("yes" if t <= target else "NO")
-        print(f"{name:<32}{fmt(t):>12}{fmt(floor) if floor else '':>12}{ratio}"
-              f"{fmt(target) if target else '':>12}  {ok}", flush=True)  # fmt: skip
+        print(
+            f"{name:<32}{fmt(t):>12}{fmt(floor) if floor else '':>12}{ratio}"
+            f"{fmt(target) if target else '':>12}  {ok}",
+            flush=True,
+        )
     if args.json:
         with open(args.json, "w") as f:
             json.dump(results, f, indent=1)

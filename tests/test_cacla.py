@@ -7,7 +7,7 @@ import pytest
 
 from pipefollow import cacla
 from pipefollow.agents import make_agent
-from pipefollow.cacla import A, G, K, V, Cacla, CaclaParams
+from pipefollow.cacla import A, Cacla, CaclaParams, G, K, V
 from pipefollow.exploration import skew_normal_from_normals
 from pipefollow.pipeline import builtin
 from pipefollow.rbf import RBFGrid
@@ -144,7 +144,12 @@ def _learn_bandit(agent, steps=4000, seed=0):
 
 @pytest.mark.parametrize(
     "params",
-    [CaclaParams(), CaclaParams(skew=0.5), CaclaParams(supervised=True), CaclaParams(skew=0.25, supervised=True)],
+    [
+        CaclaParams(),
+        CaclaParams(skew=0.5),
+        CaclaParams(supervised=True),
+        CaclaParams(skew=0.25, supervised=True),
+    ],
     ids=["cacla", "skew", "supervised", "supervised-skew"],
 )
 def test_learns_a_one_step_task(params):

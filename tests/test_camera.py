@@ -207,3 +207,16 @@ def test_tracking_errors_formula():
     assert_allclose(tracking_errors(0.6, 2.0, -0.2, 0.5), (0.2, 0.4899573263), atol=1e-9)
     assert_allclose(tracking_errors(-1.0, 0.0, 1.0, 0.0), (0.0, -math.pi / 2), atol=1e-15)
     assert_allclose(tracking_errors(0.4, 3.0, 0.4, 0.0), (0.4, 0.0), atol=1e-15)
+
+
+def test_angle_error_is_a_line_angle_whichever_way_the_pipe_runs():
+    # a pipe running backwards through the frame, tilted 30° from vertical: the line deviates by 30°
+    dx, dy = math.sin(math.radians(30.0)), math.cos(math.radians(30.0))
+    _, forward = tracking_errors(dx, 2.0 + dy, 0.0, 2.0)
+    _, backward = tracking_errors(-dx, 2.0 - dy, 0.0, 2.0)
+    assert forward == pytest.approx(math.radians(30.0))
+    assert backward == pytest.approx(math.radians(30.0))
+    _, flipped = tracking_errors(dx, 2.0 - dy, 0.0, 2.0)
+    assert flipped == pytest.approx(-math.radians(30.0))
+    # the worst in-view reward of eq. 19 then stays above the lost-pipe penalty (paper §4)
+    assert -(1.0 + (math.pi / 2) ** 2 + 4.0 + 0.5) > -10.0

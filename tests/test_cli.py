@@ -15,8 +15,21 @@ def runner():
 
 def test_evaluate_heuristic_json(runner, tmp_path):
     plot = tmp_path / "h.png"
-    res = runner.invoke(main, ["evaluate", "--controller", "heuristic", "--pipeline", "paper-left",
-                               "--episodes", "2", "--json", "--plot", str(plot)])  # fmt: skip
+    res = runner.invoke(
+        main,
+        [
+            "evaluate",
+            "--controller",
+            "heuristic",
+            "--pipeline",
+            "paper-left",
+            "--episodes",
+            "2",
+            "--json",
+            "--plot",
+            str(plot),
+        ],
+    )
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
     assert set(out) >= {"mean_return", "mean_pipe_in_view", "mean_progress_m", "episodes"}
@@ -57,9 +70,26 @@ def test_unknown_builtin_pipeline(runner):
 
 def test_train_then_evaluate_policy_then_continue(runner, tmp_path):
     out = tmp_path / "run"
-    res = runner.invoke(main, ["train", "--algorithm", "cacla", "--skew", "22.5", "--supervised",
-                               "--pipeline", "paper-left", "--episodes", "12", "--seed", "1",
-                               "--out", str(out), "--json"])  # fmt: skip
+    res = runner.invoke(
+        main,
+        [
+            "train",
+            "--algorithm",
+            "cacla",
+            "--skew",
+            "22.5",
+            "--supervised",
+            "--pipeline",
+            "paper-left",
+            "--episodes",
+            "12",
+            "--seed",
+            "1",
+            "--out",
+            str(out),
+            "--json",
+        ],
+    )
     assert res.exit_code == 0, res.output
     result = json.loads(res.stdout)
     assert len(result["returns"]) == 12
@@ -69,12 +99,41 @@ def test_train_then_evaluate_policy_then_continue(runner, tmp_path):
     np.testing.assert_allclose([float(r["return"]) for r in curve], result["returns"])
     res = runner.invoke(main, ["evaluate", "--controller", result["policy"], "--json"])
     assert res.exit_code == 0, res.output
-    res = runner.invoke(main, ["train", "--algorithm", "cacla", "--skew", "22.5", "--supervised",
-                               "--pipeline", "paper-right", "--episodes", "5", "--out", str(tmp_path / "r2"),
-                               "--init", result["policy"], "--json"])  # fmt: skip
+    res = runner.invoke(
+        main,
+        [
+            "train",
+            "--algorithm",
+            "cacla",
+            "--skew",
+            "22.5",
+            "--supervised",
+            "--pipeline",
+            "paper-right",
+            "--episodes",
+            "5",
+            "--out",
+            str(tmp_path / "r2"),
+            "--init",
+            result["policy"],
+            "--json",
+        ],
+    )
     assert res.exit_code == 0, res.output
-    res = runner.invoke(main, ["train", "--algorithm", "sarsa", "--episodes", "2", "--out", str(tmp_path / "r3"),
-                               "--init", result["policy"]])  # fmt: skip
+    res = runner.invoke(
+        main,
+        [
+            "train",
+            "--algorithm",
+            "sarsa",
+            "--episodes",
+            "2",
+            "--out",
+            str(tmp_path / "r3"),
+            "--init",
+            result["policy"],
+        ],
+    )
     assert res.exit_code == 2
 
 

@@ -9,7 +9,7 @@ import pipefollow
 from pipefollow import simulation as sim
 from pipefollow.env import PipelineFollowingEnv
 from pipefollow.heuristic import Heuristic
-from pipefollow.pipeline import Pipeline, builtin, random_pipeline
+from pipefollow.pipeline import Pipeline, random_pipeline
 from pipefollow.training import run_episode
 
 
@@ -114,8 +114,9 @@ def test_heuristic_keeps_pipe_in_view_through_first_turn():
     actions=st.lists(st.floats(-3, 3, allow_nan=False), min_size=1, max_size=40),
 )
 def test_random_actions_on_random_pipelines_keep_state_finite_and_bounded(seed, actions):
-    pipe = random_pipeline(np.random.default_rng(seed), n_segments=4, length_range=(1.0, 6.0),
-                           turn_range_deg=(0.0, 150.0))  # fmt: skip
+    pipe = random_pipeline(
+        np.random.default_rng(seed), n_segments=4, length_range=(1.0, 6.0), turn_range_deg=(0.0, 150.0)
+    )
     env = PipelineFollowingEnv(pipe, episode_seconds=len(actions))
     env.reset(seed=seed)
     for a in actions:

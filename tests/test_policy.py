@@ -5,7 +5,9 @@ from pipefollow.agents import make_agent
 from pipefollow.policy import PolicyError, load_policy, save_policy
 
 
-@pytest.mark.parametrize("kind", [dict(algorithm="sarsa"), dict(algorithm="cacla", skew_deg=22.5, supervised=True)])
+@pytest.mark.parametrize(
+    "kind", [dict(algorithm="sarsa"), dict(algorithm="cacla", skew_deg=22.5, supervised=True)]
+)
 def test_loaded_policy_acts_exactly_as_saved(tmp_path, kind):
     rng = np.random.default_rng(0)
     agent = make_agent(rng=rng, **kind)

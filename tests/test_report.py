@@ -26,11 +26,36 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 EPISODES = 160  # ≥ first-100 + last-50 windows, so they do not overlap
 REPEATS = 3
 OFFSETS = (-2.0, 0.0, 2.0)  # per-repeat offset of the return: the spread across repeats
-RESULTS_COLUMNS = ("experiment", "trial", "label", "algorithm", "skew_deg", "supervised", "repeat", "seed",
-                   "phase", "pipeline", "episode", "sigma", "return", "pipe_in_view", "progress_m",
-                   "time_lost_s")  # fmt: skip
-EVALUATION_COLUMNS = ("trial", "label", "repeat", "seed", "pipeline", "controller", "return", "pipe_in_view",
-                      "progress_m", "time_lost_s")  # fmt: skip
+RESULTS_COLUMNS = (
+    "experiment",
+    "trial",
+    "label",
+    "algorithm",
+    "skew_deg",
+    "supervised",
+    "repeat",
+    "seed",
+    "phase",
+    "pipeline",
+    "episode",
+    "sigma",
+    "return",
+    "pipe_in_view",
+    "progress_m",
+    "time_lost_s",
+)
+EVALUATION_COLUMNS = (
+    "trial",
+    "label",
+    "repeat",
+    "seed",
+    "pipeline",
+    "controller",
+    "return",
+    "pipe_in_view",
+    "progress_m",
+    "time_lost_s",
+)
 
 # trial → (return at episode 0, return at the end, in view, progress): converges iff in view ≥ 0.95 and
 # progress ≥ 4 m. The skew variants: 11.25° and 22.5° start far better than plain CACLA, 45° does not.
@@ -92,9 +117,26 @@ def make_run(tmp_path, exp, spec_override=None, learned=LEARNED):
                     spec(repeat, ph.episodes) if spec else _series(t.name, repeat, ph.episodes, rng)
                 )
                 for i in range(ph.episodes):
-                    results.append((exp.name, t.name, t.title, t.algorithm, t.skew_deg, t.supervised, repeat,
-                                    seed, k, ph.pipeline, episode, 0.5, ret[i], view[i], prog[i],
-                                    20 * (1 - view[i])))  # fmt: skip
+                    results.append(
+                        (
+                            exp.name,
+                            t.name,
+                            t.title,
+                            t.algorithm,
+                            t.skew_deg,
+                            t.supervised,
+                            repeat,
+                            seed,
+                            k,
+                            ph.pipeline,
+                            episode,
+                            0.5,
+                            ret[i],
+                            view[i],
+                            prog[i],
+                            20 * (1 - view[i]),
+                        )
+                    )
                     stats.append((ret[i], view[i], prog[i], 20 * (1 - view[i])))
                     phases.append(k)
                     episode += 1
@@ -108,10 +150,17 @@ def make_run(tmp_path, exp, spec_override=None, learned=LEARNED):
             for c, v in values.items():
                 evaluation.append((t.name, t.title, repeat, seed, pipe, c, *v))
             trials[(t.name, seed)] = SimpleNamespace(
-                trial=t.name, seed=seed, stats=np.array(stats), phase=np.array(phases),
-                sigma=np.full(len(stats), 0.5), weights=np.zeros(3), evaluation=values,
-                poses={c: _poses(pipe) for c in values}, evaluation_pipeline=pipe, wall_seconds=12.5,
-            )  # fmt: skip
+                trial=t.name,
+                seed=seed,
+                stats=np.array(stats),
+                phase=np.array(phases),
+                sigma=np.full(len(stats), 0.5),
+                weights=np.zeros(3),
+                evaluation=values,
+                poses={c: _poses(pipe) for c in values},
+                evaluation_pipeline=pipe,
+                wall_seconds=12.5,
+            )
     _write_csv(run / "results.csv", RESULTS_COLUMNS, results)
     _write_csv(run / "evaluation.csv", EVALUATION_COLUMNS, evaluation)
     return run, trials
@@ -142,20 +191,42 @@ def paper_grid():
     trials = (
         TrialConfig("sarsa", "SARSA", algorithm="sarsa", phases=(left,), figures=("fig5",)),
         TrialConfig("cacla", "CACLA", **cacla, phases=(left,), figures=("fig5", "fig6")),
-        TrialConfig("supervised-cacla", "supervised CACLA", **supervised, phases=(left,),
-                    figures=("fig5", "fig7")),
-        TrialConfig("cacla-skew11.25", "CACLA, skew 11.25°", **cacla, skew_deg=11.25, phases=(left,),
-                    figures=("fig6",)),
-        TrialConfig("cacla-skew22.5", "CACLA, skew 22.5°", **cacla, skew_deg=22.5, phases=(left,),
-                    figures=("fig6",)),
-        TrialConfig("cacla-skew45", "CACLA, skew 45°", **cacla, skew_deg=45.0, phases=(left,),
-                    figures=("fig6",)),
-        TrialConfig("supervised-cacla-skew22.5", "supervised CACLA, skew 22.5°", **supervised, skew_deg=22.5,
-                    phases=(left,), figures=("fig7",)),
-        TrialConfig("validation", "supervised CACLA, skew 22.5°, left then right", **supervised,
-                    skew_deg=22.5, phases=(left, right), evaluate_on="paper-validation",
-                    evaluate_seconds=60.0, figures=("table1",)),
-    )  # fmt: skip
+        TrialConfig(
+            "supervised-cacla", "supervised CACLA", **supervised, phases=(left,), figures=("fig5", "fig7")
+        ),
+        TrialConfig(
+            "cacla-skew11.25",
+            "CACLA, skew 11.25°",
+            **cacla,
+            skew_deg=11.25,
+            phases=(left,),
+            figures=("fig6",),
+        ),
+        TrialConfig(
+            "cacla-skew22.5", "CACLA, skew 22.5°", **cacla, skew_deg=22.5, phases=(left,), figures=("fig6",)
+        ),
+        TrialConfig(
+            "cacla-skew45", "CACLA, skew 45°", **cacla, skew_deg=45.0, phases=(left,), figures=("fig6",)
+        ),
+        TrialConfig(
+            "supervised-cacla-skew22.5",
+            "supervised CACLA, skew 22.5°",
+            **supervised,
+            skew_deg=22.5,
+            phases=(left,),
+            figures=("fig7",),
+        ),
+        TrialConfig(
+            "validation",
+            "supervised CACLA, skew 22.5°, left then right",
+            **supervised,
+            skew_deg=22.5,
+            phases=(left, right),
+            evaluate_on="paper-validation",
+            evaluate_seconds=60.0,
+            figures=("table1",),
+        ),
+    )
     return ExperimentConfig("paper", repeats=REPEATS, seed=2010, trials=trials)
 
 
@@ -173,8 +244,9 @@ def run(tmp_path, paper_short, monkeypatch):
 
 def _findings(run_dir):
     cfg = report.from_dict(json.loads((run_dir / "config.json").read_text()))
-    return report.compute_findings(cfg, report.read_rows(run_dir / "results.csv"),
-                                   report.read_rows(run_dir / "evaluation.csv"))  # fmt: skip
+    return report.compute_findings(
+        cfg, report.read_rows(run_dir / "results.csv"), report.read_rows(run_dir / "evaluation.csv")
+    )
 
 
 def _parts(findings, number):
@@ -267,8 +339,12 @@ def test_verdicts_on_the_designed_run(run):
     beats, right = _parts(f, 4)
     assert beats.verdict == right.verdict == report.CONFIRMED
     assert "3/3 repeats" in beats.ours
-    assert [c.verdict for c in f.claims] == [report.CONFIRMED, report.NOT_CONFIRMED, report.CONFIRMED,
-                                             report.CONFIRMED]  # fmt: skip
+    assert [c.verdict for c in f.claims] == [
+        report.CONFIRMED,
+        report.NOT_CONFIRMED,
+        report.CONFIRMED,
+        report.CONFIRMED,
+    ]
 
 
 def test_every_skew_variant_clearly_better_confirms_claim_2(tmp_path, paper_short):
@@ -300,8 +376,9 @@ def test_a_failed_repeat_is_not_confirmed_and_listed_as_a_difference(tmp_path, p
 
 def test_sarsa_converging_is_not_confirmed(tmp_path, paper_short):
     exp = with_overrides(paper_short, trials=["sarsa"])
-    run, _ = make_run(tmp_path, exp, spec_override={"sarsa": lambda r, n: (np.zeros(n), np.ones(n),
-                                                                              np.full(n, 6.0))})  # fmt: skip
+    run, _ = make_run(
+        tmp_path, exp, spec_override={"sarsa": lambda r, n: (np.zeros(n), np.ones(n), np.full(n, 6.0))}
+    )
     (sarsa,) = _parts(_findings(run), 1)
     assert sarsa.verdict == report.NOT_CONFIRMED
 

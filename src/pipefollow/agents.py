@@ -21,8 +21,14 @@ from pipefollow.sarsa import Sarsa, SarsaParams
 ALGORITHMS = ("sarsa", "cacla")
 
 
-def make_agent(algorithm: str, *, skew_deg: float = 0.0, supervised: bool = False,
-               rng: np.random.Generator | None = None, **params) -> Cacla | Sarsa:  # fmt: skip
+def make_agent(
+    algorithm: str,
+    *,
+    skew_deg: float = 0.0,
+    supervised: bool = False,
+    rng: np.random.Generator | None = None,
+    **params,
+) -> Cacla | Sarsa:
     """A fresh learner: ``sarsa`` or ``cacla`` (with ``skew_deg`` Δγ in degrees and ``supervised``).
 
     Extra keyword arguments override fields of :class:`CaclaParams` / :class:`SarsaParams`.

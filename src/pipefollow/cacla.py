@@ -39,6 +39,9 @@ class CaclaParams(NamedTuple):
     forgetting: float = 0.0  # per-update decay of w_k (Rosenstein & Barto); the paper uses none
 
 
+PAPER_CACLA = CaclaParams()
+
+
 def pack(p: CaclaParams) -> np.ndarray:
     """``p`` as a float array for compiled code (a NamedTuple argument costs µs per call)."""
     return np.array(p, dtype=np.float64)
@@ -143,7 +146,7 @@ class Cacla:
 
     def __init__(
         self,
-        params: CaclaParams = CaclaParams(),
+        params: CaclaParams = PAPER_CACLA,
         grid: RBFGrid = STATE_GRID,
         rng: np.random.Generator | None = None,
         seed: int | None = None,
@@ -233,8 +236,16 @@ class Cacla:
             a_rl = float(action)
             a_sup = self.supervisor(obs) if self.params.supervised else 0.0
         self._pending = None
-        return update_packed(self.weights, phi, a_rl, a_sup, float(reward), float(discount),
-                             self._cached_features(next_obs), self._packed)  # fmt: skip
+        return update_packed(
+            self.weights,
+            phi,
+            a_rl,
+            a_sup,
+            float(reward),
+            float(discount),
+            self._cached_features(next_obs),
+            self._packed,
+        )
 
 
 def cacla_label(p: CaclaParams) -> str:
@@ -243,4 +254,3 @@ def cacla_label(p: CaclaParams) -> str:
     if p.skew > 0.0:
         name += f", skew {p.skew * 45.0:g}°"
     return name
-

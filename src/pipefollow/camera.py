@@ -120,5 +120,15 @@ def _closer(best, piece, progress):
 
 @njit(cache=True)
 def tracking_errors(x1, y1, x2, y_near):
-    """``e_dist`` (m) and ``e_angl`` (rad) of DESIGN.md: pipe centred and vertical in the frame."""
-    return 0.5 * (x1 + x2), math.atan2(x1 - x2, y1 - y_near)
+    """``e_dist`` (m) and ``e_angl`` (rad) of DESIGN.md: pipe centred and vertical in the frame.
+
+    ``e_angl`` is the angle between the pipe's line and the frame's vertical, in [−π/2, π/2]: a
+    line's deviation from the vertical, whichever way the pipe runs. So the worst in-view reward
+    of eq. 19 is about −(1 + (π/2)² + 4) ≈ −7.5 − v_x, above the −10 of a lost pipe (paper §4).
+    """
+    e_angl = math.atan2(x1 - x2, y1 - y_near)
+    if e_angl > 0.5 * math.pi:
+        e_angl -= math.pi
+    elif e_angl < -0.5 * math.pi:
+        e_angl += math.pi
+    return 0.5 * (x1 + x2), e_angl

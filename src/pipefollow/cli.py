@@ -9,10 +9,12 @@ from pathlib import Path
 import click
 import numpy as np
 
+from pipefollow.experiments.config import ConfigError
+from pipefollow.experiments.store import StoreError
 from pipefollow.pipeline import PipelineError
 from pipefollow.policy import PolicyError
 
-USER_ERRORS: tuple[type[Exception], ...] = (PipelineError, PolicyError)
+USER_ERRORS: tuple[type[Exception], ...] = (PipelineError, PolicyError, ConfigError, StoreError)
 
 
 class UserError(click.ClickException):
@@ -63,8 +65,12 @@ def load_controller(spec: str, seed: int):
 
 def _summary(stats) -> dict:
     rows = [
-        {"return": s.ret, "pipe_in_view": s.pipe_in_view, "progress_m": s.progress_m,
-         "time_lost_s": s.time_lost_s}  # fmt: skip
+        {
+            "return": s.ret,
+            "pipe_in_view": s.pipe_in_view,
+            "progress_m": s.progress_m,
+            "time_lost_s": s.time_lost_s,
+        }
         for s in stats
     ]
     return {
@@ -76,24 +82,50 @@ def _summary(stats) -> dict:
 
 
 @main.command()
-@click.option("--controller", default="heuristic", show_default=True,
-              help="'heuristic' or a policy file (.npz) written by 'pipefollow train'.")
-@click.option("--pipeline", default="paper-left", show_default=True,
-              help="Built-in name (paper-left, paper-right, paper-validation) or a JSON file.")
+@click.option(
+    "--controller",
+    default="heuristic",
+    show_default=True,
+    help="'heuristic' or a policy file (.npz) written by 'pipefollow train'.",
+)
+@click.option(
+    "--pipeline",
+    default="paper-left",
+    show_default=True,
+    help="Built-in name (paper-left, paper-right, paper-validation) or a JSON file.",
+)
 @click.option("--episodes", default=1, show_default=True, type=click.IntRange(min=1))
-@click.option("--seconds", type=click.FloatRange(min=1.0), default=None,
-              help="Episode length in seconds [default: 60 on paper-validation, else 20].")
+@click.option(
+    "--seconds",
+    type=click.FloatRange(min=1.0),
+    default=None,
+    help="Episode length in seconds [default: 60 on paper-validation, else 20].",
+)
 @click.option("--seed", default=0, show_default=True, type=int, help="Seed of the start perturbation.")
-@click.option("--start-noise", default=0.0, show_default=True, type=click.FloatRange(min=0.0),
-              help="Uniform random lateral start offset up to this many metres.")
-@click.option("--heading-noise", default=0.0, show_default=True, type=click.FloatRange(min=0.0),
-              help="Uniform random start heading offset up to this many degrees.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-              help="Save a trajectory plot (PNG) of the first episode.")
+@click.option(
+    "--start-noise",
+    default=0.0,
+    show_default=True,
+    type=click.FloatRange(min=0.0),
+    help="Uniform random lateral start offset up to this many metres.",
+)
+@click.option(
+    "--heading-noise",
+    default=0.0,
+    show_default=True,
+    type=click.FloatRange(min=0.0),
+    help="Uniform random start heading offset up to this many degrees.",
+)
+@click.option(
+    "--plot",
+    "plot_path",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Save a trajectory plot (PNG) of the first episode.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @_guard
-def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading_noise, plot_path,
-             as_json):  # fmt: skip
+def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading_noise, plot_path, as_json):
     """Evaluate a controller deterministically (σ = 0) on a pipeline."""
     from pipefollow.env import PipelineFollowingEnv
     from pipefollow.pipeline import resolve
@@ -105,14 +137,19 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
     stats = []
     for e in range(episodes):
         stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
-    result = {"controller": controller, "pipeline": pipeline, "seconds": env.episode_seconds,
-              **_summary(stats)}  # fmt: skip
+    result = {
+        "controller": controller,
+        "pipeline": pipeline,
+        "seconds": env.episode_seconds,
+        **_summary(stats),
+    }
     if plot_path:
         from pipefollow.render import plot_trajectories
 
         name = "heuristic" if controller == "heuristic" else Path(controller).stem
-        plot_trajectories(pipe, {name: stats[0].poses}, plot_path,
-                          title=f"{name} on {pipe.name}: return {stats[0].ret:.2f}")  # fmt: skip
+        plot_trajectories(
+            pipe, {name: stats[0].poses}, plot_path, title=f"{name} on {pipe.name}: return {stats[0].ret:.2f}"
+        )
         result["plot"] = str(plot_path)
     if as_json:
         click.echo(json.dumps(result))
@@ -121,27 +158,50 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
     click.echo(f"{'episode':>7} {'return':>9} {'in view':>8} {'progress':>9}")
     for i, row in enumerate(result["episodes"]):
         click.echo(f"{i:>7} {row['return']:>9.3f} {row['pipe_in_view']:>8.1%} {row['progress_m']:>8.2f}m")
-    click.echo(f"{'mean':>7} {result['mean_return']:>9.3f} {result['mean_pipe_in_view']:>8.1%} "
-               f"{result['mean_progress_m']:>8.2f}m")  # fmt: skip
+    click.echo(
+        f"{'mean':>7} {result['mean_return']:>9.3f} {result['mean_pipe_in_view']:>8.1%} "
+        f"{result['mean_progress_m']:>8.2f}m"
+    )
     if plot_path:
         click.echo(f"plot: {plot_path}")
 
 
 @main.command()
 @click.option("--algorithm", type=click.Choice(["sarsa", "cacla"]), required=True)
-@click.option("--skew", type=click.FloatRange(min=0.0), default=0.0, show_default=True,
-              help="CACLA skew step Δγ in degrees (eq. 15): 11.25, 22.5 or 45 in the paper; 0 = Gaussian.")
+@click.option(
+    "--skew",
+    type=click.FloatRange(min=0.0),
+    default=0.0,
+    show_default=True,
+    help="CACLA skew step Δγ in degrees (eq. 15): 11.25, 22.5 or 45 in the paper; 0 = Gaussian.",
+)
 @click.option("--supervised", is_flag=True, help="Supervised CACLA with the heuristic as supervisor.")
-@click.option("--pipeline", default="paper-left", show_default=True,
-              help="Built-in name or JSON file to train on.")
+@click.option(
+    "--pipeline", default="paper-left", show_default=True, help="Built-in name or JSON file to train on."
+)
 @click.option("--episodes", default=500, show_default=True, type=click.IntRange(min=1))
-@click.option("--seconds", default=20.0, show_default=True, type=click.FloatRange(min=1.0),
-              help="Episode length in seconds.")
+@click.option(
+    "--seconds",
+    default=20.0,
+    show_default=True,
+    type=click.FloatRange(min=1.0),
+    help="Episode length in seconds.",
+)
 @click.option("--seed", default=0, show_default=True, type=int)
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), required=True,
-              help="Folder for policy.npz and learning_curve.csv.")
-@click.option("--init", "init_policy", type=click.Path(dir_okay=False), default=None,
-              help="Continue training from this policy file (e.g. left turns, then right turns).")
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False),
+    required=True,
+    help="Folder for policy.npz and learning_curve.csv.",
+)
+@click.option(
+    "--init",
+    "init_policy",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Continue training from this policy file (e.g. left turns, then right turns).",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
 @_guard
 def train(algorithm, skew, supervised, pipeline, episodes, seconds, seed, out_dir, init_policy, as_json):
@@ -160,14 +220,17 @@ def train(algorithm, skew, supervised, pipeline, episodes, seconds, seed, out_di
         agent = load_policy(init_policy)
         if agent.algorithm != algorithm:
             raise UserError(f"--init {init_policy}: holds a {agent.name} policy, not {algorithm}")
-        if algorithm == "cacla" and (skew != agent.params.skew * 45.0 or supervised != agent.params.supervised):
+        if algorithm == "cacla" and (
+            skew != agent.params.skew * 45.0 or supervised != agent.params.supervised
+        ):
             raise UserError(f"--init {init_policy}: holds a {agent.name} policy; --skew/--supervised differ")
         agent.rng = rng
     else:
         agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng)
     show = not as_json and sys.stderr.isatty()
-    with click.progressbar(length=episodes, label=f"training {agent.name}", file=sys.stderr,
-                           hidden=not show) as bar:  # fmt: skip
+    with click.progressbar(
+        length=episodes, label=f"training {agent.name}", file=sys.stderr, hidden=not show
+    ) as bar:
         done = [0]
 
         def progress(n):
@@ -186,15 +249,187 @@ def train(algorithm, skew, supervised, pipeline, episodes, seconds, seed, out_di
         "policy": str(policy_path),
         "learning_curve": str(curve_path),
         "returns": stats[:, 0].tolist(),
-        **{f"final_mean_{n}": float(stats[-min(50, episodes):, i].mean()) for i, n in enumerate(STAT_NAMES)},
+        **{f"final_mean_{n}": float(stats[-min(50, episodes) :, i].mean()) for i, n in enumerate(STAT_NAMES)},
     }
     if as_json:
         click.echo(json.dumps(result))
         return
     k = min(10, episodes)
-    click.echo(f"{agent.name}: mean return of the first {k} episodes {stats[:k, 0].mean():.2f}, "
-               f"of the last {k} {stats[-k:, 0].mean():.2f}")  # fmt: skip
+    click.echo(
+        f"{agent.name}: mean return of the first {k} episodes {stats[:k, 0].mean():.2f}, "
+        f"of the last {k} {stats[-k:, 0].mean():.2f}"
+    )
     click.echo(f"policy: {policy_path}\nlearning curve: {curve_path}")
+
+
+def _write_figures(run_dir: Path, required: bool) -> list[Path]:
+    """Figures and REPORT.md through ``pipefollow.experiments.report``, if that module exists."""
+    try:
+        from pipefollow.experiments import report
+    except ModuleNotFoundError as e:
+        if e.name != "pipefollow.experiments.report":
+            raise
+        if required:
+            raise click.ClickException(
+                "figures need pipefollow.experiments.report, which is missing"
+            ) from None
+        click.echo("note: figures skipped (pipefollow.experiments.report is not available)", err=True)
+        return []
+    return [Path(p) for p in report.write_outputs(run_dir)]
+
+
+@main.command()
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False),
+    default=None,
+    help="Run folder; running again with the same options resumes. "
+    "[default: ./reproduction, ./reproduction-quick with --quick]",
+)
+@click.option(
+    "--backend",
+    default="process",
+    show_default=True,
+    metavar="serial|process|ray",
+    help="Where trials run: in this process, in a local process pool, or on Ray.",
+)
+@click.option(
+    "--workers",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Trials at the same time [default: all cores].",
+)
+@click.option(
+    "--ray-address", default=None, help="Address of a running Ray cluster [default: a local instance]."
+)
+@click.option(
+    "--repeats",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Repeats (seeds) of every trial [default: the experiment's, 5 for the paper].",
+)
+@click.option(
+    "--episodes",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Episodes of every training phase [default: the experiment's, 500 for the paper].",
+)
+@click.option(
+    "--seed", type=int, default=None, help="Seed of the first repeat [default: 2010 for the paper]."
+)
+@click.option(
+    "--experiment",
+    default="paper",
+    show_default=True,
+    help="'paper' (the shipped paper.toml) or an experiment TOML file.",
+)
+@click.option(
+    "--trial",
+    "trials",
+    multiple=True,
+    metavar="NAME",
+    help="Run only this trial (repeatable) [default: all].",
+)
+@click.option(
+    "--quick",
+    is_flag=True,
+    help="Small smoke-test version: 2 repeats, 30 episodes per phase, --out ./reproduction-quick.",
+)
+@click.option("--no-figures", is_flag=True, help="Do not draw figures and REPORT.md.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
+@_guard
+def reproduce(
+    out_dir,
+    backend,
+    workers,
+    ray_address,
+    repeats,
+    episodes,
+    seed,
+    experiment,
+    trials,
+    quick,
+    no_figures,
+    as_json,
+):
+    """Reproduce the paper's experiments: train every trial × seed, store results, draw the figures.
+
+    The run folder holds config.json, one file per finished trial (trials/), the learned policies
+    (policies/), results.csv and evaluation.csv (tidy tables for pandas), and the figures and
+    REPORT.md. An interrupted run resumes where it stopped when started again with the same options.
+    """
+    from pipefollow.experiments.config import load_experiment, with_overrides
+    from pipefollow.experiments.runner import RunInterrupted, run_experiment
+    from pipefollow.experiments.store import summary
+
+    if quick:
+        repeats = 2 if repeats is None else repeats
+        episodes = 30 if episodes is None else episodes
+    out = Path(out_dir) if out_dir else Path("reproduction-quick" if quick else "reproduction")
+    exp = with_overrides(
+        load_experiment(experiment), repeats=repeats, episodes=episodes, seed=seed, trials=list(trials)
+    )
+    try:
+        run = run_experiment(
+            exp, out, backend=backend, workers=workers, ray_address=ray_address, show_progress=not as_json
+        )
+    except RunInterrupted as e:
+        click.echo(f"pipefollow: {e.message}", err=True)
+        sys.exit(130)
+    outputs = list(run.tables)
+    if not no_figures:
+        outputs += _write_figures(run.run_dir, required=False)
+    per_trial = summary(run.run_dir, exp)
+    if as_json:
+        click.echo(
+            json.dumps(
+                {
+                    "run_dir": str(run.run_dir),
+                    "backend": run.backend,
+                    "workers": run.workers,
+                    "trials_total": run.trials_total,
+                    "trials_computed": run.trials_computed,
+                    "trials_reused": run.trials_reused,
+                    "wall_seconds": run.wall_seconds,
+                    "outputs": [str(p) for p in outputs],
+                    "trials": per_trial,
+                }
+            )
+        )
+        return
+    click.echo(
+        f"{exp.name}: {run.trials_total} trials ({run.trials_computed} computed, {run.trials_reused} reused) "
+        f"in {run.wall_seconds:.1f} s, backend {run.backend} ({run.workers} workers)"
+    )
+    width = max(len(r["label"]) for r in per_trial.values()) if per_trial else 5
+    click.echo(f"{'trial':<{width}}  {'return, last 50 (mean ± sd over seeds)':>38}  {'in view':>7}")
+    for row in per_trial.values():
+        ret = f"{row['mean_return_last50']:.2f} ± {row['std_return_last50']:.2f}"
+        click.echo(f"{row['label']:<{width}}  {ret:>38}  {row['mean_pipe_in_view_last50']:>7.1%}")
+    for name, row in per_trial.items():
+        if exp.trial(name).evaluate_on:
+            evals = ", ".join(f"{c} {v:.2f}" for c, v in row["evaluation_mean_return"].items())
+            click.echo(f"{row['label']} on {row['evaluation_pipeline']} (mean return): {evals}")
+    for p in outputs:
+        click.echo(f"wrote {p}")
+
+
+@main.command()
+@click.argument("run_dir", type=click.Path(file_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object: the files written.")
+@_guard
+def plot(run_dir, as_json):
+    """Redraw all figures and REPORT.md of a run folder from its stored results."""
+    from pipefollow.experiments.store import read_config
+
+    read_config(run_dir)  # a one-line error if RUN_DIR is not a run folder
+    outputs = _write_figures(Path(run_dir), required=True)
+    if as_json:
+        click.echo(json.dumps({"run_dir": str(run_dir), "outputs": [str(p) for p in outputs]}))
+        return
+    for p in outputs:
+        click.echo(f"wrote {p}")
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -73,6 +73,4 @@ def control_force(eta, nu, waypoint, params: ControllerParams = PAPER_CONTROLLER
     """Array form of :func:`pd_force` in waypoint-tracking mode: τ for pose ``eta``, velocity ``nu``."""
     eta = np.asarray(eta, dtype=np.float64)
     nu = np.asarray(nu, dtype=np.float64)
-    return np.array(
-        pd_force(*eta, *nu, float(waypoint[0]), float(waypoint[1]), 0.0, True, params)
-    )
+    return np.array(pd_force(*eta, *nu, float(waypoint[0]), float(waypoint[1]), 0.0, True, params))

@@ -98,8 +98,10 @@ class PipelineFollowingEnv(gym.Env):
         decision_seconds = params.dt * params.substeps
         if not (math.isfinite(episode_seconds) and episode_seconds >= decision_seconds):
             raise ValueError(f"episode_seconds must be at least {decision_seconds:g}, got {episode_seconds}")
-        for name, value in (("start_lateral_noise", start_lateral_noise),
-                            ("start_heading_noise_deg", start_heading_noise_deg)):  # fmt: skip
+        for name, value in (
+            ("start_lateral_noise", start_lateral_noise),
+            ("start_heading_noise_deg", start_heading_noise_deg),
+        ):
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"{name} must be a finite number ≥ 0, got {value}")
         self.pipeline = resolve(pipeline)

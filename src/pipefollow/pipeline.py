@@ -170,9 +170,7 @@ def builtin(name: str) -> Pipeline:
     if name == "paper-right":
         return Pipeline(builtin("paper-left").mirror().points, name)
     if name == "paper-validation":
-        return _polyline(
-            [4.0, 5.0, 3.5, 6.0, 4.5, 5.0, 8.0], [-45.0, 90.0, -90.0, 45.0, -90.0, 45.0], name
-        )
+        return _polyline([4.0, 5.0, 3.5, 6.0, 4.5, 5.0, 8.0], [-45.0, 90.0, -90.0, 45.0, -90.0, 45.0], name)
     raise PipelineError(f"pipeline '{name}': unknown built-in (choose from {', '.join(BUILTIN_NAMES)})")
 
 

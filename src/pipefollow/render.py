@@ -41,15 +41,26 @@ def _auv_triangle(x, y, psi, size=0.35):
 
 def _footprint(x, y, psi, cam):
     """Corners (east, north) of the camera footprint."""
-    corners = [(0.0, -cam.half_width), (cam.depth, -cam.half_width),
-               (cam.depth, cam.half_width), (0.0, cam.half_width)]  # fmt: skip
+    corners = [
+        (0.0, -cam.half_width),
+        (cam.depth, -cam.half_width),
+        (cam.depth, cam.half_width),
+        (0.0, cam.half_width),
+    ]
     c, s = math.cos(psi), math.sin(psi)
     return np.array([(y + s * f + c * lat, x + c * f - s * lat) for f, lat in corners])
 
 
 def _draw_pipe(ax, pipeline: Pipeline) -> None:
-    ax.plot(pipeline.points[:, 1], pipeline.points[:, 0], color=PIPE_COLOR, lw=3, alpha=0.8,
-            label="pipe", solid_capstyle="round")  # fmt: skip
+    ax.plot(
+        pipeline.points[:, 1],
+        pipeline.points[:, 0],
+        color=PIPE_COLOR,
+        lw=3,
+        alpha=0.8,
+        label="pipe",
+        solid_capstyle="round",
+    )
     ax.set_aspect("equal")
     ax.set_xlabel("east (m)")
     ax.set_ylabel("north (m)")
@@ -60,8 +71,9 @@ def _draw_auv(ax, pose, cam, color=AUV_COLOR, alpha=1.0) -> None:
     from matplotlib.patches import Polygon
 
     x, y, psi = pose
-    ax.add_patch(Polygon(_footprint(x, y, psi, cam), closed=True, fill=False, ec=CAMERA_COLOR,
-                         lw=1.2, alpha=alpha))  # fmt: skip
+    ax.add_patch(
+        Polygon(_footprint(x, y, psi, cam), closed=True, fill=False, ec=CAMERA_COLOR, lw=1.2, alpha=alpha)
+    )
     ax.add_patch(Polygon(_auv_triangle(x, y, psi), closed=True, color=color, alpha=alpha))
 
 

@@ -24,8 +24,9 @@ def csv_text(header: Sequence[str], rows: Iterable[Sequence]) -> str:
     return buf.getvalue()
 
 
-def write_learning_curve(path: str | Path, stats: np.ndarray, episodes: int,
-                         sigma_start: float = 1.0, sigma_end: float = 0.01) -> Path:  # fmt: skip
+def write_learning_curve(
+    path: str | Path, stats: np.ndarray, episodes: int, sigma_start: float = 1.0, sigma_end: float = 0.01
+) -> Path:
     """One row per episode: ``episode, sigma, return, pipe_in_view, progress_m, time_lost_s``."""
     path = Path(path)
     rows = ([e, linear_sigma(e, episodes, sigma_start, sigma_end), *stats[e]] for e in range(len(stats)))

@@ -25,6 +25,9 @@ class SarsaParams(NamedTuple):
     n_search: int = 21  # actions of the one-step search: −90°…90° in 9° steps (paper §4.1)
 
 
+PAPER_SARSA = SarsaParams()
+
+
 @njit(cache=True)
 def action_features(a, centres, width, normalized):
     """ψ(a): the action dimension's RBF activations."""
@@ -73,8 +76,9 @@ def update(W, phi, psi, reward, discount, phi_next, psi_next, alpha):
 
 
 class Sarsa:
-    """A SARSA agent on RBF state × action features (any env with a Box observation and
-    a 1-D action in [-1, 1]).
+    """A SARSA agent on RBF state × action features.
+
+    It works on any environment with a Box observation and a 1-D action in [-1, 1].
 
     The update picks the next action a' (on-policy, with the current σ) and :meth:`act` then
     returns that same action for that observation, as SARSA requires.
@@ -82,7 +86,7 @@ class Sarsa:
 
     def __init__(
         self,
-        params: SarsaParams = SarsaParams(),
+        params: SarsaParams = PAPER_SARSA,
         grid: RBFGrid = STATE_GRID,
         action_grid: RBFGrid = ACTION_GRID,
         rng: np.random.Generator | None = None,
@@ -154,7 +158,15 @@ class Sarsa:
         next_obs = np.asarray(next_obs, dtype=np.float64)
         phi_next = self.features(next_obs)
         a_next = self._choose(phi_next, True) if discount != 0.0 else 0.0
-        delta = update(self.weights, phi, self._psi(float(action)), float(reward), float(discount),
-                       phi_next, self._psi(a_next), self.params.alpha)  # fmt: skip
+        delta = update(
+            self.weights,
+            phi,
+            self._psi(float(action)),
+            float(reward),
+            float(discount),
+            phi_next,
+            self._psi(a_next),
+            self.params.alpha,
+        )
         self._pending = (next_obs.copy(), phi_next, a_next)
         return delta

@@ -68,7 +68,14 @@ def closed_loop_rk4(s, wp_x, wp_y, psi_ref, track_bearing, dt, p):
     k3x, k3y, k3h = kinematics(ps, u, v, r)
     k3u, k3v, k3r = acceleration(u, v, r, tx, ty, tn, ap)
     # k4
-    x, y, ps, u, v, r = x0 + dt * k3x, y0 + dt * k3y, h0 + dt * k3h, u0 + dt * k3u, v0 + dt * k3v, r0 + dt * k3r
+    x, y, ps, u, v, r = (
+        x0 + dt * k3x,
+        y0 + dt * k3y,
+        h0 + dt * k3h,
+        u0 + dt * k3u,
+        v0 + dt * k3v,
+        r0 + dt * k3r,
+    )
     tx, ty, tn = pd_force(x, y, ps, u, v, r, wp_x, wp_y, psi_ref, track_bearing, cp)
     k4x, k4y, k4h = kinematics(ps, u, v, r)
     k4u, k4v, k4r = acceleration(u, v, r, tx, ty, tn, ap)
@@ -157,7 +164,16 @@ def pack_params(p: SimParams) -> np.ndarray:
     rebuilds the record inside compiled code.
     """
     return np.array(
-        [*p.auv, *p.controller, *p.camera, p.dt, p.substeps, p.lost_reward, p.progress_back, p.progress_ahead],
+        [
+            *p.auv,
+            *p.controller,
+            *p.camera,
+            p.dt,
+            p.substeps,
+            p.lost_reward,
+            p.progress_back,
+            p.progress_ahead,
+        ],
         dtype=np.float64,
     )
 
@@ -166,9 +182,29 @@ def pack_params(p: SimParams) -> np.ndarray:
 def unpack_params(a):
     """Inverse of :func:`pack_params`, inside compiled code."""
     auv = AUVParams(
-        a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10],
-        a[11], a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21],
-    )  # fmt: skip
+        a[0],
+        a[1],
+        a[2],
+        a[3],
+        a[4],
+        a[5],
+        a[6],
+        a[7],
+        a[8],
+        a[9],
+        a[10],
+        a[11],
+        a[12],
+        a[13],
+        a[14],
+        a[15],
+        a[16],
+        a[17],
+        a[18],
+        a[19],
+        a[20],
+        a[21],
+    )
     ctrl = ControllerParams(a[22], a[23], a[24], a[25], a[26], a[27], a[28], a[29])
     cam = CameraParams(a[30], a[31])
     return SimParams(auv, ctrl, cam, a[32], int(a[33]), a[34], a[35], a[36])

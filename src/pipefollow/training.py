@@ -59,8 +59,16 @@ class EpisodeStats:
         return (self.ret, self.pipe_in_view, self.progress_m, self.time_lost_s)
 
 
-def run_episode(env, agent, *, learn: bool = False, explore: bool = False, sigma: float = 0.0,
-                seed: int | None = None, options: dict | None = None) -> EpisodeStats:  # fmt: skip
+def run_episode(
+    env,
+    agent,
+    *,
+    learn: bool = False,
+    explore: bool = False,
+    sigma: float = 0.0,
+    seed: int | None = None,
+    options: dict | None = None,
+) -> EpisodeStats:
     """Run one episode of ``agent`` in a :class:`~pipefollow.env.PipelineFollowingEnv`.
 
     With ``learn`` the agent is updated as described in the module docstring.
@@ -92,12 +100,20 @@ def run_episode(env, agent, *, learn: bool = False, explore: bool = False, sigma
                 pending = None
         obs = next_obs
     env_u = env.unwrapped
-    return EpisodeStats(total, seen / steps, float(info["progress_m"]), (steps - seen) * decision_s,
-                        np.array(env_u.trail))  # fmt: skip
+    return EpisodeStats(
+        total, seen / steps, float(info["progress_m"]), (steps - seen) * decision_s, np.array(env_u.trail)
+    )
 
 
-def train(env, agent, episodes: int, *, sigma_start: float = 1.0, sigma_end: float = 0.01,
-          callback: Callable[[int, EpisodeStats], None] | None = None) -> np.ndarray:  # fmt: skip
+def train(
+    env,
+    agent,
+    episodes: int,
+    *,
+    sigma_start: float = 1.0,
+    sigma_end: float = 0.01,
+    callback: Callable[[int, EpisodeStats], None] | None = None,
+) -> np.ndarray:
     """Train ``agent`` for ``episodes`` episodes in ``env``; returns (episodes, 4) statistics."""
     stats = np.empty((episodes, 4))
     for e in range(episodes):
@@ -114,8 +130,9 @@ def train(env, agent, episodes: int, *, sigma_start: float = 1.0, sigma_end: flo
 
 
 @njit(cache=True)
-def _cacla_episodes(w, hp, points, cum, start, simp, sigmas, n_decisions, centres, offsets, widths,
-                    normalized, rng, stats):  # fmt: skip
+def _cacla_episodes(
+    w, hp, points, cum, start, simp, sigmas, n_decisions, centres, offsets, widths, normalized, rng, stats
+):
     p = cacla_mod.unpack(hp)
     ps = sim.unpack_params(simp)
     decision_s = ps.dt * ps.substeps
@@ -165,9 +182,28 @@ def _cacla_episodes(w, hp, points, cum, start, simp, sigmas, n_decisions, centre
 
 
 @njit(cache=True)
-def _sarsa_episodes(W, alpha, discount, search_actions, search_psi, a_centres, a_width, a_normalized,
-                    points, cum, start, simp, sigmas, n_decisions, centres, offsets, widths, normalized,
-                    rng, stats):  # fmt: skip
+def _sarsa_episodes(
+    W,
+    alpha,
+    discount,
+    search_actions,
+    search_psi,
+    a_centres,
+    a_width,
+    a_normalized,
+    points,
+    cum,
+    start,
+    simp,
+    sigmas,
+    n_decisions,
+    centres,
+    offsets,
+    widths,
+    normalized,
+    rng,
+    stats,
+):
     ps = sim.unpack_params(simp)
     decision_s = ps.dt * ps.substeps
     nf = W.shape[0]
@@ -224,15 +260,23 @@ def _sarsa_episodes(W, alpha, discount, search_actions, search_psi, a_centres, a
         stats[e, 3] = (n_decisions - seen) * decision_s
 
 
-def train_compiled(agent, pipeline: Pipeline, episodes: int, *, episode_seconds: float = 20.0,
-                   sigma_start: float = 1.0, sigma_end: float = 0.01,
-                   params: sim.SimParams = sim.PAPER_SIM,
-                   progress: Callable[[int], None] | None = None, chunk: int = 50) -> np.ndarray:  # fmt: skip
-    """Train ``agent`` (a :class:`~pipefollow.cacla.Cacla` or :class:`~pipefollow.sarsa.Sarsa`) in
-    compiled code; the same numbers as :func:`train` on ``PipelineFollowingEnv(pipeline,
-    episode_seconds)`` with the same agent state and generator. Returns (episodes, 4) statistics.
+def train_compiled(
+    agent,
+    pipeline: Pipeline,
+    episodes: int,
+    *,
+    episode_seconds: float = 20.0,
+    sigma_start: float = 1.0,
+    sigma_end: float = 0.01,
+    params: sim.SimParams = sim.PAPER_SIM,
+    progress: Callable[[int], None] | None = None,
+    chunk: int = 50,
+) -> np.ndarray:
+    """Train a :class:`~pipefollow.cacla.Cacla` or :class:`~pipefollow.sarsa.Sarsa` agent in compiled code.
 
-    Runs ``chunk`` episodes per compiled call and reports the episodes done to ``progress``.
+    It gives the same numbers as :func:`train` on ``PipelineFollowingEnv(pipeline, episode_seconds)``
+    with the same agent state and generator. Runs ``chunk`` episodes per compiled call and reports
+    the episodes done to ``progress``. Returns (episodes, 4) statistics.
     """
     sigmas = np.array([linear_sigma(e, episodes, sigma_start, sigma_end) for e in range(episodes)])
     n_decisions = int(round(episode_seconds / (params.dt * params.substeps)))
@@ -246,14 +290,46 @@ def train_compiled(agent, pipeline: Pipeline, episodes: int, *, episode_seconds:
         hi = min(episodes, lo + max(1, chunk))
         sig, out = sigmas[lo:hi], stats[lo:hi]
         if isinstance(agent, cacla_mod.Cacla):
-            _cacla_episodes(agent.weights, cacla_mod.pack(agent.params), pts, cum, start, simp, sig,
-                            n_decisions, centres, offsets, widths, normalized, agent.rng, out)  # fmt: skip
+            _cacla_episodes(
+                agent.weights,
+                cacla_mod.pack(agent.params),
+                pts,
+                cum,
+                start,
+                simp,
+                sig,
+                n_decisions,
+                centres,
+                offsets,
+                widths,
+                normalized,
+                agent.rng,
+                out,
+            )
         elif isinstance(agent, sarsa_mod.Sarsa):
             ac, _, aw = agent.action_grid.packed
-            _sarsa_episodes(agent.weights, agent.params.alpha, agent.params.discount, agent.search_actions,
-                            agent.search_psi, ac, float(aw[0]), agent.action_grid.form == "normalized",
-                            pts, cum, start, simp, sig, n_decisions, centres, offsets, widths, normalized,
-                            agent.rng, out)  # fmt: skip
+            _sarsa_episodes(
+                agent.weights,
+                agent.params.alpha,
+                agent.params.discount,
+                agent.search_actions,
+                agent.search_psi,
+                ac,
+                float(aw[0]),
+                agent.action_grid.form == "normalized",
+                pts,
+                cum,
+                start,
+                simp,
+                sig,
+                n_decisions,
+                centres,
+                offsets,
+                widths,
+                normalized,
+                agent.rng,
+                out,
+            )
         else:
             raise TypeError(f"no compiled training loop for {type(agent).__name__}")
         if progress is not None:

@@ -1,0 +1,1 @@
+"""Experiments: configuration, the trial unit of work, runner, results store, figures and report."""

@@ -234,8 +234,14 @@ def load_experiment(spec: str | Path = "paper") -> ExperimentConfig:
     return parse_experiment(data, source)
 
 
-def with_overrides(exp: ExperimentConfig, *, repeats: int | None = None, episodes: int | None = None,
-                   seed: int | None = None, trials: list[str] | None = None) -> ExperimentConfig:  # fmt: skip
+def with_overrides(
+    exp: ExperimentConfig,
+    *,
+    repeats: int | None = None,
+    episodes: int | None = None,
+    seed: int | None = None,
+    trials: list[str] | None = None,
+) -> ExperimentConfig:
     """A copy with command-line overrides: repeats, episodes of every phase, seed, a subset of trials."""
     out = exp
     if trials:
@@ -249,9 +255,15 @@ def with_overrides(exp: ExperimentConfig, *, repeats: int | None = None, episode
     if seed is not None:
         out = dataclasses.replace(out, seed=seed)
     if episodes is not None:
-        out = dataclasses.replace(out, trials=tuple(
-            dataclasses.replace(t, phases=tuple(dataclasses.replace(p, episodes=episodes) for p in t.phases))
-            for t in out.trials))  # fmt: skip
+        out = dataclasses.replace(
+            out,
+            trials=tuple(
+                dataclasses.replace(
+                    t, phases=tuple(dataclasses.replace(p, episodes=episodes) for p in t.phases)
+                )
+                for t in out.trials
+            ),
+        )
     validate(out, "overrides")
     for t in out.trials:
         for p in t.phases:

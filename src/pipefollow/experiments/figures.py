@@ -99,8 +99,9 @@ def learning_curve_figure(
     return fig
 
 
-def trajectories_figure(pipeline, trajectories: Mapping[str, np.ndarray], path: str | os.PathLike | None,
-                        title: str):  # fmt: skip
+def trajectories_figure(
+    pipeline, trajectories: Mapping[str, np.ndarray], path: str | os.PathLike | None, title: str
+):
     """Evaluation trajectories over a pipeline (paper Fig. 4 view), saved as PNG when ``path`` is given.
 
     Args:

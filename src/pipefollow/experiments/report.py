@@ -344,9 +344,11 @@ def claim_fig5(trials: Sequence[TrialConfig], summaries: Mapping[str, list[Phase
     if not parts:
         statement = "CACLA and supervised CACLA converge; SARSA does not"
         parts.append(Part(statement, "no fig5 trials in this run", NOT_TESTED))
-    paper = ("\"The Sarsa algorithm did not converge to a result able to track the pipeline within the "
-             "allotted number of episodes in any instance. Both versions of CACLA converged to a successful "
-             "policy in all instances.\" (§5.1)")  # fmt: skip
+    paper = (
+        '"The Sarsa algorithm did not converge to a result able to track the pipeline within the '
+        "allotted number of episodes in any instance. Both versions of CACLA converged to a successful "
+        'policy in all instances." (§5.1)'
+    )
     return Claim(1, "Fig. 5", paper, tuple(parts))
 
 
@@ -368,16 +370,20 @@ def claim_fig6(trials: Sequence[TrialConfig], summaries: Mapping[str, list[Phase
     base, variants = _baseline_and_variants(group, supervised=False)
     first = [summaries[t.name][0] for t in group]
     converge = _convergence_part(first, "every set-up (plain and skewed CACLA) converges in every repeat")
-    statement = (f"skew helps early: each skew variant's mean return over the first {EARLY_EPISODES} "
-                 f"episodes is above plain CACLA's by more than {SE_FACTOR:g} standard errors")  # fmt: skip
+    statement = (
+        f"skew helps early: each skew variant's mean return over the first {EARLY_EPISODES} "
+        f"episodes is above plain CACLA's by more than {SE_FACTOR:g} standard errors"
+    )
     if base is None or not variants:
         helps = Part(statement, "needs plain CACLA and at least one skew variant in fig6", NOT_TESTED)
     else:
         comps = _comparisons(base, variants, summaries, "first_return")
         better = [not math.isnan(se) and d > SE_FACTOR * se for _, d, se in comps]
         lines = [f"{base.title}: {_pm(summaries[base.name][0].values('first_return'))}"]
-        lines += [f"{v.title}: {_pm(summaries[v.name][0].values('first_return'))}, {_se_text(d, se)}"
-                  for v, d, se in comps]  # fmt: skip
+        lines += [
+            f"{v.title}: {_pm(summaries[v.name][0].values('first_return'))}, {_se_text(d, se)}"
+            for v, d, se in comps
+        ]
         if all(better):
             tally = f"all {len(comps)} variants better by more than {SE_FACTOR:g} SE"
         elif any(better):
@@ -387,9 +393,11 @@ def claim_fig6(trials: Sequence[TrialConfig], summaries: Mapping[str, list[Phase
         head = f"first {EARLY_EPISODES} episodes, mean return over repeats: "
         ours = head + "; ".join(lines) + f" — {tally}"
         helps = Part(statement, ours, _verdict(all(better)))
-    paper = ("\"All cases converged to a successful policy in all instances.\" (§5.1) \"Adding skew "
-             "exploration also seems to have a positive effect on early stages of the tabula rasa CACLA "
-             "algorithm – the stages with more heavy exploration.\" (§6)")  # fmt: skip
+    paper = (
+        '"All cases converged to a successful policy in all instances." (§5.1) "Adding skew '
+        "exploration also seems to have a positive effect on early stages of the tabula rasa CACLA "
+        'algorithm – the stages with more heavy exploration." (§6)'
+    )
     return Claim(2, "Fig. 6", paper, (converge, helps))
 
 
@@ -399,21 +407,27 @@ def claim_fig7(trials: Sequence[TrialConfig], summaries: Mapping[str, list[Phase
     base, variants = _baseline_and_variants(group, supervised=True)
     first = [summaries[t.name][0] for t in group]
     converge = _convergence_part(first, "supervised CACLA with and without skew converges in every repeat")
-    statement = (f"no advantage from skew: the last-{CONVERGE_EPISODES}-episode mean returns with and "
-                 f"without skew differ by less than {SE_FACTOR:g} standard errors")  # fmt: skip
+    statement = (
+        f"no advantage from skew: the last-{CONVERGE_EPISODES}-episode mean returns with and "
+        f"without skew differ by less than {SE_FACTOR:g} standard errors"
+    )
     if base is None or not variants:
         same = Part(statement, "needs supervised CACLA with and without skew in fig7", NOT_TESTED)
     else:
         comps = _comparisons(base, variants, summaries, "last_return")
         alike = [not math.isnan(se) and abs(d) < SE_FACTOR * se for _, d, se in comps]
         lines = [f"{base.title}: {_pm(summaries[base.name][0].values('last_return'))}"]
-        lines += [f"{v.title}: {_pm(summaries[v.name][0].values('last_return'))}, {_se_text(d, se)}"
-                  for v, d, se in comps]  # fmt: skip
+        lines += [
+            f"{v.title}: {_pm(summaries[v.name][0].values('last_return'))}, {_se_text(d, se)}"
+            for v, d, se in comps
+        ]
         ours = f"last {CONVERGE_EPISODES} episodes, mean return over repeats: " + "; ".join(lines)
         same = Part(statement, ours, _verdict(all(alike)))
-    paper = ("\"Both cases converged to a successful policy in all instances.\" (§5.1) \"Comparing the "
-             "supervised CACLA algorithm with and without skew, we see no advantage of using the skew "
-             "exploration parameter.\" (§6)")  # fmt: skip
+    paper = (
+        '"Both cases converged to a successful policy in all instances." (§5.1) "Comparing the '
+        "supervised CACLA algorithm with and without skew, we see no advantage of using the skew "
+        'exploration parameter." (§6)'
+    )
     return Claim(3, "Fig. 7", paper, (converge, same))
 
 
@@ -490,11 +504,13 @@ def claim_table1(table: Table1 | None, later_phases: Sequence[PhaseSummary]) -> 
         beats = Part(statement, "no table1 trial with a learned and a heuristic evaluation", NOT_TESTED)
     else:
         lm, hm = float(table.learned.mean()), float(table.heuristic.mean())
-        ours = (f"on `{table.pipeline}` for {table.seconds:g} s (σ = 0): learned {_pm(table.learned)} "
-                f"(mean ± sd over {len(table.seeds)} repeats) vs heuristic {hm:.2f}: "
-                f"{table.improvement_pct:+.1f} % relative to the heuristic (paper: "
-                f"{_paper_improvement_pct():+.1f} %); the learned policy beats the heuristic in "
-                f"{table.n_beat}/{len(table.seeds)} repeats")  # fmt: skip
+        ours = (
+            f"on `{table.pipeline}` for {table.seconds:g} s (σ = 0): learned {_pm(table.learned)} "
+            f"(mean ± sd over {len(table.seeds)} repeats) vs heuristic {hm:.2f}: "
+            f"{table.improvement_pct:+.1f} % relative to the heuristic (paper: "
+            f"{_paper_improvement_pct():+.1f} %); the learned policy beats the heuristic in "
+            f"{table.n_beat}/{len(table.seeds)} repeats"
+        )
         beats = Part(statement, ours, _verdict(lm > hm))
     parts = [beats]
     for s in later_phases:
@@ -535,8 +551,9 @@ class Findings:
     notes: tuple[str, ...] = field(default=())
 
 
-def compute_findings(config: ExperimentConfig, results: Rows, evaluation: Rows,
-                     wall_seconds: float | None = None) -> Findings:  # fmt: skip
+def compute_findings(
+    config: ExperimentConfig, results: Rows, evaluation: Rows, wall_seconds: float | None = None
+) -> Findings:
     """The findings of a run from its configuration and the rows of ``results.csv``/``evaluation.csv``."""
     summaries = {t.name: s for t in config.trials if (s := summarize_trial(results, t))}
     evaluations = read_evaluations(evaluation)
@@ -589,13 +606,18 @@ def _setup_lines(f: Findings) -> list[str]:
     lines.append("")
     evaluated = {e.pipeline for e in f.evaluations.values()}
     if evaluated:
-        lines.append("After training, every trial was evaluated deterministically (σ = 0) for one episode "
-                     "(learned controller, the heuristic and, for supervised agents, the pure actor) on "
-                     + ", ".join(f"`{p}`" for p in sorted(evaluated)) + ".")  # fmt: skip
+        lines.append(
+            "After training, every trial was evaluated deterministically (σ = 0) for one episode "
+            "(learned controller, the heuristic and, for supervised agents, the pure actor) on "
+            + ", ".join(f"`{p}`" for p in sorted(evaluated))
+            + "."
+        )
     if f.wall_seconds is not None:
         hours = f.wall_seconds / 3600
-        lines.append(f"The trials took {f.wall_seconds:.0f} s of wall time in total ({hours:.2f} h, summed "
-                     "over trials that may have run in parallel).")  # fmt: skip
+        lines.append(
+            f"The trials took {f.wall_seconds:.0f} s of wall time in total ({hours:.2f} h, summed "
+            "over trials that may have run in parallel)."
+        )
     missing = [t.name for t in cfg.trials if t.name not in f.summaries]
     if missing:
         lines.append("No training results for: " + ", ".join(f"`{m}`" for m in missing) + ".")
@@ -616,9 +638,12 @@ def _convergence_lines(f: Findings) -> list[str]:
         "",
     ]
     if shortest and shortest < CONVERGE_EPISODES + EARLY_EPISODES:
-        lines += [f"Note: this run's shortest phase has {shortest} episodes, fewer than "
-                  f"{CONVERGE_EPISODES + EARLY_EPISODES}; the first-{EARLY_EPISODES} and "
-                  f"last-{CONVERGE_EPISODES} windows overlap or are cut to what exists.", ""]  # fmt: skip
+        lines += [
+            f"Note: this run's shortest phase has {shortest} episodes, fewer than "
+            f"{CONVERGE_EPISODES + EARLY_EPISODES}; the first-{EARLY_EPISODES} and "
+            f"last-{CONVERGE_EPISODES} windows overlap or are cut to what exists.",
+            "",
+        ]
     return lines
 
 
@@ -640,8 +665,11 @@ def _trial_table_lines(f: Findings) -> list[str]:
         ev = f.evaluations.get(t.name)
         for s in phases:
             last = s is phases[-1]
-            evals = (f"`{ev.pipeline}` | {_pm(ev.of('learned'))} | {_pm(ev.of('heuristic'))}"
-                     if ev is not None and last else "— | — | —")  # fmt: skip
+            evals = (
+                f"`{ev.pipeline}` | {_pm(ev.of('learned'))} | {_pm(ev.of('heuristic'))}"
+                if ev is not None and last
+                else "— | — | —"
+            )
             lines.append(
                 f"| {s.label} | {s.phase + 1}: `{s.pipeline}` | {s.n_converged}/{s.n} "
                 f"| {_pm(s.values('last_return'))} | {_pm(s.values('first_return'))} "
@@ -687,8 +715,12 @@ def _table1_lines(f: Findings, trajectories: str | None) -> list[str]:
         "",
     ]
     if trajectories:
-        lines += [f"Trajectories of the repeat with the median learned return (seed {t.median_seed}):", "",
-                  f"![validation trajectories]({trajectories})", ""]  # fmt: skip
+        lines += [
+            f"Trajectories of the repeat with the median learned return (seed {t.median_seed}):",
+            "",
+            f"![validation trajectories]({trajectories})",
+            "",
+        ]
     return lines
 
 
@@ -713,16 +745,19 @@ def _differences_lines(f: Findings) -> list[str]:
     episodes = sorted({p.episodes for t in cfg.trials for p in t.phases})
     if cfg.repeats != PAPER_REPEATS or episodes != [PAPER_EPISODES]:
         counts = ", ".join(map(str, episodes))
-        lines.append(f"- Set-up: {cfg.repeats} repeats of {counts} episodes per phase; the paper used "
-                     f"{PAPER_REPEATS} repeats of {PAPER_EPISODES}.")  # fmt: skip
+        lines.append(
+            f"- Set-up: {cfg.repeats} repeats of {counts} episodes per phase; the paper used "
+            f"{PAPER_REPEATS} repeats of {PAPER_EPISODES}."
+        )
     if len(lines) == 2:
         lines.append("- Every claim was confirmed.")
     lines.append("")
     return lines
 
 
-def render_markdown(findings: Findings, figures_drawn: Mapping[str, str] | None = None,
-                    trajectories: str | None = None) -> str:  # fmt: skip
+def render_markdown(
+    findings: Findings, figures_drawn: Mapping[str, str] | None = None, trajectories: str | None = None
+) -> str:
     """REPORT.md text from findings.
 
     Args:
@@ -778,8 +813,9 @@ def _wall_seconds(run_dir: Path, config: ExperimentConfig, load: Callable) -> fl
         return None
 
 
-def draw_learning_curves(run_dir: Path, config: ExperimentConfig, results: Rows,
-                         evaluations: Mapping[str, Evaluation]) -> dict[str, str]:  # fmt: skip
+def draw_learning_curves(
+    run_dir: Path, config: ExperimentConfig, results: Rows, evaluations: Mapping[str, Evaluation]
+) -> dict[str, str]:
     """Draw fig5/6/7.png for the groups with results; returns key → file name of those drawn."""
     drawn = {}
     for key, title in FIGURES.items():

@@ -10,8 +10,8 @@ import numpy as np
 from pipefollow.agents import make_agent
 from pipefollow.cacla import Cacla
 from pipefollow.env import PipelineFollowingEnv
-from pipefollow.exploration import linear_sigma
 from pipefollow.experiments.config import TrialConfig
+from pipefollow.exploration import linear_sigma
 from pipefollow.heuristic import Heuristic
 from pipefollow.pipeline import resolve
 from pipefollow.rbf import STATE_GRID, RBFGrid
@@ -55,9 +55,17 @@ def build_agent(config: TrialConfig, rng: np.random.Generator | None = None):
     if config.algorithm == "sarsa":
         agent = make_agent("sarsa", rng=rng, alpha=config.alpha_q, discount=config.discount)
     else:
-        agent = make_agent("cacla", skew_deg=config.skew_deg, supervised=config.supervised, rng=rng,
-                           alpha_v=config.alpha_v, alpha_pi=config.alpha_pi, discount=config.discount,
-                           delta_k=config.delta_k, forgetting=config.forgetting)  # fmt: skip
+        agent = make_agent(
+            "cacla",
+            skew_deg=config.skew_deg,
+            supervised=config.supervised,
+            rng=rng,
+            alpha_v=config.alpha_v,
+            alpha_pi=config.alpha_pi,
+            discount=config.discount,
+            delta_k=config.delta_k,
+            forgetting=config.forgetting,
+        )
     if grid is not STATE_GRID:
         agent = type(agent)(agent.params, grid=grid, rng=rng)
     return agent
@@ -86,11 +94,20 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
     stats, phase, sigma = [], [], []
     for i, ph in enumerate(config.phases):
         pipe = resolve(ph.pipeline)
-        stats.append(train_compiled(agent, pipe, ph.episodes, episode_seconds=config.episode_seconds,
-                                    sigma_start=config.sigma_start, sigma_end=config.sigma_end))  # fmt: skip
+        stats.append(
+            train_compiled(
+                agent,
+                pipe,
+                ph.episodes,
+                episode_seconds=config.episode_seconds,
+                sigma_start=config.sigma_start,
+                sigma_end=config.sigma_end,
+            )
+        )
         phase.append(np.full(ph.episodes, i))
-        sigma.append([linear_sigma(e, ph.episodes, config.sigma_start, config.sigma_end)
-                      for e in range(ph.episodes)])  # fmt: skip
+        sigma.append(
+            [linear_sigma(e, ph.episodes, config.sigma_start, config.sigma_end) for e in range(ph.episodes)]
+        )
     eval_name = config.evaluate_on or config.phases[-1].pipeline
     eval_seconds = config.evaluate_seconds if config.evaluate_on else config.episode_seconds
     env = PipelineFollowingEnv(resolve(eval_name), eval_seconds)

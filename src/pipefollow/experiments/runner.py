@@ -1,0 +1,313 @@
+"""Run an experiment: map the pure ``run_trial(config, seed)`` over its trials and seeds.
+
+The parent process owns the run folder (:mod:`pipefollow.experiments.store`): it saves every
+finished trial the moment its result arrives, so an interruption (Ctrl-C, ``kill``, a crash)
+loses only the trials still running, and starting again in the same folder computes only what
+is missing. Backends differ in where trials run, never in their numbers:
+
+* ``serial``: one after the other, in this process;
+* ``process``: a pool of worker processes on this machine (forked on Linux, so that they
+  inherit the compiled numba code instead of each compiling it);
+* ``ray``: Ray tasks, on a local instance or on a cluster (``ray_address``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import multiprocessing
+import os
+import signal
+import sys
+import time
+from collections.abc import Callable, Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from contextlib import closing
+from dataclasses import dataclass
+from pathlib import Path
+
+import click
+
+from pipefollow.experiments import store
+from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig
+from pipefollow.experiments.trial import TrialResult, run_trial
+
+BACKENDS = ("serial", "process", "ray")
+
+TrialFn = Callable[[TrialConfig, int], TrialResult]
+Work = list[tuple[TrialConfig, int]]
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """What :func:`run_experiment` did.
+
+    Attributes:
+        run_dir: the run folder.
+        backend: the backend used.
+        workers: trials run at the same time (1 for ``serial`` or without work; Ray's CPUs for ``ray``).
+        trials_total: trials × seeds of the experiment.
+        trials_computed: those computed by this call.
+        trials_reused: those found finished in the run folder.
+        wall_seconds: time this call took.
+        tables: the regenerated ``results.csv`` and ``evaluation.csv``.
+    """
+
+    run_dir: Path
+    backend: str
+    workers: int
+    trials_total: int
+    trials_computed: int
+    trials_reused: int
+    wall_seconds: float
+    tables: tuple[Path, ...] = ()
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped a run; what was saved stays, and running the same command again resumes."""
+
+    def __init__(self, run_dir: Path, saved: int, total: int) -> None:
+        self.run_dir, self.saved, self.total = run_dir, saved, total
+        super().__init__(self.message)
+
+    @property
+    def message(self) -> str:
+        """One line for the user."""
+        return (
+            f"interrupted: {self.saved} of {self.total} trials are saved in '{self.run_dir}'; "
+            "run the same command again to resume"
+        )
+
+
+def import_ray():
+    """The ``ray`` module, or a :class:`ConfigError` saying how to install it."""
+    try:
+        import ray
+    except ImportError:
+        raise ConfigError("backend 'ray' needs the optional extra: pip install 'pipefollow[ray]'") from None
+    return ray
+
+
+def check_inputs(exp: ExperimentConfig) -> None:
+    """Fail before any work on what the trials would fail on late: unreadable pipelines."""
+    from pipefollow.pipeline import resolve
+
+    for name in dict.fromkeys(p.pipeline for t in exp.trials for p in t.phases):
+        resolve(name)
+    for t in exp.trials:
+        if t.evaluate_on:
+            resolve(t.evaluate_on)
+
+
+def warm_up(configs: list[TrialConfig]) -> None:
+    """Run a one-episode version of each distinct kind of learner once, in this process.
+
+    This compiles (or loads from numba's cache) every compiled path the trials use, so that
+    forked workers inherit the code and spawned ones find it cached instead of all compiling it
+    at the same time.
+    """
+    seen = set()
+    for c in configs:
+        kind = (c.algorithm, c.skew_deg > 0, c.supervised, c.rbf)
+        if kind in seen:
+            continue
+        seen.add(kind)
+        tiny = dataclasses.replace(c, phases=(dataclasses.replace(c.phases[0], episodes=1),), evaluate_on="")
+        run_trial(tiny, 0)
+
+
+def _failed(e: BaseException, config: TrialConfig, seed: int) -> BaseException:
+    e.add_note(f"while running trial '{config.name}' with seed {seed}")
+    return e
+
+
+# ---------------------------------------------------------------------------------------------
+# Backends: each yields (config, result) as trials finish, and cleans up when closed
+
+
+def _serial(work: Work, trial_fn: TrialFn) -> Iterator[tuple[TrialConfig, TrialResult]]:
+    for config, seed in work:
+        try:
+            result = trial_fn(config, seed)
+        except Exception as e:
+            raise _failed(e, config, seed) from None
+        yield config, result
+
+
+def _worker_init(parent_pid: int) -> None:
+    # Ctrl-C reaches the whole process group: the parent alone decides how to stop.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        # Die with the parent (kill -9 included) instead of computing for nobody.
+        try:
+            import ctypes
+
+            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+        except (OSError, AttributeError):  # pragma: no cover
+            pass
+        if os.getppid() != parent_pid:  # the parent died before prctl took effect
+            os._exit(1)
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    terminate = getattr(pool, "terminate_workers", None)  # Python ≥ 3.14
+    if terminate is not None:
+        terminate()
+        return
+    for p in list((getattr(pool, "_processes", None) or {}).values()):
+        if p.is_alive():
+            p.terminate()
+
+
+def _process(work: Work, trial_fn: TrialFn, workers: int) -> Iterator[tuple[TrialConfig, TrialResult]]:
+    ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
+    pool = ProcessPoolExecutor(
+        max_workers=workers, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(),)
+    )
+    futures = {}
+    complete = False
+    try:
+        futures = {pool.submit(trial_fn, config, seed): (config, seed) for config, seed in work}
+        for fut in as_completed(futures):
+            config, seed = futures[fut]
+            try:
+                result = fut.result()
+            except Exception as e:
+                raise _failed(e, config, seed) from None
+            yield config, result
+        complete = True
+    finally:
+        if not complete:  # interrupted or failed: do not wait for trials nobody will save
+            for fut in futures:
+                fut.cancel()
+            _stop_workers(pool)
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _ray(
+    work: Work, trial_fn: TrialFn, workers: int | None, address: str | None, info: dict
+) -> Iterator[tuple[TrialConfig, TrialResult]]:
+    ray = import_ray()
+    connected_here = not ray.is_initialized()  # else: the caller's Ray session, left as it is
+    pending = {}
+    try:
+        # Ray's INFO/WARNING start-up lines would drown the progress bar; errors still show.
+        if connected_here and address:
+            ray.init(address=address, log_to_driver=False, logging_level=logging.ERROR)
+        elif connected_here:
+            ray.init(
+                num_cpus=workers or os.cpu_count(),
+                include_dashboard=False,
+                log_to_driver=False,
+                logging_level=logging.ERROR,
+            )
+        info["cpus"] = int(ray.cluster_resources().get("CPU", 0))
+        remote = ray.remote(num_cpus=1, max_retries=0)(trial_fn)
+        pending = {remote.remote(config, seed): (config, seed) for config, seed in work}
+        while pending:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            for ref in ready:
+                config, seed = pending.pop(ref)
+                try:
+                    result = ray.get(ref)
+                except Exception as e:
+                    raise _failed(e, config, seed) from None
+                yield config, result
+    finally:
+        for ref in pending:
+            ray.cancel(ref, force=True)
+        if connected_here:
+            ray.shutdown()
+
+
+# ---------------------------------------------------------------------------------------------
+
+
+def run_experiment(
+    exp: ExperimentConfig,
+    out_dir: str | os.PathLike,
+    backend: str = "process",
+    workers: int | None = None,
+    ray_address: str | None = None,
+    show_progress: bool = True,
+    trial_fn: TrialFn = run_trial,
+) -> RunSummary:
+    """Run every (trial, seed) of ``exp`` not yet finished in the run folder ``out_dir``.
+
+    Args:
+        exp: the experiment; its seeds are ``exp.seeds()``.
+        out_dir: the run folder (created; an existing one must hold the same configuration).
+        backend: ``serial``, ``process`` or ``ray``.
+        workers: trials at the same time (default: all cores; for Ray, the CPUs of a local instance).
+        ray_address: address of a running Ray cluster (default: start a local instance).
+        show_progress: progress bar on stderr, when it is a terminal.
+        trial_fn: the unit of work, ``run_trial`` or a function with its signature (picklable
+            for the ``process`` backend on platforms without ``fork``).
+
+    Returns:
+        A :class:`RunSummary`; the results are in the run folder.
+
+    Raises:
+        ConfigError: unknown backend, ``workers`` < 1, missing Ray, a folder holding another
+            configuration or in use by another run.
+        RunInterrupted: on Ctrl-C, after stopping the workers; finished trials stay saved.
+    """
+    t0 = time.perf_counter()
+    if backend not in BACKENDS:
+        raise ConfigError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    if workers is not None and workers < 1:
+        raise ConfigError(f"workers must be at least 1, got {workers}")
+    if backend == "ray":
+        import_ray()
+    check_inputs(exp)
+    total = len(exp.trials) * exp.repeats
+    with store.locked(out_dir) as run_dir:
+        store.prepare(run_dir, exp)
+        done = store.finished(run_dir, exp)
+        work = [(t, seed) for t in exp.trials for seed in exp.seeds() if (t.name, seed) not in done]
+        n_workers = 1
+        if backend == "process":
+            n_workers = max(1, min(workers or os.cpu_count() or 1, len(work)))
+        ray_info = {"cpus": 0}
+        computed = 0
+        hidden = not (show_progress and sys.stderr.isatty())
+        with click.progressbar(
+            length=total, label=f"{exp.name}: trials", file=sys.stderr, hidden=hidden, show_pos=True
+        ) as bar:
+            bar.update(len(done))
+            try:
+                if work and backend != "serial":
+                    warm_up([c for c, _ in work])
+                if backend == "serial" or not work:
+                    results = _serial(work, trial_fn)
+                elif backend == "process":
+                    results = _process(work, trial_fn, n_workers)
+                else:
+                    results = _ray(work, trial_fn, workers, ray_address, ray_info)
+                with closing(results):
+                    for config, result in results:
+                        store.save_trial(run_dir, result, config)
+                        computed += 1
+                        bar.update(1)
+            except KeyboardInterrupt:
+                raise RunInterrupted(run_dir, len(done) + computed, total) from None
+            except Exception as e:
+                e.add_note(
+                    f"{len(done) + computed} of {total} trials are saved in '{run_dir}'; "
+                    "running again resumes"
+                )
+                raise
+        if backend == "ray":
+            n_workers = ray_info["cpus"] or 1
+        store.ensure_policies(run_dir, exp)
+        tables = store.write_tables(run_dir, exp)
+    return RunSummary(
+        run_dir=Path(run_dir),
+        backend=backend,
+        workers=n_workers,
+        trials_total=total,
+        trials_computed=computed,
+        trials_reused=len(done),
+        wall_seconds=time.perf_counter() - t0,
+        tables=tuple(tables),
+    )

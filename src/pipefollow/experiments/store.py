@@ -1,0 +1,402 @@
+"""The run folder: everything a reproduction produced, written so that an interruption loses nothing.
+
+Layout of a run folder ``RUN``::
+
+    RUN/config.json                      the resolved ExperimentConfig (written first)
+    RUN/trials/<trial>/seed-<seed>.npz   one finished trial (TrialResult), the unit of resumption
+    RUN/policies/<trial>-seed<seed>.npz  its learned policy, a policy file for ``pipefollow evaluate``
+    RUN/results.csv                      tidy learning curves: trial × seed × training episode
+    RUN/evaluation.csv                   tidy evaluation: trial × seed × evaluated controller
+
+Every file is written through a temporary file in the same folder and ``os.replace``, so a file
+with its final name is always complete. A trial file is written last for its trial: its presence
+is what "finished" means, and a run started again in the same folder computes only the trials
+without one. The tables are regenerated from the trial files.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import zipfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig, from_dict, to_dict
+from pipefollow.experiments.trial import TrialResult, build_agent
+from pipefollow.pipeline import write_text_atomic
+from pipefollow.results import csv_text
+from pipefollow.training import STAT_NAMES
+
+FORMAT = "pipefollow-trial"
+FORMAT_VERSION = 1
+CONFIG_FILE = "config.json"
+RESULTS_FILE = "results.csv"
+EVALUATION_FILE = "evaluation.csv"
+LOCK_FILE = ".lock"
+TMP_SUFFIX = ".tmp"  # temporary files are ".<final name>.<random>.tmp": never taken for results
+
+RESULTS_COLUMNS = (
+    "experiment",
+    "trial",
+    "label",
+    "algorithm",
+    "skew_deg",
+    "supervised",
+    "repeat",
+    "seed",
+    "phase",
+    "pipeline",
+    "episode",
+    "sigma",
+    *STAT_NAMES,
+)
+EVALUATION_COLUMNS = ("trial", "label", "repeat", "seed", "pipeline", "controller", *STAT_NAMES)
+
+
+class StoreError(ValueError):
+    """A run folder or trial file that cannot be used; the message names it."""
+
+
+def trial_path(run_dir: str | os.PathLike, trial: str, seed: int) -> Path:
+    """Where the result of ``trial`` with ``seed`` is stored."""
+    return Path(run_dir) / "trials" / trial / f"seed-{seed}.npz"
+
+
+def policy_path(run_dir: str | os.PathLike, trial: str, seed: int) -> Path:
+    """Where the learned policy of ``trial`` with ``seed`` is stored."""
+    return Path(run_dir) / "policies" / f"{trial}-seed{seed}.npz"
+
+
+def _write_npz_atomic(path: Path, arrays: dict[str, np.ndarray]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=TMP_SUFFIX)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **arrays)
+            f.flush()
+            os.fsync(f.fileno())  # the rename must not overtake the data (power loss, not just kill)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+# ---------------------------------------------------------------------------------------------
+# The folder and its configuration
+
+
+def _describe_difference(stored: dict, wanted: dict) -> str:
+    """A short account of how two resolved configurations differ."""
+    for key in ("name", "repeats", "seed"):
+        if stored.get(key) != wanted.get(key):
+            return f"{key} {stored.get(key)!r} there, {wanted.get(key)!r} now"
+    old = {t["name"]: t for t in stored.get("trials", [])}
+    new = {t["name"]: t for t in wanted.get("trials", [])}
+    if list(old) != list(new):
+        return f"trials {', '.join(old) or 'none'} there; {', '.join(new) or 'none'} now"
+    for name, t in new.items():
+        for key in t:
+            if old[name].get(key) != t[key]:
+                return f"trial '{name}': {key} {old[name].get(key)!r} there, {t[key]!r} now"
+    return "different content"
+
+
+def read_config(run_dir: str | os.PathLike) -> ExperimentConfig:
+    """The experiment stored in a run folder; :class:`StoreError` if it is not a run folder."""
+    run_dir = Path(run_dir)
+    path = run_dir / CONFIG_FILE
+    if not run_dir.is_dir():
+        raise StoreError(f"run folder '{run_dir}': no such folder")
+    try:
+        data = json.loads(path.read_text())
+        return from_dict(data)
+    except FileNotFoundError:
+        msg = f"'{run_dir}' is not a run folder (no {CONFIG_FILE}; 'pipefollow reproduce' writes one)"
+        raise StoreError(msg) from None
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        msg = f"run folder '{run_dir}': unreadable {CONFIG_FILE} ({type(e).__name__}: {e})"
+        raise StoreError(msg) from None
+
+
+def prepare(run_dir: str | os.PathLike, exp: ExperimentConfig) -> Path:
+    """Create ``run_dir`` for ``exp``, or check that it holds the same resolved configuration.
+
+    A different configuration raises :class:`ConfigError`; temporary files left by an interrupted
+    run are removed. Call it with the folder locked (:func:`locked`).
+    """
+    run_dir = Path(run_dir)
+    if run_dir.exists() and not run_dir.is_dir():
+        raise ConfigError(f"--out '{run_dir}': exists and is not a folder")
+    wanted = json.loads(json.dumps(to_dict(exp)))
+    path = run_dir / CONFIG_FILE
+    if path.exists():
+        try:
+            stored = json.loads(path.read_text())
+        except (OSError, ValueError) as e:
+            raise StoreError(f"run folder '{run_dir}': unreadable {CONFIG_FILE} ({e})") from None
+        if stored != wanted:
+            diff = _describe_difference(stored, wanted)
+            raise ConfigError(
+                f"run folder '{run_dir}' holds a different configuration ({diff}); "
+                "use another --out or the same options"
+            )
+    else:
+        write_text_atomic(path, json.dumps(wanted, indent=2, ensure_ascii=False) + "\n")
+    for tmp in run_dir.rglob(f".*{TMP_SUFFIX}"):
+        tmp.unlink(missing_ok=True)
+    return run_dir
+
+
+@contextmanager
+def locked(run_dir: str | os.PathLike) -> Iterator[Path]:
+    """Hold an exclusive lock on ``run_dir`` (created if missing) while the block runs.
+
+    A second run in the same folder gets a :class:`ConfigError` instead of interleaving its files
+    with the first one's. The lock dies with the process, so a killed run leaves no stale lock.
+    """
+    run_dir = Path(run_dir)
+    if run_dir.exists() and not run_dir.is_dir():
+        raise ConfigError(f"--out '{run_dir}': exists and is not a folder")
+    run_dir.mkdir(parents=True, exist_ok=True)
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX: no locking
+        yield run_dir
+        return
+    fd = os.open(run_dir / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ConfigError(f"run folder '{run_dir}' is in use by another pipefollow run") from None
+        yield run_dir
+    finally:
+        os.close(fd)
+
+
+# ---------------------------------------------------------------------------------------------
+# Trial files
+
+
+def save_trial(run_dir: str | os.PathLike, result: TrialResult, config: TrialConfig | None = None) -> Path:
+    """Store ``result`` atomically; with its ``config``, first also write its policy file.
+
+    The trial file comes last: once it exists, the trial counts as finished.
+    """
+    if config is not None:
+        save_policy_file(run_dir, config, result)
+    names = list(result.evaluation)
+    arrays = {
+        "format": np.array(FORMAT),
+        "format_version": np.array(FORMAT_VERSION),
+        "trial": np.array(result.trial),
+        "seed": np.array(result.seed, dtype=np.int64),
+        "stats": np.asarray(result.stats, dtype=np.float64),
+        "phase": np.asarray(result.phase, dtype=np.int64),
+        "sigma": np.asarray(result.sigma, dtype=np.float64),
+        "weights": np.asarray(result.weights, dtype=np.float64),
+        "evaluation_controllers": np.array(names, dtype=str).reshape(len(names)),
+        "evaluation_values": np.array([result.evaluation[n] for n in names], dtype=np.float64).reshape(-1, 4),
+        "evaluation_pipeline": np.array(result.evaluation_pipeline),
+        "wall_seconds": np.array(float(result.wall_seconds)),
+    }
+    for name, poses in result.poses.items():
+        arrays[f"poses/{name}"] = np.asarray(poses, dtype=np.float64)
+    path = trial_path(run_dir, result.trial, result.seed)
+    _write_npz_atomic(path, arrays)
+    return path
+
+
+def load_trial(run_dir: str | os.PathLike, trial: str, seed: int) -> TrialResult:
+    """Read a stored trial; any problem raises :class:`StoreError` naming the file."""
+    path = trial_path(run_dir, trial, seed)
+    src = f"trial file '{path}'"
+    try:
+        # Our own file object: np.load leaks the one it opens when the zip is damaged.
+        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+    except FileNotFoundError:
+        raise StoreError(f"{src}: no such file") from None
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
+        raise StoreError(f"{src}: not a readable .npz file ({type(e).__name__})") from None
+    if str(data.get("format", "")) != FORMAT:
+        raise StoreError(f"{src}: not a pipefollow trial file (no '{FORMAT}' marker)")
+    try:
+        if int(data["format_version"]) > FORMAT_VERSION:
+            raise StoreError(f"{src}: format version {int(data['format_version'])} is newer than this reads")
+        if str(data["trial"]) != trial or int(data["seed"]) != seed:
+            raise StoreError(f"{src}: holds trial '{data['trial']}' seed {int(data['seed'])}")
+        names = [str(n) for n in data["evaluation_controllers"]]
+        values = data["evaluation_values"]
+        stats = data["stats"]
+        if (
+            stats.ndim != 2
+            or stats.shape[1] != 4
+            or len(data["phase"]) != len(stats)
+            or len(data["sigma"]) != len(stats)
+            or values.shape != (len(names), 4)
+        ):
+            raise StoreError(f"{src}: arrays of inconsistent shapes")
+        return TrialResult(
+            trial=trial,
+            seed=seed,
+            stats=stats,
+            phase=data["phase"],
+            sigma=data["sigma"],
+            weights=data["weights"],
+            evaluation={n: tuple(float(v) for v in row) for n, row in zip(names, values, strict=True)},
+            poses={k.split("/", 1)[1]: v for k, v in data.items() if k.startswith("poses/")},
+            evaluation_pipeline=str(data["evaluation_pipeline"]),
+            wall_seconds=float(data["wall_seconds"]),
+        )
+    except StoreError:
+        raise
+    except KeyError as e:
+        raise StoreError(f"{src}: missing entry {e}") from None
+    except (ValueError, TypeError) as e:
+        raise StoreError(f"{src}: malformed entry ({e})") from None
+
+
+def finished(run_dir: str | os.PathLike, exp: ExperimentConfig) -> set[tuple[str, int]]:
+    """The (trial, seed) pairs of ``exp`` with a complete trial file in ``run_dir``.
+
+    A trial file that does not load or does not fit its trial's configuration is removed: its
+    trial counts as unfinished and will be computed again.
+    """
+    done = set()
+    shapes: dict[str, tuple[int, ...]] = {}
+    for t in exp.trials:
+        for seed in exp.seeds():
+            path = trial_path(run_dir, t.name, seed)
+            if not path.exists():
+                continue
+            try:
+                result = load_trial(run_dir, t.name, seed)
+            except StoreError:
+                path.unlink(missing_ok=True)
+                continue
+            if t.name not in shapes:
+                shapes[t.name] = build_agent(t).weights.shape
+            if len(result.stats) != t.episodes or result.weights.shape != shapes[t.name]:
+                path.unlink(missing_ok=True)
+                continue
+            done.add((t.name, seed))
+    return done
+
+
+def save_policy_file(run_dir: str | os.PathLike, config: TrialConfig, result: TrialResult) -> Path:
+    """Write the learned policy of ``result`` as a policy file (``pipefollow evaluate --controller``)."""
+    from pipefollow.policy import save_policy
+
+    agent = build_agent(config)
+    agent.weights[...] = result.weights
+    pipelines = " then ".join(p.pipeline for p in config.phases)
+    return save_policy(
+        agent,
+        policy_path(run_dir, result.trial, result.seed),
+        trial=config.name,
+        label=config.title,
+        seed=result.seed,
+        pipeline=pipelines,
+        episodes=config.episodes,
+    )
+
+
+def ensure_policies(run_dir: str | os.PathLike, exp: ExperimentConfig) -> int:
+    """Write the policy files missing for finished trials; returns how many were written."""
+    written = 0
+    for t in exp.trials:
+        for seed in exp.seeds():
+            if trial_path(run_dir, t.name, seed).exists() and not policy_path(run_dir, t.name, seed).exists():
+                save_policy_file(run_dir, t, load_trial(run_dir, t.name, seed))
+                written += 1
+    return written
+
+
+# ---------------------------------------------------------------------------------------------
+# Tables
+
+
+def _results_rows(exp: ExperimentConfig, t: TrialConfig, repeat: int, r: TrialResult):
+    for e in range(len(r.stats)):
+        ph = int(r.phase[e])
+        yield (
+            exp.name,
+            t.name,
+            t.title,
+            t.algorithm,
+            float(t.skew_deg),
+            t.supervised,
+            repeat,
+            r.seed,
+            ph,
+            t.phases[ph].pipeline,
+            e,
+            float(r.sigma[e]),
+            *(float(v) for v in r.stats[e]),
+        )
+
+
+def write_tables(run_dir: str | os.PathLike, exp: ExperimentConfig) -> list[Path]:
+    """Regenerate ``results.csv`` and ``evaluation.csv`` from the stored trials of ``exp``.
+
+    Rows follow the order of the trials in ``exp``, then the seeds; trials not (yet) stored are
+    left out. Returns the two paths.
+    """
+    run_dir = Path(run_dir)
+    results, evaluation = [], []
+    for t in exp.trials:
+        for repeat, seed in enumerate(exp.seeds()):
+            if not trial_path(run_dir, t.name, seed).exists():
+                continue
+            r = load_trial(run_dir, t.name, seed)
+            results.extend(_results_rows(exp, t, repeat, r))
+            for controller, values in r.evaluation.items():
+                evaluation.append(
+                    (
+                        t.name,
+                        t.title,
+                        repeat,
+                        seed,
+                        r.evaluation_pipeline,
+                        controller,
+                        *(float(v) for v in values),
+                    )
+                )
+    paths = [run_dir / RESULTS_FILE, run_dir / EVALUATION_FILE]
+    write_text_atomic(paths[0], csv_text(RESULTS_COLUMNS, results))
+    write_text_atomic(paths[1], csv_text(EVALUATION_COLUMNS, evaluation))
+    return paths
+
+
+def summary(run_dir: str | os.PathLike, exp: ExperimentConfig, last: int = 50) -> dict[str, dict]:
+    """Per trial of ``exp``, means over its stored seeds.
+
+    Of the last ``last`` training episodes: return and pipe in view; of the evaluation episodes:
+    each controller's return.
+    """
+    out = {}
+    for t in exp.trials:
+        seeds = [s for s in exp.seeds() if trial_path(run_dir, t.name, s).exists()]
+        results = [load_trial(run_dir, t.name, s) for s in seeds]
+        if not results:
+            continue
+        final = [r.stats[-last:].mean(axis=0) for r in results]
+        row = {
+            "label": t.title,
+            "seeds": [r.seed for r in results],
+            f"mean_return_last{last}": float(np.mean([f[0] for f in final])),
+            f"std_return_last{last}": float(np.std([f[0] for f in final])),
+            f"mean_pipe_in_view_last{last}": float(np.mean([f[1] for f in final])),
+            "evaluation_pipeline": results[0].evaluation_pipeline,
+            "evaluation_mean_return": {
+                c: float(np.mean([r.evaluation[c][0] for r in results])) for c in results[0].evaluation
+            },
+        }
+        out[t.name] = row
+    return out

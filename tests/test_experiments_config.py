@@ -1,0 +1,211 @@
+"""Experiment configuration: the shipped paper grid, errors that name the key, overrides."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from pipefollow.experiments.config import (
+    ConfigError,
+    ExperimentConfig,
+    Phase,
+    TrialConfig,
+    field_help,
+    from_dict,
+    load_experiment,
+    to_dict,
+    with_overrides,
+)
+
+PAPER_TRIALS = [
+    "sarsa",
+    "cacla",
+    "supervised-cacla",
+    "cacla-skew11.25",
+    "cacla-skew22.5",
+    "cacla-skew45",
+    "supervised-cacla-skew22.5",
+    "validation",
+]
+
+
+@pytest.fixture(scope="module")
+def paper() -> ExperimentConfig:
+    return load_experiment("paper")
+
+
+def write_toml(tmp_path, text: str):
+    path = tmp_path / "exp.toml"
+    path.write_text(text)
+    return path
+
+
+MINIMAL = """
+[experiment]
+name = "tiny"
+repeats = 2
+
+[[trial]]
+name = "a"
+"""
+
+
+def test_paper_grid(paper):
+    assert paper.name == "paper"
+    assert len(paper.trials) == 8
+    assert [t.name for t in paper.trials] == PAPER_TRIALS
+    assert paper.repeats == 5
+    assert paper.seeds() == [2010, 2011, 2012, 2013, 2014]
+    # §4: the paper's learning parameters reach every trial through [defaults]
+    for t in paper.trials:
+        assert (t.alpha_v, t.alpha_pi, t.alpha_q, t.discount, t.delta_k) == (0.4, 0.2, 0.4, 0.8, 0.05)
+        assert (t.sigma_start, t.sigma_end, t.episode_seconds) == (1.0, 0.01, 20.0)
+    assert {t.skew_deg for t in paper.trials if t.name.startswith("cacla-skew")} == {11.25, 22.5, 45.0}
+    assert paper.trial("sarsa").algorithm == "sarsa"
+    assert paper.trial("supervised-cacla-skew22.5").supervised
+    v = paper.trial("validation")
+    assert [p.pipeline for p in v.phases] == ["paper-left", "paper-right"]
+    assert v.episodes == 1000
+    assert (v.evaluate_on, v.evaluate_seconds) == ("paper-validation", 60.0)
+
+
+def test_every_field_is_documented():
+    for cls in (Phase, TrialConfig, ExperimentConfig):
+        assert all(field_help(cls).values()), cls
+
+
+@pytest.mark.parametrize(
+    ("table", "line", "names"),
+    [
+        ("[[trial]]", "learning_rate = 0.1", ["learning_rate", "alpha_v", "skew_deg"]),
+        ("[experiment]", "repeat = 3", ["repeat", "repeats", "seed"]),
+        ("[defaults]", "alpha = 0.1", ["alpha", "alpha_q", "discount"]),
+    ],
+)
+def test_unknown_key_names_it_and_the_allowed_keys(tmp_path, table, line, names):
+    text = (
+        MINIMAL.replace(table, f"{table}\n{line}", 1)
+        if table in MINIMAL
+        else MINIMAL + f"\n{table}\n{line}\n"
+    )
+    with pytest.raises(ConfigError) as e:
+        load_experiment(write_toml(tmp_path, text))
+    msg = str(e.value)
+    assert "exp.toml" in msg and "unknown key" in msg
+    for name in names:
+        assert name in msg
+
+
+def test_invalid_choice_names_the_key_and_the_allowed_values(tmp_path):
+    with pytest.raises(ConfigError, match=r"'algorithm' must be one of sarsa, cacla, got 'ppo'"):
+        load_experiment(write_toml(tmp_path, MINIMAL + 'algorithm = "ppo"\n'))
+    with pytest.raises(ConfigError, match=r"'rbf' must be one of normalized, literal"):
+        load_experiment(write_toml(tmp_path, MINIMAL + 'rbf = "cosine"\n'))
+
+
+@pytest.mark.parametrize(
+    ("line", "pattern"),
+    [
+        ('repeats = "five"', r"'repeats' must be an integer, got 'five'"),
+        ("repeats = 2.5", r"'repeats' must be an integer"),
+        ("repeats = 0", r"'repeats' must be at least 1"),
+    ],
+)
+def test_wrong_experiment_value(tmp_path, line, pattern):
+    text = MINIMAL.replace("repeats = 2", line)
+    with pytest.raises(ConfigError, match=pattern):
+        load_experiment(write_toml(tmp_path, text))
+
+
+@pytest.mark.parametrize(
+    ("line", "pattern"),
+    [
+        ('alpha_v = "big"', r"'alpha_v' must be a finite number, got 'big'"),
+        ("alpha_v = 0.0", r"'alpha_v' must be in \(0, 1\]"),
+        ("discount = 1.5", r"'discount' must be in \(0, 1\]"),
+        ("supervised = 1", r"'supervised' must be true or false"),
+        ("sigma_start = 0.001", r"'sigma_start' must be ≥ sigma_end"),
+        ("episode_seconds = nan", r"'episode_seconds' must be a finite number"),
+        ('phases = [{ pipeline = "paper-left", episodes = 0 }]', r"'episodes' must be at least 1"),
+        (
+            'phases = [{ pipeline = "paper-left", epsiodes = 3 }]',
+            r"unknown key 'epsiodes'; allowed: pipeline, episodes",
+        ),
+        ("phases = []", r"'phases' must be a non-empty list"),
+        ('figures = "fig5"', r"'figures' must be a list of strings"),
+        ('algorithm = "sarsa"\nskew_deg = 22.5', r"skew_deg and supervised apply to algorithm 'cacla' only"),
+    ],
+)
+def test_wrong_trial_value_names_the_key(tmp_path, line, pattern):
+    with pytest.raises(ConfigError, match=pattern) as e:
+        load_experiment(write_toml(tmp_path, MINIMAL + line + "\n"))
+    assert "[[trial]] #1 'a'" in str(e.value)
+
+
+def test_trial_name_must_be_usable_in_file_names(tmp_path):
+    with pytest.raises(ConfigError, match=r"\[\[trial\]\] #1 'a/b': key 'name' must be letters, digits"):
+        load_experiment(write_toml(tmp_path, MINIMAL.replace('name = "a"', 'name = "a/b"')))
+
+
+def test_file_problems(tmp_path):
+    with pytest.raises(ConfigError, match="no such file"):
+        load_experiment(tmp_path / "missing.toml")
+    with pytest.raises(ConfigError, match="not valid TOML"):
+        load_experiment(write_toml(tmp_path, "[experiment\n"))
+    with pytest.raises(ConfigError, match=r"no \[\[trial\]\] tables"):
+        load_experiment(write_toml(tmp_path, '[experiment]\nname = "x"\n'))
+    with pytest.raises(ConfigError, match="trial names must be unique, repeated: a"):
+        load_experiment(write_toml(tmp_path, MINIMAL + '[[trial]]\nname = "a"\n'))
+    with pytest.raises(ConfigError, match=r"'repeats' belongs in the \[experiment\] table"):
+        load_experiment(write_toml(tmp_path, "repeats = 3\n" + MINIMAL))
+
+
+def test_defaults_apply_and_trials_override_them(tmp_path):
+    text = MINIMAL + '[[trial]]\nname = "b"\nalpha_v = 0.1\n[defaults]\nalpha_v = 0.3\n'
+    exp = load_experiment(write_toml(tmp_path, text))
+    assert exp.trial("a").alpha_v == 0.3
+    assert exp.trial("b").alpha_v == 0.1
+
+
+def test_overrides(paper):
+    exp = with_overrides(paper, repeats=2, episodes=7, seed=5, trials=["validation", "sarsa"])
+    assert exp.seeds() == [5, 6]
+    # the experiment's order, not the order of the options
+    assert [t.name for t in exp.trials] == ["sarsa", "validation"]
+    assert [p.episodes for p in exp.trial("validation").phases] == [7, 7]
+    assert exp.trial("validation").episodes == 14
+    assert exp.trial("sarsa") == dataclasses.replace(paper.trial("sarsa"), phases=(Phase("paper-left", 7),))
+    assert with_overrides(paper) == paper
+
+
+def test_override_errors(paper):
+    with pytest.raises(ConfigError, match=r"--trial: unknown trial 'ppo'; allowed: sarsa, cacla, "):
+        with_overrides(paper, trials=["ppo"])
+    with pytest.raises(ConfigError, match="'repeats' must be at least 1"):
+        with_overrides(paper, repeats=0)
+    with pytest.raises(ConfigError, match="'episodes' must be at least 1"):
+        with_overrides(paper, episodes=0)
+
+
+def test_dict_round_trip_survives_json(paper):
+    data = json.loads(json.dumps(to_dict(paper)))
+    assert from_dict(data) == paper
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    repeats=st.integers(1, 9),
+    episodes=st.integers(1, 2000),
+    seed=st.integers(-(2**31), 2**31),
+    subset=st.sets(st.sampled_from(PAPER_TRIALS), min_size=1),
+)
+def test_overridden_configs_round_trip(repeats, episodes, seed, subset):
+    paper = load_experiment("paper")
+    exp = with_overrides(paper, repeats=repeats, episodes=episodes, seed=seed, trials=sorted(subset))
+    assert {t.name for t in exp.trials} == subset
+    assert all(t.episodes == episodes * len(t.phases) for t in exp.trials)
+    assert from_dict(json.loads(json.dumps(to_dict(exp)))) == exp

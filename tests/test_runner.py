@@ -1,0 +1,342 @@
+"""The experiment runner: backends agree, runs resume, interruptions lose only unfinished trials."""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipefollow.experiments import store
+from pipefollow.experiments.config import ConfigError, ExperimentConfig, load_experiment, with_overrides
+from pipefollow.experiments.runner import RunInterrupted, run_experiment
+from pipefollow.experiments.trial import run_trial
+
+# Two of the paper's trials (SARSA; supervised CACLA with skew, two phases and a validation run),
+# 2 seeds × 5 episodes per phase.
+TINY = with_overrides(load_experiment("paper"), repeats=2, episodes=5, trials=["sarsa", "validation"])
+PAIRS = [(t.name, s) for t in TINY.trials for s in TINY.seeds()]
+
+
+class Counting:
+    """run_trial, counting its calls."""
+
+    def __init__(self, fail_on_call: int | None = None, exc: type[BaseException] = KeyboardInterrupt):
+        self.calls: list[tuple[str, int]] = []
+        self.fail_on_call, self.exc = fail_on_call, exc
+
+    def __call__(self, config, seed):
+        self.calls.append((config.name, seed))
+        if len(self.calls) == self.fail_on_call:
+            raise self.exc()
+        return run_trial(config, seed)
+
+
+def tables(run_dir: Path) -> tuple[str, str]:
+    return (run_dir / "results.csv").read_text(), (run_dir / "evaluation.csv").read_text()
+
+
+def stamps(run_dir: Path) -> dict[str, tuple[int, int]]:
+    """(inode, mtime) of every trial and policy file: a recomputed file gets a new inode."""
+    return {
+        p.relative_to(run_dir).as_posix(): (p.stat().st_ino, p.stat().st_mtime_ns)
+        for p in [*run_dir.glob("trials/*/*.npz"), *run_dir.glob("policies/*.npz")]
+    }
+
+
+def assert_same_trials(a: Path, b: Path, exp: ExperimentConfig = TINY) -> None:
+    for t in exp.trials:
+        for seed in exp.seeds():
+            ra, rb = store.load_trial(a, t.name, seed), store.load_trial(b, t.name, seed)
+            for name in ("stats", "phase", "sigma", "weights"):
+                np.testing.assert_array_equal(getattr(ra, name), getattr(rb, name), err_msg=name)
+            assert ra.evaluation == rb.evaluation
+            for c in ra.poses:
+                np.testing.assert_array_equal(ra.poses[c], rb.poses[c])
+    assert tables(a) == tables(b)
+
+
+@pytest.fixture(scope="module")
+def serial_run(tmp_path_factory) -> Path:
+    """The tiny experiment, run once serially: the reference of the other backends."""
+    run = tmp_path_factory.mktemp("serial")
+    summary = run_experiment(TINY, run, backend="serial", show_progress=False)
+    assert (summary.trials_computed, summary.trials_reused, summary.trials_total) == (4, 0, 4)
+    return run
+
+
+def test_serial_run_fills_the_run_folder(serial_run):
+    assert store.finished(serial_run, TINY) == set(PAIRS)
+    assert store.read_config(serial_run) == TINY
+    files = {p.relative_to(serial_run).as_posix() for p in serial_run.rglob("*") if p.is_file()}
+    assert files == {
+        "config.json",
+        ".lock",
+        "results.csv",
+        "evaluation.csv",
+        *(f"trials/{t}/seed-{s}.npz" for t, s in PAIRS),
+        *(f"policies/{t}-seed{s}.npz" for t, s in PAIRS),
+    }
+    results, evaluation = tables(serial_run)
+    assert len(results.splitlines()) == 1 + 2 * 5 + 2 * 10
+    assert len(evaluation.splitlines()) == 1 + 2 * 2 + 2 * 3
+
+
+def test_process_backend_gives_identical_results(serial_run, tmp_path):
+    summary = run_experiment(TINY, tmp_path, backend="process", workers=2, show_progress=False)
+    assert (summary.trials_computed, summary.workers) == (4, 2)
+    assert_same_trials(serial_run, tmp_path)
+
+
+def test_resume_recomputes_nothing(serial_run, tmp_path):
+    run = tmp_path / "run"
+    first = Counting()
+    run_experiment(TINY, run, backend="serial", show_progress=False, trial_fn=first)
+    assert sorted(first.calls) == sorted(PAIRS)
+    before = stamps(run)
+
+    again = Counting()
+    summary = run_experiment(TINY, run, backend="serial", show_progress=False, trial_fn=again)
+    assert again.calls == []
+    assert (summary.trials_computed, summary.trials_reused) == (0, 4)
+    assert stamps(run) == before
+    assert tables(run) == tables(serial_run)
+
+    store.trial_path(run, "validation", 2011).unlink()
+    (store.trial_path(run, "sarsa", 2010)).write_bytes(b"damaged")
+    third = Counting()
+    summary = run_experiment(TINY, run, backend="process", show_progress=False, trial_fn=third)
+    assert (summary.trials_computed, summary.trials_reused) == (2, 2)
+    assert tables(run) == tables(serial_run)
+
+
+def test_ctrl_c_keeps_what_is_saved_and_resumes(serial_run, tmp_path):
+    interrupted = Counting(fail_on_call=3)
+    with pytest.raises(RunInterrupted) as e:
+        run_experiment(TINY, tmp_path, backend="serial", show_progress=False, trial_fn=interrupted)
+    assert isinstance(e.value, KeyboardInterrupt)
+    assert (e.value.saved, e.value.total) == (2, 4)
+    assert e.value.message == (
+        f"interrupted: 2 of 4 trials are saved in '{tmp_path}'; run the same command again to resume"
+    )
+    assert store.finished(tmp_path, TINY) == set(PAIRS[:2])
+    assert not (tmp_path / "results.csv").exists()  # no partial tables that look complete
+
+    resumed = Counting()
+    run_experiment(TINY, tmp_path, backend="serial", show_progress=False, trial_fn=resumed)
+    assert resumed.calls == PAIRS[2:]
+    assert_same_trials(serial_run, tmp_path)
+
+
+def test_a_failing_trial_keeps_the_others_and_says_where(tmp_path):
+    failing = Counting(fail_on_call=2, exc=ZeroDivisionError)
+    with pytest.raises(ZeroDivisionError) as e:
+        run_experiment(TINY, tmp_path, backend="serial", show_progress=False, trial_fn=failing)
+    notes = "\n".join(e.value.__notes__)
+    assert "while running trial 'sarsa' with seed 2011" in notes
+    assert f"1 of 4 trials are saved in '{tmp_path}'; running again resumes" in notes
+    assert store.finished(tmp_path, TINY) == {("sarsa", 2010)}
+
+
+def _interrupting_trial(config, seed):
+    """A worker's trial: the first one runs; the next one presses Ctrl-C (once) and then hangs."""
+    run_dir = Path(os.environ["PIPEFOLLOW_TEST_RUN"])
+    if (config.name, seed) == PAIRS[0]:
+        return run_trial(config, seed)
+    while not store.trial_path(run_dir, *PAIRS[0]).exists():
+        time.sleep(0.01)
+    try:
+        os.close(os.open(run_dir / "ctrl-c", os.O_CREAT | os.O_EXCL))
+        os.kill(os.getppid(), signal.SIGINT)
+    except FileExistsError:
+        pass
+    time.sleep(120)
+    raise AssertionError("a hung worker was not stopped")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the test's trial function needs fork")
+def test_ctrl_c_stops_the_process_pool_without_waiting(tmp_path, monkeypatch):
+    monkeypatch.setenv("PIPEFOLLOW_TEST_RUN", str(tmp_path))
+    t0 = time.perf_counter()
+    with pytest.raises(RunInterrupted) as e:
+        run_experiment(
+            TINY, tmp_path, backend="process", workers=2, show_progress=False, trial_fn=_interrupting_trial
+        )
+    assert time.perf_counter() - t0 < 60  # the hung workers were stopped, not waited for
+    assert e.value.saved == 1
+    assert multiprocessing.active_children() == []
+    assert store.finished(tmp_path, TINY) == {PAIRS[0]}
+
+
+def test_bad_backend_and_workers_are_config_errors(tmp_path):
+    with pytest.raises(ConfigError, match="backend must be one of serial, process, ray, got 'dask'"):
+        run_experiment(TINY, tmp_path / "a", backend="dask")
+    with pytest.raises(ConfigError, match="workers must be at least 1"):
+        run_experiment(TINY, tmp_path / "b", backend="process", workers=0)
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_missing_ray_is_a_config_error(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)  # makes `import ray` fail
+    with pytest.raises(
+        ConfigError, match=r"backend 'ray' needs the optional extra: pip install 'pipefollow\[ray\]'"
+    ):
+        run_experiment(TINY, tmp_path, backend="ray")
+
+
+def test_a_different_config_in_the_same_folder_is_refused(serial_run):
+    more = with_overrides(TINY, repeats=3)
+    with pytest.raises(ConfigError, match=r"holds a different configuration \(repeats 2 there, 3 now\)"):
+        run_experiment(more, serial_run, backend="serial")
+
+
+@pytest.mark.ray
+def test_ray_backend_gives_identical_results(serial_run, tmp_path):
+    pytest.importorskip("ray")
+    summary = run_experiment(TINY, tmp_path, backend="ray", workers=2, show_progress=False)
+    assert (summary.trials_computed, summary.backend) == (4, "ray")
+    assert_same_trials(serial_run, tmp_path)
+
+
+# ---------------------------------------------------------------------------------------------
+# The command line
+
+
+def reproduce_cmd(out: Path, *extra: str) -> list[str]:
+    return [
+        sys.executable,
+        "-m",
+        "pipefollow.cli",
+        "reproduce",
+        "--out",
+        str(out),
+        "--backend",
+        "serial",
+        "--no-figures",
+        "--json",
+        *extra,
+    ]
+
+
+# Big enough that a trial takes a good fraction of a second, so the kill lands mid-run.
+KILL_RUN = ("--trial", "sarsa", "--trial", "cacla", "--repeats", "2", "--episodes", "1500")
+
+
+def test_sigkill_midway_loses_only_unfinished_trials(tmp_path):
+    killed = tmp_path / "killed"
+    proc = subprocess.Popen(reproduce_cmd(killed, *KILL_RUN), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        deadline = time.monotonic() + 120
+        while not list(killed.glob("trials/*/seed-*.npz")):
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline, "no trial finished in time"
+            time.sleep(0.005)
+        proc.send_signal(signal.SIGKILL)
+    finally:
+        proc.communicate()
+    assert proc.returncode == -signal.SIGKILL, "the run finished before it could be killed"
+
+    exp = store.read_config(killed)
+    saved = store.finished(killed, exp)
+    assert 1 <= len(saved) < 4
+    # Every file is complete: trial files and policies load, and the only other files are the
+    # configuration, the lock and temporary files, whose names cannot be taken for results.
+    for p in killed.rglob("*"):
+        if p.is_dir():
+            continue
+        rel = p.relative_to(killed).as_posix()
+        if p.name.startswith(".") and p.name.endswith(".tmp"):
+            continue
+        if rel.startswith("trials/"):
+            store.load_trial(killed, p.parent.name, int(p.stem.removeprefix("seed-")))
+        elif rel.startswith("policies/"):
+            from pipefollow.policy import load_policy
+
+            load_policy(p)
+        else:
+            assert rel in ("config.json", ".lock"), rel
+    # A saved trial has its policy (written just before the trial file; a policy without its
+    # trial file, if the kill fell between the two, is rewritten by the rerun).
+    before = {
+        k: v
+        for k, v in stamps(killed).items()
+        if any(k in (f"trials/{t}/seed-{s}.npz", f"policies/{t}-seed{s}.npz") for t, s in saved)
+    }
+    assert len(before) == 2 * len(saved)
+
+    done = subprocess.run(reproduce_cmd(killed, *KILL_RUN), capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    assert (report["trials_reused"], report["trials_computed"]) == (len(saved), 4 - len(saved))
+    after = stamps(killed)
+    assert {k: after[k] for k in before} == before  # the saved trials were not recomputed
+    assert not [p for p in killed.rglob("*.tmp")]
+
+    clean = tmp_path / "clean"
+    run_experiment(exp, clean, backend="serial", show_progress=False)
+    assert tables(killed) == tables(clean)
+
+
+def test_cli_reproduce_json_and_errors(tmp_path):
+    from click.testing import CliRunner
+
+    from pipefollow.cli import main
+
+    runner = CliRunner()
+    out = tmp_path / "run"
+    args = [
+        "reproduce",
+        "--out",
+        str(out),
+        "--backend",
+        "serial",
+        "--no-figures",
+        "--json",
+        "--trial",
+        "sarsa",
+        "--repeats",
+        "1",
+        "--episodes",
+        "3",
+    ]
+    result = runner.invoke(main, args)
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.stdout)
+    assert report["run_dir"] == str(out)
+    assert (report["trials_computed"], report["trials_reused"]) == (1, 0)
+    assert report["outputs"] == [str(out / "results.csv"), str(out / "evaluation.csv")]
+    assert set(report["trials"]) == {"sarsa"}
+    assert isinstance(report["trials"]["sarsa"]["mean_return_last50"], float)
+
+    again = runner.invoke(main, args)
+    assert json.loads(again.stdout)["trials_reused"] == 1
+
+    for bad, message in [
+        (["--backend", "dask"], "backend must be one of serial, process, ray, got 'dask'"),
+        (["--repeats", "2"], "holds a different configuration (repeats 1 there, 2 now)"),
+        (["--trial", "ppo"], "--trial: unknown trial 'ppo'; allowed: sarsa, cacla"),
+        (["--experiment", str(tmp_path / "none.toml")], "none.toml': no such file"),
+    ]:
+        result = runner.invoke(main, [*args, *bad])
+        assert result.exit_code == 2, result.output
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("pipefollow: error: ") and message in lines[0], lines
+
+    result = runner.invoke(main, ["plot", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    drawn = json.loads(result.stdout)["outputs"]
+    assert str(out / "REPORT.md") in drawn and all(Path(p).exists() for p in drawn)
+
+    result = runner.invoke(main, ["plot", str(tmp_path)])
+    assert result.exit_code == 2
+    assert (
+        result.stderr.strip() == f"pipefollow: error: '{tmp_path}' is not a run folder "
+        "(no config.json; 'pipefollow reproduce' writes one)"
+    )
