@@ -169,7 +169,7 @@ class Cacla:
 
         self.supervisor = supervisor
         self._pending = None
-        self._phi_cache: tuple[tuple, np.ndarray] | None = None  # φ(s') of the last update
+        self._phi_cache: tuple[bytes, np.ndarray] | None = None  # φ(s') of the last update
 
     algorithm = "cacla"
 
@@ -197,7 +197,7 @@ class Cacla:
 
     def _cached_features(self, obs) -> np.ndarray:
         """φ(obs), reusing φ(s') of the last update when ``obs`` is that s' (the usual case)."""
-        key = tuple(obs)
+        key = np.asarray(obs, dtype=np.float64).tobytes()
         cache = self._phi_cache
         if cache is not None and cache[0] == key:
             return cache[1]
