@@ -178,3 +178,16 @@ def test_make_agent_validation():
         make_agent("sarsa", supervised=True)
     assert make_agent("cacla", skew_deg=22.5).params.skew == pytest.approx(0.5)
     assert math.isclose(make_agent("cacla", skew_deg=45).params.skew, 1.0)
+
+
+@pytest.mark.parametrize("centred, mean", [(False, math.sqrt(0.5) * math.sqrt(2 / math.pi)), (True, 0.0)])
+def test_skew_exploration_mean_shift_and_the_centred_extension(centred, mean):
+    w = weights()
+    w[G] = [1.0, 1.0, 1.0]  # γ(s) = 1 → δ = 1/√2
+    p = CaclaParams(skew=0.5, skew_centred=centred)
+    rng = np.random.default_rng(0)
+    sigma = 0.05  # small enough that no sample is clipped
+    z = np.array(
+        [(cacla.act(w, PHI, sigma, *rng.standard_normal(2), 0.0, p)[1] - 0.09) / sigma for _ in range(20000)]
+    )
+    assert z.mean() == pytest.approx(mean, abs=4 * z.std() / math.sqrt(z.size))

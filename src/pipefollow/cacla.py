@@ -13,6 +13,7 @@ drawn by the caller from a ``numpy.random.Generator`` and passed in as standard 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import NamedTuple
 
@@ -37,6 +38,7 @@ class CaclaParams(NamedTuple):
     delta_k: float = 0.05  # Δk per visit (paper §4.1)
     k_max: float = 1.0  # cap on k(s) (eq. 13)
     forgetting: float = 0.0  # per-update decay of w_k (Rosenstein & Barto); the paper uses none
+    skew_centred: bool = False  # subtract the skew-normal's mean shift σδ√(2/π): an extension
 
 
 PAPER_CACLA = CaclaParams()
@@ -50,7 +52,7 @@ def pack(p: CaclaParams) -> np.ndarray:
 @njit(cache=True)
 def unpack(a):
     """Inverse of :func:`pack` inside compiled code."""
-    return CaclaParams(a[0], a[1], a[2], a[3], a[4], a[5] != 0.0, a[6], a[7], a[8])
+    return CaclaParams(a[0], a[1], a[2], a[3], a[4], a[5] != 0.0, a[6], a[7], a[8], a[9] != 0.0)
 
 
 @njit(cache=True)
@@ -72,6 +74,8 @@ def act(w, phi, sigma, z0, z1, a_sup, p):
         if p.skew > 0.0:
             g = min(p.gamma_max, max(-p.gamma_max, np.dot(w[G], phi)))
             z = skew_normal_from_normals(g, z0, z1)
+            if p.skew_centred:  # keep the exploration's mean on A(s); the paper does not
+                z -= g / math.sqrt(1.0 + g * g) * math.sqrt(2.0 / math.pi)
         else:
             z = z0
         a_rl = clip1(mu + sigma * z)
@@ -252,5 +256,5 @@ def cacla_label(p: CaclaParams) -> str:
     """Label such as ``supervised CACLA, skew 22.5°``."""
     name = "supervised CACLA" if p.supervised else "CACLA"
     if p.skew > 0.0:
-        name += f", skew {p.skew * 45.0:g}°"
+        name += f", skew {p.skew * 45.0:g}°" + (" centred" if p.skew_centred else "")
     return name

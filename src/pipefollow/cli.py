@@ -177,6 +177,11 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
 )
 @click.option("--supervised", is_flag=True, help="Supervised CACLA with the heuristic as supervisor.")
 @click.option(
+    "--skew-centred",
+    is_flag=True,
+    help="Extension: keep skew-normal exploration centred on the actor's action (the paper does not).",
+)
+@click.option(
     "--pipeline", default="paper-left", show_default=True, help="Built-in name or JSON file to train on."
 )
 @click.option("--episodes", default=500, show_default=True, type=click.IntRange(min=1))
@@ -204,14 +209,26 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
 @_guard
-def train(algorithm, skew, supervised, pipeline, episodes, seconds, seed, out_dir, init_policy, as_json):
+def train(
+    algorithm,
+    skew,
+    supervised,
+    skew_centred,
+    pipeline,
+    episodes,
+    seconds,
+    seed,
+    out_dir,
+    init_policy,
+    as_json,
+):
     """Train a learner; writes the policy and its learning curve."""
     from pipefollow.agents import make_agent
     from pipefollow.pipeline import resolve
     from pipefollow.training import STAT_NAMES, train_compiled
 
-    if algorithm == "sarsa" and (skew or supervised):
-        raise UserError("--skew and --supervised apply to --algorithm cacla only")
+    if algorithm == "sarsa" and (skew or supervised or skew_centred):
+        raise UserError("--skew, --skew-centred and --supervised apply to --algorithm cacla only")
     pipe = resolve(pipeline)
     rng = np.random.default_rng(seed)
     if init_policy:
@@ -220,13 +237,19 @@ def train(algorithm, skew, supervised, pipeline, episodes, seconds, seed, out_di
         agent = load_policy(init_policy)
         if agent.algorithm != algorithm:
             raise UserError(f"--init {init_policy}: holds a {agent.name} policy, not {algorithm}")
-        if algorithm == "cacla" and (
-            skew != agent.params.skew * 45.0 or supervised != agent.params.supervised
+        options = (skew / 45.0, supervised, skew_centred)
+        if algorithm == "cacla" and options != (
+            agent.params.skew,
+            agent.params.supervised,
+            agent.params.skew_centred,
         ):
-            raise UserError(f"--init {init_policy}: holds a {agent.name} policy; --skew/--supervised differ")
+            raise UserError(
+                f"--init {init_policy}: holds a {agent.name} policy; its options differ from these"
+            )
         agent.rng = rng
     else:
-        agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng)
+        extra = {"skew_centred": True} if skew_centred else {}
+        agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng, **extra)
     show = not as_json and sys.stderr.isatty()
     with click.progressbar(
         length=episodes, label=f"training {agent.name}", file=sys.stderr, hidden=not show

@@ -44,6 +44,9 @@ class TrialConfig:
     algorithm: str = _f("cacla", "learner: sarsa (eq. 3) or cacla (eqs. 5-7)", choices=ALGORITHMS)
     skew_deg: float = _f(0.0, "CACLA skew step Δγ (deg, eq. 15); 0 = Gaussian exploration (paper §4.1)")
     supervised: bool = _f(False, "supervised CACLA with the heuristic as supervisor (eqs. 10-13)")
+    skew_centred: bool = _f(
+        False, "extension: re-centre skew-normal exploration on A(s) (the paper does not)"
+    )
     phases: tuple[Phase, ...] = _f((Phase(),), "training phases in order (paper §4.2: left, then right)")
     episode_seconds: float = _f(20.0, "episode length (s); one decision per second (paper §4.1)")
     sigma_start: float = _f(1.0, "exploration σ of the first episode, normalized action units (paper §4)")
@@ -162,7 +165,7 @@ def validate(obj, where: str) -> None:
 
         if not re.fullmatch(r"[A-Za-z0-9_.-]+", obj.name):
             raise bad("name", "letters, digits, '-', '_' or '.'", obj.name)
-        if obj.algorithm == "sarsa" and (obj.skew_deg or obj.supervised):
+        if obj.algorithm == "sarsa" and (obj.skew_deg or obj.supervised or obj.skew_centred):
             raise ConfigError(f"{where}: skew_deg and supervised apply to algorithm 'cacla' only")
         for key in ("alpha_v", "alpha_pi", "alpha_q", "discount"):
             v = getattr(obj, key)

@@ -65,6 +65,7 @@ def build_agent(config: TrialConfig, rng: np.random.Generator | None = None):
             discount=config.discount,
             delta_k=config.delta_k,
             forgetting=config.forgetting,
+            skew_centred=config.skew_centred,
         )
     if grid is not STATE_GRID:
         agent = type(agent)(agent.params, grid=grid, rng=rng)
