@@ -10,17 +10,17 @@ from pipefollow.sarsa import Sarsa, SarsaParams
 
 
 def test_update_matches_hand_computation():
-    W = np.array([[1.0, 0.0], [0.5, -1.0], [0.0, 2.0]])
+    W = np.array([[1.0, 0.0], [0.5, -1.0], [0.0, 2.0]]).T.copy()  # (action × state) features
     phi = np.array([0.2, 0.3, 0.5])
     psi = np.array([0.75, 0.25])
     phi_n = np.array([0.0, 1.0, 0.0])
     psi_n = np.array([0.5, 0.5])
-    # Q(s,a) = Σ W_ij φ_i ψ_j: φᵀW = [0.35, 0.7]; · ψ = 0.2625 + 0.175 = 0.4375
+    # Q(s,a) = Σ W_ji ψ_j φ_i: Wφ = [0.35, 0.7]; · ψ = 0.2625 + 0.175 = 0.4375
     # Q(s',a') = [0.5, -1] · ψ' = -0.25; δ = 1 + 0.8·(−0.25) − 0.4375 = 0.3625
     W0 = W.copy()
     delta = sarsa.update(W, phi, psi, 1.0, 0.8, phi_n, psi_n, 0.4)
     assert delta == pytest.approx(0.3625)
-    np.testing.assert_allclose(W, W0 + 0.4 * 0.3625 * np.outer(phi, psi))
+    np.testing.assert_allclose(W, W0 + 0.4 * 0.3625 * np.outer(psi, phi))
 
 
 def test_separable_q_equals_the_full_22932_feature_product():
@@ -32,12 +32,12 @@ def test_separable_q_equals_the_full_22932_feature_product():
     for a, q in zip(agent.search_actions, agent.q_values(obs), strict=True):
         full = np.kron(phi, ACTION_GRID.features(np.array([a])))  # the 22,932 features
         assert full.size == 22932
-        assert q == pytest.approx(full @ agent.weights.ravel(), rel=1e-12)
+        assert q == pytest.approx(full @ agent.weights.T.ravel(), rel=1e-12)
 
 
 def test_greedy_picks_best_grid_action_and_exploration_is_clipped_not_snapped():
     agent = Sarsa(seed=0)
-    agent.weights[:, 12] = 1.0  # action centre +90°: Q largest at a = 1
+    agent.weights[12, :] = 1.0  # action centre +90°: Q largest at a = 1
     obs = np.array([0.0, 1.5, 0.0, 0.2])
     assert agent.act(obs, explore=False) == pytest.approx(1.0)
     phi = agent.features(obs)

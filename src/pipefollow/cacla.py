@@ -21,6 +21,7 @@ import numpy as np
 from numba import njit
 
 from pipefollow.exploration import skew_normal_from_normals
+from pipefollow.linear import dot
 from pipefollow.rbf import STATE_GRID, RBFGrid, grid_features
 
 V, A, G, K = 0, 1, 2, 3  # rows of the weight matrix: critic, actor, skew, supervisor trust
@@ -69,10 +70,10 @@ def act(w, phi, sigma, z0, z1, a_sup, p):
     built from the standard normals ``z0, z1``; σ = 0 gives the deterministic policy. Supervised
     agents execute ``a = k(s) a_rl + (1 − k(s)) a_sup`` (eq. 10).
     """
-    mu = np.dot(w[A], phi)
+    mu = dot(w[A], phi)
     if sigma > 0.0:
         if p.skew > 0.0:
-            g = min(p.gamma_max, max(-p.gamma_max, np.dot(w[G], phi)))
+            g = min(p.gamma_max, max(-p.gamma_max, dot(w[G], phi)))
             z = skew_normal_from_normals(g, z0, z1)
             if p.skew_centred:  # keep the exploration's mean on A(s); the paper does not
                 z -= g / math.sqrt(1.0 + g * g) * math.sqrt(2.0 / math.pi)
@@ -82,7 +83,7 @@ def act(w, phi, sigma, z0, z1, a_sup, p):
     else:
         a_rl = clip1(mu)
     if p.supervised:
-        k = min(p.k_max, max(0.0, np.dot(w[K], phi)))
+        k = min(p.k_max, max(0.0, dot(w[K], phi)))
         return k * a_rl + (1.0 - k) * a_sup, a_rl
     return a_rl, a_rl
 
@@ -93,11 +94,11 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p):
 
     ``discount`` is γ_d^n for a transition of n decisions (semi-Markov, DESIGN.md). Returns δ.
     """
-    v = np.dot(w[V], phi)
-    delta = reward + discount * np.dot(w[V], phi_next) - v  # eq. 4, pre-update critic
-    mu = np.dot(w[A], phi)
+    v = dot(w[V], phi)
+    delta = reward + discount * dot(w[V], phi_next) - v  # eq. 4, pre-update critic
+    mu = dot(w[A], phi)
     if p.supervised:
-        k = min(p.k_max, max(0.0, np.dot(w[K], phi)))
+        k = min(p.k_max, max(0.0, dot(w[K], phi)))
         rl = k * (a_rl - mu) if delta > 0.0 else 0.0
         step = p.alpha_pi * (rl + (1.0 - k) * (a_sup - mu))  # eq. 12
     else:
@@ -108,14 +109,14 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p):
         w[A, i] += step * phi[i]
     if p.skew > 0.0:  # eq. 15
         inc = p.skew * np.sign(delta) * np.sign(a_rl - mu)
-        g = np.dot(w[G], phi)
+        g = dot(w[G], phi)
         if (inc > 0.0 and g < p.gamma_max) or (inc < 0.0 and g > -p.gamma_max):
             for i in range(phi.shape[0]):
                 w[G, i] += inc * phi[i]
     if p.supervised:  # eq. 13
         if p.forgetting > 0.0:
             w[K] *= 1.0 - p.forgetting
-        if np.dot(w[K], phi) < p.k_max:
+        if dot(w[K], phi) < p.k_max:
             for i in range(phi.shape[0]):
                 w[K, i] += p.delta_k * phi[i]
     return delta
@@ -225,7 +226,7 @@ class Cacla:
 
     def actor(self, obs) -> float:
         """The pure actor's deterministic action clip(A(s)), without the supervisor."""
-        return float(np.clip(self.weights[A] @ self.features(obs), -1.0, 1.0))
+        return clip1(dot(self.weights[A], self.features(obs)))
 
     def update(self, obs, action, reward: float, next_obs, discount: float) -> float:
         """Learn from ``obs`` → ``next_obs``; ``discount`` is γ_d^n (0 if terminal). Returns δ.

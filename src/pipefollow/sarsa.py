@@ -2,7 +2,7 @@
 
 ``Q(s, a) = Σ_ij W_ij φ_i(s) ψ_j(a)`` is linear in the 1,764 × 13 = 22,932 products of the RBF state
 features φ and the action features ψ (paper §4.1). Because the features separate, Q over all
-actions of the search grid costs one product ``q = φᵀW`` (13 numbers) and a 21 × 13 product,
+actions of the search grid costs one product ``q = Wφ`` (13 numbers) and a 21 × 13 product,
 not 21 × 22,932 multiplications. The greedy action is the best of the 21-point grid −90°…90° in
 9° steps; exploration adds σ·N(0, 1) to it (clipped, not snapped back to the grid).
 """
@@ -14,6 +14,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from pipefollow.linear import dot, matvec
 from pipefollow.rbf import ACTION_GRID, STATE_GRID, RBFGrid, dim_activations, grid_features
 
 
@@ -45,10 +46,19 @@ def search_table(p: SarsaParams, grid: RBFGrid = ACTION_GRID) -> tuple[np.ndarra
 
 @njit(cache=True)
 def greedy(W, phi, search_actions, search_psi):
-    """Greedy action of the one-step search and the state's action-weight vector q = φᵀW."""
-    q = phi @ W
-    values = search_psi @ q
-    return search_actions[np.argmax(values)], q
+    """Greedy action of the one-step search, and the action-weight vector ``q_j = W_j·φ``.
+
+    Ties (e.g. untrained weights) go to the action nearest straight ahead, not to −90°.
+    """
+    q = matvec(W, phi)
+    values = matvec(search_psi, q)
+    best = 0
+    for k in range(1, values.shape[0]):
+        if values[k] > values[best] or (
+            values[k] == values[best] and abs(search_actions[k]) < abs(search_actions[best])
+        ):
+            best = k
+    return search_actions[best], q
 
 
 @njit(cache=True)
@@ -62,16 +72,19 @@ def choose(W, phi, search_actions, search_psi, sigma, z):
 
 @njit(cache=True)
 def update(W, phi, psi, reward, discount, phi_next, psi_next, alpha):
-    """Eq. 3: ``W += α δ φ ψᵀ`` with ``δ = r + discount·Q(s', a') − Q(s, a)``. Returns δ."""
-    q_sa = psi @ (phi @ W)
-    q_next = psi_next @ (phi_next @ W) if discount != 0.0 else 0.0
+    """Eq. 3: ``W += α δ ψ φᵀ`` with ``δ = r + discount·Q(s', a') − Q(s, a)``. Returns δ.
+
+    ``W`` is (action features × state features): row j holds the weights of action centre j.
+    """
+    q_sa = dot(psi, matvec(W, phi))
+    q_next = dot(psi_next, matvec(W, phi_next)) if discount != 0.0 else 0.0
     delta = reward + discount * q_next - q_sa
     c = alpha * delta
-    for i in range(phi.shape[0]):
-        ci = c * phi[i]
-        if ci != 0.0:
-            for j in range(psi.shape[0]):
-                W[i, j] += ci * psi[j]
+    for j in range(psi.shape[0]):
+        cj = c * psi[j]
+        if cj != 0.0:
+            for i in range(phi.shape[0]):
+                W[j, i] += cj * phi[i]
     return delta
 
 
@@ -96,7 +109,8 @@ class Sarsa:
         self.grid = grid
         self.action_grid = action_grid
         self.rng = rng if rng is not None else np.random.default_rng(seed)
-        self.weights = np.zeros((grid.n_features, action_grid.n_features))
+        # Q(s, a) = Σ_ji W_ji ψ_j(a) φ_i(s): one row of state weights per action centre
+        self.weights = np.zeros((action_grid.n_features, grid.n_features))
         self.sigma = 1.0
         self.search_actions, self.search_psi = search_table(params, action_grid)
         self._grid_arrays = grid.packed
@@ -146,7 +160,7 @@ class Sarsa:
 
     def q_values(self, obs) -> np.ndarray:
         """Q(obs, a) over the search grid."""
-        return self.search_psi @ (self.features(obs) @ self.weights)
+        return matvec(self.search_psi, matvec(self.weights, self.features(obs)))
 
     def update(self, obs, action, reward: float, next_obs, discount: float) -> float:
         """Eq. 3 for ``obs, action → next_obs``; chooses a' at ``next_obs``. Returns δ."""

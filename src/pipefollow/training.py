@@ -206,7 +206,7 @@ def _sarsa_episodes(
 ):
     ps = sim.unpack_params(simp)
     decision_s = ps.dt * ps.substeps
-    nf = W.shape[0]
+    nf = W.shape[1]
     s = np.empty(sim.STATE_SIZE)
     phi = np.empty(nf)
     phi_pend = np.empty(nf)
