@@ -9,12 +9,13 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from numba import njit
+
+from pipefollow.atomic import write_text_atomic
 
 BUILTIN_NAMES = ("paper-left", "paper-right", "paper-validation")
 
@@ -104,19 +105,6 @@ def _validated_points(points, source: str) -> np.ndarray:
         i = int(np.argmax(seg <= 1e-9))
         raise PipelineError(f"{source}: zero-length segment between points {i} and {i + 1}")
     return pts
-
-
-def write_text_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename: never half a file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def load(path: str | os.PathLike) -> Pipeline:

@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 import zipfile
 from pathlib import Path
 
 import numpy as np
 
 import pipefollow
+from pipefollow.atomic import atomic_file
 from pipefollow.cacla import Cacla, CaclaParams
 from pipefollow.rbf import RBFGrid
 from pipefollow.sarsa import Sarsa, SarsaParams
@@ -49,15 +49,8 @@ def save_policy(agent: Cacla | Sarsa, path: str | os.PathLike, **metadata) -> Pa
         "weights": agent.weights,
         **{k: np.array(v) for k, v in extra.items()},
     }
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez_compressed(f, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_file(path) as f:
+        np.savez_compressed(f, **arrays)
     return path
 
 

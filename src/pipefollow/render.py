@@ -138,9 +138,8 @@ def plot_trajectories(
 
 
 def save_figure(fig, path: str | os.PathLike) -> None:
-    """Save a figure as PNG through a temporary file and a rename."""
-    path = os.fspath(path)
-    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    tmp = f"{path}.tmp.png"
-    fig.savefig(tmp, dpi=110)
-    os.replace(tmp, path)
+    """Save a figure as PNG, atomically."""
+    from pipefollow.atomic import atomic_file
+
+    with atomic_file(path) as f:
+        fig.savefig(f, format="png", dpi=110)

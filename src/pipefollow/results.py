@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from pipefollow.atomic import write_text_atomic
 from pipefollow.exploration import linear_sigma
-from pipefollow.pipeline import write_text_atomic
 from pipefollow.training import STAT_NAMES
 
 

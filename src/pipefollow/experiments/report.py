@@ -870,7 +870,7 @@ def write_outputs(run_dir: str | Path) -> list[Path]:
         Paths written: fig5/6/7.png for the figure groups with results, validation-trajectories.png
         if a table1 trial was evaluated and its trial file can be read, and REPORT.md (last).
     """
-    from pipefollow.pipeline import write_text_atomic
+    from pipefollow.atomic import write_text_atomic
 
     run_dir = Path(run_dir)
     config = from_dict(json.loads((run_dir / "config.json").read_text()))

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 import zipfile
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -26,9 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
+from pipefollow.atomic import TMP_SUFFIX, atomic_file, write_text_atomic
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig, from_dict, to_dict
 from pipefollow.experiments.trial import TrialResult, build_agent
-from pipefollow.pipeline import write_text_atomic
 from pipefollow.results import csv_text
 from pipefollow.training import STAT_NAMES
 
@@ -38,7 +37,6 @@ CONFIG_FILE = "config.json"
 RESULTS_FILE = "results.csv"
 EVALUATION_FILE = "evaluation.csv"
 LOCK_FILE = ".lock"
-TMP_SUFFIX = ".tmp"  # temporary files are ".<final name>.<random>.tmp": never taken for results
 
 RESULTS_COLUMNS = (
     "experiment",
@@ -73,17 +71,8 @@ def policy_path(run_dir: str | os.PathLike, trial: str, seed: int) -> Path:
 
 
 def _write_npz_atomic(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=TMP_SUFFIX)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **arrays)
-            f.flush()
-            os.fsync(f.fileno())  # the rename must not overtake the data (power loss, not just kill)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_file(path) as f:
+        np.savez(f, **arrays)
 
 
 # ---------------------------------------------------------------------------------------------
