@@ -112,7 +112,7 @@ def test_invalid_choice_names_the_key_and_the_allowed_values(tmp_path):
     [
         ('repeats = "five"', r"'repeats' must be an integer, got 'five'"),
         ("repeats = 2.5", r"'repeats' must be an integer"),
-        ("repeats = 0", r"'repeats' must be at least 1"),
+        ("repeats = 0", r"'repeats' must be from 1 to 100,000"),
     ],
 )
 def test_wrong_experiment_value(tmp_path, line, pattern):
@@ -130,14 +130,19 @@ def test_wrong_experiment_value(tmp_path, line, pattern):
         ("supervised = 1", r"'supervised' must be true or false"),
         ("sigma_start = 0.001", r"'sigma_start' must be ≥ sigma_end"),
         ("episode_seconds = nan", r"'episode_seconds' must be a finite number"),
-        ('phases = [{ pipeline = "paper-left", episodes = 0 }]', r"'episodes' must be at least 1"),
+        ("episode_seconds = 1e308", r"'episode_seconds' must be from 1 to 86400"),
+        ("skew_centred = true", r"skew_centred needs skew_deg > 0"),
+        ('phases = [{ pipeline = "paper-left", episodes = 0 }]', r"'episodes' must be from 1 to 10,000,000"),
         (
             'phases = [{ pipeline = "paper-left", epsiodes = 3 }]',
             r"unknown key 'epsiodes'; allowed: pipeline, episodes",
         ),
         ("phases = []", r"'phases' must be a non-empty list"),
         ('figures = "fig5"', r"'figures' must be a list of strings"),
-        ('algorithm = "sarsa"\nskew_deg = 22.5', r"skew_deg and supervised apply to algorithm 'cacla' only"),
+        (
+            'algorithm = "sarsa"\nskew_deg = 22.5',
+            r"skew_deg, skew_centred and supervised apply to algorithm 'cacla' only",
+        ),
     ],
 )
 def test_wrong_trial_value_names_the_key(tmp_path, line, pattern):
@@ -185,9 +190,9 @@ def test_overrides(paper):
 def test_override_errors(paper):
     with pytest.raises(ConfigError, match=r"--trial: unknown trial 'ppo'; allowed: sarsa, cacla, "):
         with_overrides(paper, trials=["ppo"])
-    with pytest.raises(ConfigError, match="'repeats' must be at least 1"):
+    with pytest.raises(ConfigError, match="'repeats' must be from 1 to"):
         with_overrides(paper, repeats=0)
-    with pytest.raises(ConfigError, match="'episodes' must be at least 1"):
+    with pytest.raises(ConfigError, match="'episodes' must be from 1 to"):
         with_overrides(paper, episodes=0)
 
 
@@ -209,3 +214,10 @@ def test_overridden_configs_round_trip(repeats, episodes, seed, subset):
     assert {t.name for t in exp.trials} == subset
     assert all(t.episodes == episodes * len(t.phases) for t in exp.trials)
     assert from_dict(json.loads(json.dumps(to_dict(exp)))) == exp
+
+
+def test_trial_entries_that_are_not_tables(tmp_path):
+    path = tmp_path / "exp.toml"
+    path.write_text('trial = [1, 2]\n[experiment]\nname = "x"\n')
+    with pytest.raises(ConfigError, match=r"\[\[trial\]\] #1 must be a table"):
+        load_experiment(path)

@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+import pipefollow
 from pipefollow.experiments import store
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, Phase, TrialConfig, to_dict
 from pipefollow.experiments.trial import TrialResult, build_agent
@@ -227,9 +228,32 @@ def test_tables_leave_out_missing_trials(tmp_path):
 def test_prepare_writes_the_resolved_config_and_accepts_the_same_again(tmp_path):
     run = tmp_path / "run"
     store.prepare(run, EXP)
-    assert json.loads((run / "config.json").read_text()) == json.loads(json.dumps(to_dict(EXP)))
+    stored = json.loads((run / "config.json").read_text())
+    code = stored.pop("code")
+    assert stored == json.loads(json.dumps(to_dict(EXP)))
+    assert code == {"version": pipefollow.__version__, "sources": pipefollow.source_hash()}
     assert store.read_config(run) == EXP
     store.prepare(run, EXP)  # same configuration: resume
+
+
+def test_prepare_accepts_a_folder_written_before_a_config_field_existed(tmp_path):
+    run = tmp_path / "run"
+    store.prepare(run, EXP)
+    stored = json.loads((run / "config.json").read_text())
+    for t in stored["trials"]:
+        del t["skew_centred"]  # as written by a version without that field
+    (run / "config.json").write_text(json.dumps(stored))
+    store.prepare(run, EXP)
+
+
+def test_prepare_refuses_to_mix_results_of_other_code(tmp_path):
+    run = tmp_path / "run"
+    store.prepare(run, EXP)
+    stored = json.loads((run / "config.json").read_text())
+    stored["code"]["sources"] = "0123456789abcdef"
+    (run / "config.json").write_text(json.dumps(stored))
+    with pytest.raises(ConfigError, match="computed by other code .*use another --out"):
+        store.prepare(run, EXP)
 
 
 @pytest.mark.parametrize(

@@ -15,6 +15,25 @@ except PackageNotFoundError:  # running from a source tree
 ENV_ID = "pipefollow/PipelineFollowing-v0"
 
 
+def source_hash() -> str:
+    """A short hash of all the package's Python sources: which code computed a result."""
+    global _SOURCE_HASH
+    if _SOURCE_HASH is None:
+        import hashlib
+        from pathlib import Path
+
+        root = Path(__file__).parent
+        digest = hashlib.sha1()
+        for path in sorted(root.rglob("*.py")):
+            digest.update(path.relative_to(root).as_posix().encode())
+            digest.update(path.read_bytes())
+        _SOURCE_HASH = digest.hexdigest()[:16]
+    return _SOURCE_HASH
+
+
+_SOURCE_HASH: str | None = None
+
+
 def _configure_numba_cache() -> None:
     """Keep numba's on-disk cache in step with all of the package's sources.
 
@@ -25,23 +44,17 @@ def _configure_numba_cache() -> None:
     ``$NUMBA_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/pipefollow`` (``~/.cache/pipefollow``);
     if that is not writable, numba's default (``__pycache__``) is left in place.
     """
-    import hashlib
     import os
     import shutil
     from pathlib import Path
 
     import numba
 
-    root = Path(__file__).parent
-    digest = hashlib.sha1()
-    for path in sorted(root.rglob("*.py")):
-        digest.update(path.relative_to(root).as_posix().encode())
-        digest.update(path.read_bytes())
     base = Path(
         os.environ.get("NUMBA_CACHE_DIR")
         or Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "pipefollow"
     )
-    target = base / f"numba-{digest.hexdigest()[:16]}"
+    target = base / f"numba-{source_hash()}"
     try:
         target.mkdir(parents=True, exist_ok=True)
         probe = target / f".probe-{os.getpid()}"

@@ -15,8 +15,13 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-ALGORITHMS = ("sarsa", "cacla")
-RBF_FORMS = ("normalized", "literal")
+from pipefollow.agents import ALGORITHMS
+from pipefollow.rbf import FORMS as RBF_FORMS
+
+# Bounds that keep a run finite (a day of simulated time per episode is far beyond any use).
+MAX_EPISODES = 10_000_000
+MAX_SECONDS = 86_400.0
+MAX_REPEATS = 100_000
 
 
 class ConfigError(ValueError):
@@ -95,7 +100,7 @@ class ExperimentConfig:
 
 
 def field_help(cls) -> dict[str, str]:
-    """Field name → help text of a config dataclass."""
+    """Field name → help text (unit and source) of a config dataclass."""
     return {f.name: f.metadata.get("help", "") for f in dataclasses.fields(cls)}
 
 
@@ -158,15 +163,19 @@ def validate(obj, where: str) -> None:
         return ConfigError(f"{where}: key '{key}' must be {what}, got {value!r}")
 
     if isinstance(obj, Phase):
-        if obj.episodes < 1:
-            raise bad("episodes", "at least 1", obj.episodes)
+        if not 1 <= obj.episodes <= MAX_EPISODES:
+            raise bad("episodes", f"from 1 to {MAX_EPISODES:,}", obj.episodes)
     elif isinstance(obj, TrialConfig):
         import re
 
         if not re.fullmatch(r"[A-Za-z0-9_.-]+", obj.name):
             raise bad("name", "letters, digits, '-', '_' or '.'", obj.name)
         if obj.algorithm == "sarsa" and (obj.skew_deg or obj.supervised or obj.skew_centred):
-            raise ConfigError(f"{where}: skew_deg and supervised apply to algorithm 'cacla' only")
+            raise ConfigError(
+                f"{where}: skew_deg, skew_centred and supervised apply to algorithm 'cacla' only"
+            )
+        if obj.skew_centred and not obj.skew_deg:
+            raise ConfigError(f"{where}: skew_centred needs skew_deg > 0")
         for key in ("alpha_v", "alpha_pi", "alpha_q", "discount"):
             v = getattr(obj, key)
             if not 0.0 < v <= 1.0:
@@ -179,11 +188,13 @@ def validate(obj, where: str) -> None:
         if obj.sigma_start < obj.sigma_end:
             raise bad("sigma_start", f"≥ sigma_end ({obj.sigma_end})", obj.sigma_start)
         for key in ("episode_seconds", "evaluate_seconds"):
-            if getattr(obj, key) < 1.0:
-                raise bad(key, "at least 1 (s)", getattr(obj, key))
+            if not 1.0 <= getattr(obj, key) <= MAX_SECONDS:
+                raise bad(key, f"from 1 to {MAX_SECONDS:g} (s)", getattr(obj, key))
+        if obj.skew_deg > 180.0:
+            raise bad("skew_deg", "at most 180 (deg)", obj.skew_deg)
     elif isinstance(obj, ExperimentConfig):
-        if obj.repeats < 1:
-            raise bad("repeats", "at least 1", obj.repeats)
+        if not 1 <= obj.repeats <= MAX_REPEATS:
+            raise bad("repeats", f"from 1 to {MAX_REPEATS:,}", obj.repeats)
         names = [t.name for t in obj.trials]
         dup = {n for n in names if names.count(n) > 1}
         if dup:
@@ -211,6 +222,8 @@ def parse_experiment(data: dict, source: str) -> ExperimentConfig:
         raise ConfigError(f"{source}: 'trial' must be an array of tables [[trial]]")
     trials = []
     for i, table in enumerate(tables):
+        if not isinstance(table, dict):
+            raise ConfigError(f"{source}: [[trial]] #{i + 1} must be a table, got {table!r}")
         where = f"{source} [[trial]] #{i + 1}" + (f" '{table['name']}'" if "name" in table else "")
         trials.append(_coerce(TrialConfig, {**defaults, **table}, where))
     return _coerce(ExperimentConfig, {**head, "trials": tuple(trials)}, f"{source} [experiment]")

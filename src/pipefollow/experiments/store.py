@@ -79,6 +79,13 @@ def _write_npz_atomic(path: Path, arrays: dict[str, np.ndarray]) -> None:
 # The folder and its configuration
 
 
+def _code_stamp() -> dict[str, str]:
+    """Which code computes this run: package version and a hash of its sources."""
+    import pipefollow
+
+    return {"version": pipefollow.__version__, "sources": pipefollow.source_hash()}
+
+
 def _describe_difference(stored: dict, wanted: dict) -> str:
     """A short account of how two resolved configurations differ."""
     for key in ("name", "repeats", "seed"):
@@ -121,18 +128,26 @@ def prepare(run_dir: str | os.PathLike, exp: ExperimentConfig) -> Path:
     run_dir = Path(run_dir)
     if run_dir.exists() and not run_dir.is_dir():
         raise ConfigError(f"--out '{run_dir}': exists and is not a folder")
-    wanted = json.loads(json.dumps(to_dict(exp)))
+    wanted = {**json.loads(json.dumps(to_dict(exp))), "code": _code_stamp()}
     path = run_dir / CONFIG_FILE
     if path.exists():
         try:
             stored = json.loads(path.read_text())
-        except (OSError, ValueError) as e:
+            same = from_dict(stored) == exp
+        except (OSError, ValueError, KeyError, TypeError) as e:
             raise StoreError(f"run folder '{run_dir}': unreadable {CONFIG_FILE} ({e})") from None
-        if stored != wanted:
+        if not same:
             diff = _describe_difference(stored, wanted)
             raise ConfigError(
                 f"run folder '{run_dir}' holds a different configuration ({diff}); "
                 "use another --out or the same options"
+            )
+        if stored.get("code") != wanted["code"]:
+            then, now = stored.get("code") or {}, wanted["code"]
+            raise ConfigError(
+                f"run folder '{run_dir}' was computed by other code (pipefollow {then.get('version', '?')}, "
+                f"sources {then.get('sources', '?')}; now {now['version']}, sources {now['sources']}): "
+                "its results would mix with this version's; use another --out"
             )
     else:
         write_text_atomic(path, json.dumps(wanted, indent=2, ensure_ascii=False) + "\n")
