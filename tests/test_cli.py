@@ -143,3 +143,38 @@ def test_evaluate_rejects_a_foreign_policy_file(runner, tmp_path):
     res = runner.invoke(main, ["evaluate", "--controller", str(p)])
     assert res.exit_code == 2
     assert "not a pipefollow policy" in res.stderr
+
+
+def _one_line_error(res, *fragments):
+    assert res.exit_code == 2, res.output
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in res.output, res.output
+    for f in fragments:
+        assert f in lines[0]
+
+
+def test_train_to_an_unwritable_folder_fails_before_training(runner, tmp_path):
+    blocker = tmp_path / "afile"
+    blocker.write_text("")
+    res = runner.invoke(
+        main, ["train", "--algorithm", "cacla", "--episodes", "2", "--out", str(blocker / "sub")]
+    )
+    _one_line_error(res, "--out", "cannot write there")
+
+
+@pytest.mark.parametrize(
+    "toml, fragment",
+    [
+        ("trial = [1, 2]\n", "must be a table"),
+        ('[experiment]\nname = "x"\n[[trial]]\nname = "t"\nepisode_seconds = 1e308\n', "episode_seconds"),
+        ('[experiment]\nname = "x"\n[[trial]]\nname = "t"\nalgoritm = "cacla"\n', "unknown key 'algoritm'"),
+        ("[experiment\n", "not valid TOML"),
+    ],
+)
+def test_bad_experiment_file_gives_one_line_error_and_no_run_folder(runner, tmp_path, toml, fragment):
+    path = tmp_path / "exp.toml"
+    path.write_text(toml)
+    out = tmp_path / "run"
+    res = runner.invoke(main, ["reproduce", "--experiment", str(path), "--out", str(out), "--no-figures"])
+    _one_line_error(res, str(path), fragment)
+    assert not out.exists()

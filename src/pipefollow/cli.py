@@ -36,6 +36,9 @@ def _guard(fn):
             return fn(*args, **kwargs)
         except USER_ERRORS as e:
             raise UserError(str(e)) from None
+        except OSError as e:  # an output folder or file that cannot be written
+            where = f"'{e.filename}': " if e.filename else ""
+            raise UserError(f"{where}{e.strerror or e}") from None
 
     return wrapper
 
@@ -44,6 +47,19 @@ def _guard(fn):
 @click.version_option(package_name="pipefollow")
 def main() -> None:
     """Learn and evaluate AUV pipeline-following controllers (Fjerdingen et al., 2010)."""
+
+
+def _writable_folder(path: str, option: str) -> Path:
+    """Create the folder and check that files can be written there, before any long work."""
+    folder = Path(path)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / ".pipefollow-write-probe"
+        probe.touch()
+        probe.unlink()
+    except OSError as e:
+        raise UserError(f"{option} '{path}': cannot write there ({e.strerror or e})") from None
+    return folder
 
 
 def _default_seconds(pipeline: str, seconds: float | None) -> float:
@@ -230,6 +246,7 @@ def train(
     if algorithm == "sarsa" and (skew or supervised or skew_centred):
         raise UserError("--skew, --skew-centred and --supervised apply to --algorithm cacla only")
     pipe = resolve(pipeline)
+    out = _writable_folder(out_dir, "--out")
     rng = np.random.default_rng(seed)
     if init_policy:
         from pipefollow.policy import load_policy
@@ -261,7 +278,6 @@ def train(
             done[0] = n
 
         stats = train_compiled(agent, pipe, episodes, episode_seconds=seconds, progress=progress)
-    out = Path(out_dir)
     from pipefollow.policy import save_policy
     from pipefollow.results import write_learning_curve
 
