@@ -191,3 +191,23 @@ def test_skew_exploration_mean_shift_and_the_centred_extension(centred, mean):
         [(cacla.act(w, PHI, sigma, *rng.standard_normal(2), 0.0, p)[1] - 0.09) / sigma for _ in range(20000)]
     )
     assert z.mean() == pytest.approx(mean, abs=4 * z.std() / math.sqrt(z.size))
+
+
+def test_update_for_another_observation_than_the_last_act_uses_that_observation():
+    agent = Cacla(seed=0)
+    s1, s2, s3 = (np.array([x, 1.5, 0.0, 0.2]) for x in (-0.5, 0.5, 0.0))
+    agent.act(s1)
+    agent.update(s2, 0.3, -1.0, s3, 0.8)  # out of order: must learn about s2, not s1
+    phi2 = agent.features(s2)
+    expected = np.zeros_like(agent.weights)
+    delta = -1.0  # all weights were zero
+    expected[V] = 0.4 * delta * phi2
+    np.testing.assert_allclose(agent.weights, expected)
+
+
+def test_skew_update_sign_uses_the_clipped_mean():
+    p = CaclaParams(skew=0.5)
+    w = weights()
+    w[A] = [5.0, 5.0, 5.0]  # A(s) = 5: every sample clips to 1
+    cacla.update(w, PHI, 1.0, 0.0, 0.3, 0.8, PHI_NEXT, p)  # δ > 0, sample at the clip
+    np.testing.assert_array_equal(w[G], 0.0)  # no side to prefer

@@ -41,3 +41,67 @@ def test_equivalence_covers_lost_pipe_updates():
     assert stats_env[:, 3].sum() > 0  # some time was spent with the pipe lost
     np.testing.assert_allclose(stats_fast, stats_env, rtol=0, atol=1e-9)
     np.testing.assert_allclose(b.weights, a.weights, rtol=0, atol=1e-9)
+
+
+class ScriptedEnv:
+    """Visibility and rewards follow a script; observations are the state index."""
+
+    def __init__(self, visible, rewards):
+        self.visible, self.rewards = visible, rewards
+        self.unwrapped = self
+        self.params = type("P", (), {"dt": 0.05, "substeps": 20})()
+        self.trail = []
+
+    def reset(self, seed=None, options=None):
+        self.t = 0
+        return np.array([0.0]), {"pipe_in_view": self.visible[0], "progress_m": 0.0}
+
+    def step(self, action):
+        r = self.rewards[self.t]
+        self.t += 1
+        info = {"pipe_in_view": self.visible[self.t], "progress_m": float(self.t)}
+        return np.array([float(self.t)]), r, False, self.t == len(self.rewards), info
+
+
+class Recorder:
+    discount = 0.5
+
+    def __init__(self):
+        self.acts, self.updates = [], []
+
+    def begin_episode(self, sigma):
+        pass
+
+    def act(self, obs, explore=True):
+        self.acts.append(int(obs[0]))
+        return 0.1 * obs[0]
+
+    def update(self, obs, action, reward, next_obs, discount):
+        self.updates.append((int(obs[0]), action, reward, int(next_obs[0]), discount))
+
+
+def test_semi_markov_updates_while_the_pipe_is_lost_by_hand():
+    from pipefollow.training import run_episode
+
+    visible = [True, True, False, False, True, False, False, False]  # states s0 … s7
+    rewards = [1.0, 2.0, -10.0, -10.0, 3.0, -10.0, -10.0]
+    agent = Recorder()
+    ep = run_episode(ScriptedEnv(visible, rewards), agent, learn=True, explore=True, sigma=0.3)
+    g = 0.5
+    assert agent.acts == [0, 1, 4]  # the agent acts only where the pipe is in view
+    assert agent.updates == [
+        (0, 0.0, 1.0, 1, g),  # ordinary one-step update
+        (1, 0.1, 2.0 + g * -10.0 + g**2 * -10.0, 4, g**3),  # lost for two decisions, found again
+        (4, 0.4, 3.0 + g * -10.0 + g**2 * -10.0, 7, g**3),  # lost until the time limit: bootstrap anyway
+    ]
+    assert ep.ret == sum(rewards)
+    assert ep.pipe_in_view == pytest.approx(2 / 7)  # decisions ending with the pipe in view: s1, s4
+    assert ep.time_lost_s == pytest.approx(5.0)
+
+
+def test_compiled_loop_refuses_a_custom_supervisor():
+    from pipefollow.cacla import Cacla, CaclaParams
+
+    agent = Cacla(CaclaParams(supervised=True), supervisor=lambda obs: 0.0)
+    with pytest.raises(TypeError, match="heuristic only"):
+        train_compiled(agent, builtin("paper-left"), 1)

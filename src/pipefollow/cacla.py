@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from pipefollow.exploration import skew_normal_from_normals
+from pipefollow.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals
 from pipefollow.linear import dot
 from pipefollow.rbf import STATE_GRID, RBFGrid, grid_features
 
@@ -108,7 +108,8 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p):
         w[V, i] += cv * phi[i]
         w[A, i] += step * phi[i]
     if p.skew > 0.0:  # eq. 15
-        inc = p.skew * np.sign(delta) * np.sign(a_rl - mu)
+        # the side of the executed sample: compared with the clipped mean, as a_rl is clipped too
+        inc = p.skew * np.sign(delta) * np.sign(a_rl - clip1(mu))
         g = dot(w[G], phi)
         if (inc > 0.0 and g < p.gamma_max) or (inc < 0.0 and g > -p.gamma_max):
             for i in range(phi.shape[0]):
@@ -166,6 +167,7 @@ class Cacla:
         self._grid_arrays = grid.packed
         self._normalized = grid.form == "normalized"
         self._draws = _draw_count(params)
+        self.default_supervisor = supervisor is None  # the compiled training loop knows only this one
         if supervisor is None:
             from pipefollow.heuristic import heuristic_action
 
@@ -200,9 +202,8 @@ class Cacla:
         grid_features(np.asarray(obs, dtype=np.float64), c, o, wd, self._normalized, out)
         return out
 
-    def _cached_features(self, obs) -> np.ndarray:
+    def _cached_features(self, obs, key: bytes) -> np.ndarray:
         """φ(obs), reusing φ(s') of the last update when ``obs`` is that s' (the usual case)."""
-        key = np.asarray(obs, dtype=np.float64).tobytes()
         cache = self._phi_cache
         if cache is not None and cache[0] == key:
             return cache[1]
@@ -212,7 +213,8 @@ class Cacla:
 
     def act(self, obs, explore: bool = True) -> float:
         """Executed action for ``obs``; with ``explore`` it samples with the current ``sigma``."""
-        phi = self._cached_features(obs)
+        key = _key(obs)
+        phi = self._cached_features(obs, key)
         sigma = self.sigma if explore else 0.0
         z0 = z1 = 0.0
         if sigma > 0.0:
@@ -221,7 +223,7 @@ class Cacla:
                 z1 = self.rng.standard_normal()
         a_sup = self.supervisor(obs) if self.params.supervised else 0.0
         a, a_rl = act_packed(self.weights, phi, sigma, z0, z1, a_sup, self._packed)
-        self._pending = (phi, a_rl, a_sup)
+        self._pending = (key, phi, a_rl, a_sup)
         return a
 
     def actor(self, obs) -> float:
@@ -231,13 +233,14 @@ class Cacla:
     def update(self, obs, action, reward: float, next_obs, discount: float) -> float:
         """Learn from ``obs`` → ``next_obs``; ``discount`` is γ_d^n (0 if terminal). Returns δ.
 
-        Uses the learner's own action of the last :meth:`act` call; without one, ``action`` is
-        taken as the learner's action.
+        Uses the learner's own action of the last :meth:`act` call on ``obs``; without one,
+        ``action`` is taken as the learner's action.
         """
-        if self._pending is not None:
-            phi, a_rl, a_sup = self._pending
+        key = _key(obs)
+        if self._pending is not None and self._pending[0] == key:
+            _, phi, a_rl, a_sup = self._pending
         else:
-            phi = self._cached_features(obs)
+            phi = self._cached_features(obs, key)
             a_rl = float(action)
             a_sup = self.supervisor(obs) if self.params.supervised else 0.0
         self._pending = None
@@ -248,14 +251,19 @@ class Cacla:
             a_sup,
             float(reward),
             float(discount),
-            self._cached_features(next_obs),
+            self._cached_features(next_obs, _key(next_obs)),
             self._packed,
         )
+
+
+def _key(obs) -> bytes:
+    """An observation's identity for the caches: its float64 bytes."""
+    return np.asarray(obs, dtype=np.float64).tobytes()
 
 
 def cacla_label(p: CaclaParams) -> str:
     """Label such as ``supervised CACLA, skew 22.5°``."""
     name = "supervised CACLA" if p.supervised else "CACLA"
     if p.skew > 0.0:
-        name += f", skew {p.skew * 45.0:g}°" + (" centred" if p.skew_centred else "")
+        name += f", skew {p.skew * DEGREES_PER_GAMMA:g}°" + (" centred" if p.skew_centred else "")
     return name

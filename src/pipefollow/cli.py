@@ -240,6 +240,7 @@ def train(
 ):
     """Train a learner; writes the policy and its learning curve."""
     from pipefollow.agents import make_agent
+    from pipefollow.exploration import skew_step_to_gamma
     from pipefollow.pipeline import resolve
     from pipefollow.training import STAT_NAMES, train_compiled
 
@@ -254,7 +255,7 @@ def train(
         agent = load_policy(init_policy)
         if agent.algorithm != algorithm:
             raise UserError(f"--init {init_policy}: holds a {agent.name} policy, not {algorithm}")
-        options = (skew / 45.0, supervised, skew_centred)
+        options = (skew_step_to_gamma(skew), supervised, skew_centred)
         if algorithm == "cacla" and options != (
             agent.params.skew,
             agent.params.supervised,

@@ -286,6 +286,10 @@ def train_compiled(
     normalized = agent.grid.form == "normalized"
     simp = sim.pack_params(params)
     pts, cum = pipeline.points, pipeline.cumulative
+    if isinstance(agent, cacla_mod.Cacla) and agent.params.supervised and not agent.default_supervisor:
+        raise TypeError(
+            "the compiled loop supervises with the heuristic only; use train() for other supervisors"
+        )
     for lo in range(0, episodes, max(1, chunk)):
         hi = min(episodes, lo + max(1, chunk))
         sig, out = sigmas[lo:hi], stats[lo:hi]
