@@ -12,6 +12,7 @@ KINDS = {
     "cacla": dict(algorithm="cacla"),
     "cacla-skew": dict(algorithm="cacla", skew_deg=45.0),
     "supervised-skew": dict(algorithm="cacla", skew_deg=22.5, supervised=True),
+    "supervised-skew-centred": dict(algorithm="cacla", skew_deg=22.5, supervised=True, skew_centred=True),
     "sarsa": dict(algorithm="sarsa"),
 }
 

@@ -79,7 +79,8 @@ class PipelineFollowingEnv(gym.Env):
 
     ``pipe_in_view``, ``overridden`` (the search behaviour acted), ``e_dist``, ``e_angl``,
     ``progress_m`` (arc length reached along the pipe), ``pose`` (x north, y east, ψ),
-    ``nu`` (u, v, r), ``waypoint``, ``executed_action``, ``time_s``.
+    ``nu`` (u, v, r), ``waypoint``, ``executed_action``, ``time_s``. Like the observation,
+    ``e_dist`` and ``e_angl`` hold the last sighting's values while the pipe is lost.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}

@@ -7,8 +7,10 @@ leans towards the side that has earned positive TD-errors (DESIGN.md, "skew-norm
 
 σ falls linearly from 1 to 0.01 over the episodes of a trial (paper §4; DESIGN.md, "exploration σ").
 
-Randomness comes only from an explicit ``numpy.random.Generator``; the compiled samplers take it
-as an argument and draw the same numbers NumPy would, in a fixed order.
+Randomness comes only from an explicit ``numpy.random.Generator``. The learners draw their
+standard normals themselves and build the sample with :func:`skew_normal_from_normals`, so that
+the Python and the compiled training paths consume the same numbers in the same order; the
+``*_action`` samplers here take the generator directly (numba draws the same numbers as NumPy).
 """
 
 from __future__ import annotations

@@ -120,10 +120,11 @@ def warm_up(configs: list[TrialConfig], parallel: bool = False) -> None:
         other = [c for c in tiny if c.algorithm != algorithms[0]][0]
         helper = multiprocessing.get_context("fork").Process(target=run_trial, args=(other, 0), daemon=True)
         helper.start()
-        for c in tiny:
-            if c.algorithm == algorithms[0]:
-                run_trial(c, 0)
+        first = [c for c in tiny if c.algorithm == algorithms[0]]
+        for c in first:
+            run_trial(c, 0)
         helper.join()
+        tiny = [c for c in tiny if c not in first]  # the rest now loads from the cache
     for c in tiny:
         run_trial(c, 0)
 

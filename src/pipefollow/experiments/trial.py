@@ -14,7 +14,8 @@ from pipefollow.experiments.config import TrialConfig
 from pipefollow.exploration import linear_sigma
 from pipefollow.heuristic import Heuristic
 from pipefollow.pipeline import resolve
-from pipefollow.rbf import STATE_GRID, RBFGrid
+from pipefollow.rbf import ACTION_GRID, STATE_GRID, RBFGrid
+from pipefollow.sarsa import Sarsa
 from pipefollow.training import run_episode, train_compiled
 
 
@@ -67,8 +68,12 @@ def build_agent(config: TrialConfig, rng: np.random.Generator | None = None):
             forgetting=config.forgetting,
             skew_centred=config.skew_centred,
         )
-    if grid is not STATE_GRID:
-        agent = type(agent)(agent.params, grid=grid, rng=rng)
+    if config.rbf != "normalized":  # the literal eq. 18 form for every grid of the learner
+        if config.algorithm == "sarsa":
+            action_grid = RBFGrid(ACTION_GRID.centres, form=config.rbf)
+            agent = Sarsa(agent.params, grid=grid, action_grid=action_grid, rng=rng)
+        else:
+            agent = Cacla(agent.params, grid=grid, rng=rng)
     return agent
 
 
