@@ -22,7 +22,7 @@ from numba import njit
 
 from pipefollow.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals
 from pipefollow.linear import dot
-from pipefollow.rbf import STATE_GRID, RBFGrid, grid_features
+from pipefollow.rbf import STATE_GRID, RBFGrid
 
 V, A, G, K = 0, 1, 2, 3  # rows of the weight matrix: critic, actor, skew, supervisor trust
 
@@ -164,8 +164,6 @@ class Cacla:
         self.weights = np.zeros((4, grid.n_features))
         self.sigma = 1.0
         self._packed = pack(params)
-        self._grid_arrays = grid.packed
-        self._normalized = grid.form == "normalized"
         self._draws = _draw_count(params)
         self.default_supervisor = supervisor is None  # the compiled training loop knows only this one
         if supervisor is None:
@@ -197,10 +195,7 @@ class Cacla:
 
     def features(self, obs) -> np.ndarray:
         """φ(obs)."""
-        out = np.empty(self.grid.n_features)
-        c, o, wd = self._grid_arrays
-        grid_features(np.asarray(obs, dtype=np.float64), c, o, wd, self._normalized, out)
-        return out
+        return self.grid.features(obs)
 
     def _cached_features(self, obs, key: bytes) -> np.ndarray:
         """φ(obs), reusing φ(s') of the last update when ``obs`` is that s' (the usual case)."""

@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 from pipefollow.linear import dot, matvec
-from pipefollow.rbf import ACTION_GRID, STATE_GRID, RBFGrid, dim_activations, grid_features
+from pipefollow.rbf import ACTION_GRID, STATE_GRID, RBFGrid, dim_activations
 
 
 class SarsaParams(NamedTuple):
@@ -113,8 +113,6 @@ class Sarsa:
         self.weights = np.zeros((action_grid.n_features, grid.n_features))
         self.sigma = 1.0
         self.search_actions, self.search_psi = search_table(params, action_grid)
-        self._grid_arrays = grid.packed
-        self._normalized = grid.form == "normalized"
         ac, _, aw = action_grid.packed
         self._action_centres, self._action_width = ac, float(aw[0])
         self._action_normalized = action_grid.form == "normalized"
@@ -135,10 +133,7 @@ class Sarsa:
 
     def features(self, obs) -> np.ndarray:
         """φ(obs)."""
-        out = np.empty(self.grid.n_features)
-        c, o, wd = self._grid_arrays
-        grid_features(np.asarray(obs, dtype=np.float64), c, o, wd, self._normalized, out)
-        return out
+        return self.grid.features(obs)
 
     def _psi(self, a: float) -> np.ndarray:
         return action_features(a, self._action_centres, self._action_width, self._action_normalized)
