@@ -395,7 +395,8 @@ def summary(run_dir: str | os.PathLike, exp: ExperimentConfig, last: int = 50) -
             "label": t.title,
             "seeds": [r.seed for r in results],
             f"mean_return_last{last}": float(np.mean([f[0] for f in final])),
-            f"std_return_last{last}": float(np.std([f[0] for f in final])),
+            # sample standard deviation, as in the report
+            f"std_return_last{last}": float(np.std([f[0] for f in final], ddof=1)) if len(final) > 1 else 0.0,
             f"mean_pipe_in_view_last{last}": float(np.mean([f[1] for f in final])),
             "evaluation_pipeline": results[0].evaluation_pipeline,
             "evaluation_mean_return": {
