@@ -146,6 +146,7 @@ def _cacla_episodes(
         sigma = sigmas[e]
         sim.init_state(s, points, cum, start[0], start[1], start[2], ps)
         pending = False
+        have_phi = False  # phi already holds φ(s) of the current state (computed for the last update)
         a_rl_p = a_sup_p = acc = disc = 0.0
         total = 0.0
         seen = 0
@@ -153,20 +154,22 @@ def _cacla_episodes(
             visible = s[sim.IN_VIEW] != 0.0
             a = 0.0
             if visible:
-                grid_features(s[:4], centres, offsets, widths, normalized, phi)
+                if not have_phi:
+                    grid_features(s[:4], centres, offsets, widths, normalized, phi)
                 z0 = z1 = 0.0
                 if sigma > 0.0:
                     z0 = rng.standard_normal()
                     z1 = rng.standard_normal() if skewed else z0
                 a_sup = heuristic_action(s[sim.X1], s[sim.Y1]) if p.supervised else 0.0
                 a, a_rl = cacla_mod.act(w, phi, sigma, z0, z1, a_sup, p)
+            have_phi = False
             r = sim.decide(s, a, points, cum, ps)
             total += r
             now_visible = s[sim.IN_VIEW] != 0.0
             seen += 1 if now_visible else 0
             if visible:
                 pending = True
-                phi_pend[:] = phi
+                phi, phi_pend = phi_pend, phi  # keep φ(s) for the update; no copy
                 a_rl_p, a_sup_p, acc, disc = a_rl, a_sup, r, p.discount
             elif pending:
                 acc += disc * r
@@ -175,6 +178,8 @@ def _cacla_episodes(
                 grid_features(s[:4], centres, offsets, widths, normalized, phi_next)
                 cacla_mod.update(w, phi_pend, a_rl_p, a_sup_p, acc, disc, phi_next, p)
                 pending = False
+                phi, phi_next = phi_next, phi  # φ(s') is the next decision's φ(s)
+                have_phi = True
         stats[e, 0] = total
         stats[e, 1] = seen / n_decisions
         stats[e, 2] = s[sim.PROGRESS_MAX]
