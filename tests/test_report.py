@@ -477,7 +477,7 @@ def test_report_numbers_equal_an_independent_computation(run, paper_short):
         and "at least 4 m" in text
         and "turns at 2 m and 4.5 m" in text
     )
-    assert f"took {len(paper_short.trials) * REPEATS * 12.5:.0f} s of wall time" in text
+    assert f"took {len(paper_short.trials) * REPEATS * 12.5:.1f} s of compute in total" in text
     assert "Summary: claim 1 confirmed, claim 2 not confirmed, claim 3 confirmed, claim 4 confirmed." in text
     assert re.search(r"Not confirmed — claim 2 \(Fig. 6\): skew helps early", text)
 

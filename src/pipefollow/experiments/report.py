@@ -613,10 +613,9 @@ def _setup_lines(f: Findings) -> list[str]:
             + "."
         )
     if f.wall_seconds is not None:
-        hours = f.wall_seconds / 3600
+        took = f"{f.wall_seconds:.1f} s" if f.wall_seconds < 3600 else f"{f.wall_seconds / 3600:.2f} h"
         lines.append(
-            f"The trials took {f.wall_seconds:.0f} s of wall time in total ({hours:.2f} h, summed "
-            "over trials that may have run in parallel)."
+            f"The trials took {took} of compute in total (summed over trials that may have run in parallel)."
         )
     missing = [t.name for t in cfg.trials if t.name not in f.summaries]
     if missing:
