@@ -178,3 +178,35 @@ def test_bad_experiment_file_gives_one_line_error_and_no_run_folder(runner, tmp_
     res = runner.invoke(main, ["reproduce", "--experiment", str(path), "--out", str(out), "--no-figures"])
     _one_line_error(res, str(path), fragment)
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "args, fragment",
+    [
+        (["train", "--algorithm", "cacla", "--episodes", "0"], "--episodes"),
+        (["train", "--algorithm", "cacla", "--skew", "nan"], "--skew"),
+        (["train", "--algorithm", "cacla", "--seconds", "inf"], "--seconds"),
+        (["train", "--algorithm", "cacla", "--skew-centred"], "--skew-centred needs --skew"),
+        (["evaluate", "--start-noise", "nan"], "--start-noise"),
+        (["evaluate", "--bogus"], "--bogus"),
+    ],
+)
+def test_bad_options_give_one_line_errors_and_write_nothing(runner, tmp_path, args, fragment):
+    out = tmp_path / "out"
+    res = runner.invoke(main, [*args, *(["--out", str(out)] if args[0] == "train" else [])])
+    _one_line_error(res, fragment)
+    assert not out.exists()
+
+
+def test_rejected_init_leaves_no_output_folder(runner, tmp_path):
+    res = runner.invoke(
+        main, ["train", "--algorithm", "sarsa", "--episodes", "2", "--out", str(tmp_path / "a")]
+    )
+    assert res.exit_code == 0, res.output
+    out = tmp_path / "b"
+    res = runner.invoke(
+        main,
+        ["train", "--algorithm", "cacla", "--init", str(tmp_path / "a" / "policy.npz"), "--out", str(out)],
+    )
+    _one_line_error(res, "not cacla")
+    assert not out.exists()

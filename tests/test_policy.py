@@ -49,3 +49,25 @@ def test_missing_foreign_corrupt_and_wrong_shape_files(tmp_path):
 def test_save_is_atomic_and_leaves_no_temporary_files(tmp_path):
     save_policy(make_agent("sarsa"), tmp_path / "a" / "p.npz")
     assert [p.name for p in (tmp_path / "a").iterdir()] == ["p.npz"]
+
+
+def test_version_1_sarsa_policy_files_still_load(tmp_path):
+    agent = make_agent("sarsa", rng=np.random.default_rng(1))
+    agent.weights[:] = np.random.default_rng(2).normal(size=agent.weights.shape)
+    path = save_policy(agent, tmp_path / "v2.npz")
+    with np.load(path) as z:
+        data = dict(z)
+    data["format_version"] = np.array(1)
+    data["weights"] = agent.weights.T.copy()  # version 1: (state features × action features)
+    np.savez(tmp_path / "v1.npz", **data)
+    np.testing.assert_array_equal(load_policy(tmp_path / "v1.npz").weights, agent.weights)
+
+
+def test_written_files_get_the_usual_permissions(tmp_path):
+    import os
+    import stat
+
+    path = save_policy(make_agent("cacla"), tmp_path / "p.npz")
+    mask = os.umask(0)
+    os.umask(mask)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o666 & ~mask

@@ -231,7 +231,9 @@ def test_prepare_writes_the_resolved_config_and_accepts_the_same_again(tmp_path)
     stored = json.loads((run / "config.json").read_text())
     code = stored.pop("code")
     assert stored == json.loads(json.dumps(to_dict(EXP)))
-    assert code == {"version": pipefollow.__version__, "sources": pipefollow.source_hash()}
+    assert code["version"] == pipefollow.__version__
+    assert code["sources"] == pipefollow.source_hash(store.RESULT_MODULES)
+    assert code["numpy"] == np.__version__
     assert store.read_config(run) == EXP
     store.prepare(run, EXP)  # same configuration: resume
 
@@ -334,3 +336,14 @@ def test_summary(tmp_path):
     expected = np.mean([results["sarsa", seed].stats[-2:, 0].mean() for seed in (40, 41)])
     assert s["sarsa"]["mean_return_last2"] == pytest.approx(expected)
     assert set(s["sup-skew"]["evaluation_mean_return"]) == {"learned", "heuristic", "actor"}
+
+
+def test_result_modules_exist_and_cover_the_compiled_learning_code():
+    from pathlib import Path
+
+    root = Path(pipefollow.__file__).parent
+    for module in store.RESULT_MODULES:
+        assert (root / module).is_file(), module
+    assert {"simulation.py", "cacla.py", "sarsa.py", "training.py", "experiments/trial.py"} <= set(
+        store.RESULT_MODULES
+    )

@@ -15,23 +15,24 @@ except PackageNotFoundError:  # running from a source tree
 ENV_ID = "pipefollow/PipelineFollowing-v0"
 
 
-def source_hash() -> str:
-    """A short hash of all the package's Python sources: which code computed a result."""
-    global _SOURCE_HASH
-    if _SOURCE_HASH is None:
-        import hashlib
-        from pathlib import Path
+def source_hash(modules: tuple[str, ...] | None = None) -> str:
+    """A short hash of the package's Python sources (all, or the named module files)."""
+    import hashlib
+    from pathlib import Path
 
+    key = modules or ()
+    if key not in _SOURCE_HASHES:
         root = Path(__file__).parent
+        paths = sorted(root.rglob("*.py")) if modules is None else [root / m for m in sorted(modules)]
         digest = hashlib.sha1()
-        for path in sorted(root.rglob("*.py")):
+        for path in paths:
             digest.update(path.relative_to(root).as_posix().encode())
             digest.update(path.read_bytes())
-        _SOURCE_HASH = digest.hexdigest()[:16]
-    return _SOURCE_HASH
+        _SOURCE_HASHES[key] = digest.hexdigest()[:16]
+    return _SOURCE_HASHES[key]
 
 
-_SOURCE_HASH: str | None = None
+_SOURCE_HASHES: dict[tuple[str, ...], str] = {}
 
 
 def _configure_numba_cache() -> None:

@@ -17,6 +17,16 @@ from typing import IO
 TMP_SUFFIX = ".tmp"
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+# mkstemp creates files readable by their owner only; results should get the usual permissions.
+_FILE_MODE = 0o666 & ~_umask()
+
+
 @contextmanager
 def atomic_file(path: str | os.PathLike, mode: str = "wb") -> Iterator[IO]:
     """Open a temporary file for writing; on success it replaces ``path`` (parents are created)."""
@@ -27,7 +37,8 @@ def atomic_file(path: str | os.PathLike, mode: str = "wb") -> Iterator[IO]:
     except OSError as e:  # name the file the caller asked for, not the temporary one
         raise OSError(e.errno, e.strerror, str(path)) from None
     try:
-        with os.fdopen(fd, mode) as f:
+        os.fchmod(fd, _FILE_MODE)
+        with os.fdopen(fd, mode, **({"encoding": "utf-8"} if "b" not in mode else {})) as f:
             yield f
             f.flush()
             os.fsync(f.fileno())  # the rename must not overtake the data (power loss, not just kill)

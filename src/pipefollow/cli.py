@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from pipefollow.experiments.config import ConfigError
+from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS, ConfigError
 from pipefollow.experiments.store import StoreError
 from pipefollow.pipeline import PipelineError
 from pipefollow.policy import PolicyError
@@ -26,6 +26,14 @@ class UserError(click.ClickException):
         click.echo(f"pipefollow: error: {self.message}", err=True)
 
 
+def _is_path_error(e: OSError) -> bool:
+    """An error about a file or folder the user named (not an internal failure)."""
+    import errno
+
+    path_errors = (PermissionError, IsADirectoryError, NotADirectoryError, FileNotFoundError, FileExistsError)
+    return isinstance(e, path_errors) or e.errno in (errno.ENOSPC, errno.EROFS, errno.ENAMETOOLONG)
+
+
 def _guard(fn):
     """Turn the library's input errors into one-line CLI errors (exit 2, no traceback)."""
     import functools
@@ -36,14 +44,49 @@ def _guard(fn):
             return fn(*args, **kwargs)
         except USER_ERRORS as e:
             raise UserError(str(e)) from None
-        except OSError as e:  # an output folder or file that cannot be written
-            where = f"'{e.filename}': " if e.filename else ""
+        except OSError as e:
+            if not _is_path_error(e):
+                raise
+            name = e.filename2 or e.filename  # for a failed rename, the target
+            where = f"'{name}': " if name else ""
             raise UserError(f"{where}{e.strerror or e}") from None
 
     return wrapper
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+class _OneLineErrors(click.Group):
+    """Click's own usage errors (a bad option value, a missing option) on one line, exit 2."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.exceptions.Abort:
+            click.echo("pipefollow: aborted", err=True)
+            sys.exit(1)
+        except click.ClickException as e:
+            if isinstance(e, UserError):
+                e.show()
+            else:
+                click.echo(f"pipefollow: error: {e.format_message()}", err=True)
+            sys.exit(e.exit_code)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
+def _finite(ctx, param, value):
+    """Reject NaN and infinity, which click's ranges let through."""
+    import math
+
+    if value is not None and not math.isfinite(value):
+        raise click.BadParameter(f"{value} is not a finite number", ctx=ctx, param=param)
+    return value
+
+
+@click.group(
+    cls=_OneLineErrors,
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+)
 @click.version_option(package_name="pipefollow")
 def main() -> None:
     """Learn and evaluate AUV pipeline-following controllers (Fjerdingen et al., 2010)."""
@@ -51,12 +94,15 @@ def main() -> None:
 
 def _writable_folder(path: str, option: str) -> Path:
     """Create the folder and check that files can be written there, before any long work."""
+    import os
+    import tempfile
+
     folder = Path(path)
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        probe = folder / ".pipefollow-write-probe"
-        probe.touch()
-        probe.unlink()
+        fd, probe = tempfile.mkstemp(dir=folder, prefix=".pipefollow-probe-")
+        os.close(fd)
+        os.unlink(probe)
     except OSError as e:
         raise UserError(f"{option} '{path}': cannot write there ({e.strerror or e})") from None
     return folder
@@ -110,10 +156,11 @@ def _summary(stats) -> dict:
     show_default=True,
     help="Built-in name (paper-left, paper-right, paper-validation) or a JSON file.",
 )
-@click.option("--episodes", default=1, show_default=True, type=click.IntRange(min=1))
+@click.option("--episodes", default=1, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
 @click.option(
     "--seconds",
-    type=click.FloatRange(min=1.0),
+    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
+    callback=_finite,
     default=None,
     help="Episode length in seconds [default: 60 on paper-validation, else 20].",
 )
@@ -123,6 +170,7 @@ def _summary(stats) -> dict:
     default=0.0,
     show_default=True,
     type=click.FloatRange(min=0.0),
+    callback=_finite,
     help="Uniform random lateral start offset up to this many metres.",
 )
 @click.option(
@@ -130,6 +178,7 @@ def _summary(stats) -> dict:
     default=0.0,
     show_default=True,
     type=click.FloatRange(min=0.0),
+    callback=_finite,
     help="Uniform random start heading offset up to this many degrees.",
 )
 @click.option(
@@ -186,7 +235,8 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
 @click.option("--algorithm", type=click.Choice(["sarsa", "cacla"]), required=True)
 @click.option(
     "--skew",
-    type=click.FloatRange(min=0.0),
+    type=click.FloatRange(min=0.0, max=180.0),
+    callback=_finite,
     default=0.0,
     show_default=True,
     help="CACLA skew step Δγ in degrees (eq. 15): 11.25, 22.5 or 45 in the paper; 0 = Gaussian.",
@@ -200,12 +250,13 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
 @click.option(
     "--pipeline", default="paper-left", show_default=True, help="Built-in name or JSON file to train on."
 )
-@click.option("--episodes", default=500, show_default=True, type=click.IntRange(min=1))
+@click.option("--episodes", default=500, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
 @click.option(
     "--seconds",
     default=20.0,
     show_default=True,
-    type=click.FloatRange(min=1.0),
+    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
+    callback=_finite,
     help="Episode length in seconds.",
 )
 @click.option("--seed", default=0, show_default=True, type=int)
@@ -246,8 +297,9 @@ def train(
 
     if algorithm == "sarsa" and (skew or supervised or skew_centred):
         raise UserError("--skew, --skew-centred and --supervised apply to --algorithm cacla only")
+    if skew_centred and not skew:
+        raise UserError("--skew-centred needs --skew > 0")
     pipe = resolve(pipeline)
-    out = _writable_folder(out_dir, "--out")
     rng = np.random.default_rng(seed)
     if init_policy:
         from pipefollow.policy import load_policy
@@ -268,6 +320,7 @@ def train(
     else:
         extra = {"skew_centred": True} if skew_centred else {}
         agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng, **extra)
+    out = _writable_folder(out_dir, "--out")  # before training, after the checks of --init
     show = not as_json and sys.stderr.isatty()
     with click.progressbar(
         length=episodes, label=f"training {agent.name}", file=sys.stderr, hidden=not show

@@ -1,9 +1,13 @@
-"""The learners' linear algebra, with a fixed order of summation.
+"""The learners' linear algebra, with a summation order fixed at compile time.
 
 ``np.dot`` and ``@`` inside compiled code call the BLAS library, whose order of summation may
 depend on its thread count: Ray workers run single-threaded BLAS, a local process may not, and a
-last-bit difference in one value grows into different learning runs. These loops sum in one
-fixed order, so the same seed gives the same numbers in every process and on every backend.
+last-bit difference in one value grows into different learning runs. These loops are compiled
+once (and cached); the only licence given to the compiler is to reassociate the sum of
+:func:`dot` into SIMD lanes, a split fixed by the compiled code. So every process on a machine —
+serial, process pool or Ray worker — gives the same numbers for the same seed. Machines with a
+different SIMD width (say AVX2 and AVX-512 nodes of one Ray cluster) compile a different split
+and can differ in the last bits.
 """
 
 from __future__ import annotations
@@ -12,9 +16,8 @@ import numpy as np
 from numba import njit
 
 
-# ``fastmath`` lets the compiler split the sums into SIMD lanes; the split is fixed when the
-# function is compiled, so every process running the same compiled code sums in the same order.
-@njit(cache=True, fastmath=True)
+# Only reassociation: SIMD lanes (3× faster here), no assumptions about NaN or infinity.
+@njit(cache=True, fastmath={"reassoc"})
 def dot(a, b):
     """Σ a_i b_i."""
     s = 0.0

@@ -21,7 +21,7 @@ from pipefollow.rbf import RBFGrid
 from pipefollow.sarsa import Sarsa, SarsaParams
 
 FORMAT = "pipefollow-policy"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: SARSA weights stored per action centre (13 × 1,764)
 
 
 class PolicyError(ValueError):
@@ -89,6 +89,8 @@ def load_policy(path: str | os.PathLike, seed: int | None = None) -> Cacla | Sar
         if isinstance(e, PolicyError):
             raise
         raise PolicyError(f"{src}: parameters do not fit algorithm '{algorithm}' ({e})") from None
+    if version < 2 and algorithm == "sarsa" and weights.shape == agent.weights.shape[::-1]:
+        weights = np.ascontiguousarray(weights.T)  # version 1 stored SARSA's weights state-major
     if weights.shape != agent.weights.shape:
         raise PolicyError(f"{src}: weights have shape {weights.shape}, expected {agent.weights.shape}")
     if not np.all(np.isfinite(weights)):

@@ -99,6 +99,20 @@ def check_inputs(exp: ExperimentConfig) -> None:
             resolve(t.evaluate_on)
 
 
+def _compile_quietly(config: TrialConfig) -> None:
+    """In a forked helper: compile (and cache) one kind of trial, then leave without a trace.
+
+    ``os._exit`` skips the inherited stdout buffers and exit handlers; any failure is left for the
+    parent, which runs the same tiny trial itself afterwards.
+    """
+    code = 0
+    try:
+        run_trial(config, 0)
+    except BaseException:  # noqa: BLE001 - the parent reports it
+        code = 1
+    os._exit(code)
+
+
 def warm_up(configs: list[TrialConfig], parallel: bool = False) -> None:
     """Run a one-episode version of each distinct kind of learner once, in this process.
 
@@ -118,7 +132,9 @@ def warm_up(configs: list[TrialConfig], parallel: bool = False) -> None:
     algorithms = list(dict.fromkeys(c.algorithm for c in tiny))
     if parallel and len(algorithms) > 1 and sys.platform.startswith("linux"):
         other = [c for c in tiny if c.algorithm != algorithms[0]][0]
-        helper = multiprocessing.get_context("fork").Process(target=run_trial, args=(other, 0), daemon=True)
+        helper = multiprocessing.get_context("fork").Process(
+            target=_compile_quietly, args=(other,), daemon=True
+        )
         helper.start()
         first = [c for c in tiny if c.algorithm == algorithms[0]]
         for c in first:

@@ -79,11 +79,41 @@ def _write_npz_atomic(path: Path, arrays: dict[str, np.ndarray]) -> None:
 # The folder and its configuration
 
 
+# The modules whose code decides a trial's numbers; edits elsewhere (CLI, report, figures, this
+# store) do not keep a run from resuming.
+RESULT_MODULES = (
+    "agents.py",
+    "cacla.py",
+    "camera.py",
+    "controller.py",
+    "dynamics.py",
+    "env.py",
+    "exploration.py",
+    "heuristic.py",
+    "linear.py",
+    "pipeline.py",
+    "rbf.py",
+    "reward.py",
+    "sarsa.py",
+    "simulation.py",
+    "training.py",
+    "experiments/config.py",
+    "experiments/trial.py",
+)
+
+
 def _code_stamp() -> dict[str, str]:
-    """Which code computes this run: package version and a hash of its sources."""
+    """Which code computes this run: package version, a hash of the result modules, numerics libraries."""
+    import numba
+
     import pipefollow
 
-    return {"version": pipefollow.__version__, "sources": pipefollow.source_hash()}
+    return {
+        "version": pipefollow.__version__,
+        "sources": pipefollow.source_hash(RESULT_MODULES),
+        "numpy": np.__version__,
+        "numba": numba.__version__,
+    }
 
 
 def _describe_difference(stored: dict, wanted: dict) -> str:
@@ -144,9 +174,11 @@ def prepare(run_dir: str | os.PathLike, exp: ExperimentConfig) -> Path:
             )
         if stored.get("code") != wanted["code"]:
             then, now = stored.get("code") or {}, wanted["code"]
+            differ = ", ".join(
+                f"{k} {then.get(k, '?')} there, {now[k]} now" for k in now if then.get(k) != now[k]
+            )
             raise ConfigError(
-                f"run folder '{run_dir}' was computed by other code (pipefollow {then.get('version', '?')}, "
-                f"sources {then.get('sources', '?')}; now {now['version']}, sources {now['sources']}): "
+                f"run folder '{run_dir}' was computed by other code ({differ}): "
                 "its results would mix with this version's; use another --out"
             )
     else:
