@@ -211,3 +211,14 @@ def test_skew_update_sign_uses_the_clipped_mean():
     w[A] = [5.0, 5.0, 5.0]  # A(s) = 5: every sample clips to 1
     cacla.update(w, PHI, 1.0, 0.0, 0.3, 0.8, PHI_NEXT, p)  # δ > 0, sample at the clip
     np.testing.assert_array_equal(w[G], 0.0)  # no side to prefer
+
+
+def test_non_finite_observations_are_refused_before_learning():
+    agent = Cacla(seed=0)
+    s = np.array([0.1, 1.5, 0.0, 0.2])
+    agent.act(s)
+    with pytest.raises(ValueError, match="finite"):
+        agent.update(s, 0.0, -1.0, np.array([np.nan, 1.0, 0.0, 0.2]), 0.8)
+    np.testing.assert_array_equal(agent.weights, 0.0)
+    with pytest.raises(ValueError, match="finite"):
+        agent.act(np.array([0.1, np.inf, 0.0, 0.2]))

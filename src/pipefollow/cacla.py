@@ -21,8 +21,9 @@ import numpy as np
 from numba import njit
 
 from pipefollow.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals
+from pipefollow.heuristic import heuristic_action
 from pipefollow.linear import dot
-from pipefollow.rbf import STATE_GRID, RBFGrid
+from pipefollow.rbf import STATE_GRID, RBFGrid, features_if_finite
 
 V, A, G, K = 0, 1, 2, 3  # rows of the weight matrix: critic, actor, skew, supervisor trust
 
@@ -135,6 +136,23 @@ def update_packed(w, phi, a_rl, a_sup, reward, discount, phi_next, hp):
     return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp))
 
 
+@njit(cache=True)
+def act_heuristic_packed(w, phi, sigma, z0, z1, x1, y1, hp):
+    """:func:`act_packed` with the paper's heuristic as supervisor, evaluated in compiled code."""
+    p = unpack(hp)
+    a_sup = heuristic_action(x1, y1) if p.supervised else 0.0
+    a, a_rl = act(w, phi, sigma, z0, z1, a_sup, p)
+    return a, a_rl, a_sup
+
+
+@njit(cache=True)
+def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, normalized, phi_next, hp):
+    """φ(s') into ``phi_next`` and :func:`update`, in one call; ``(δ, False)`` if s' is not finite."""
+    if not features_if_finite(next_obs, grid[0], grid[1], grid[2], normalized, phi_next):
+        return 0.0, False
+    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp)), True
+
+
 def _draw_count(p: CaclaParams) -> int:
     """Standard normals per exploring decision: skew-normal samples take two."""
     return 2 if p.skew > 0.0 else 1
@@ -167,7 +185,6 @@ class Cacla:
         self._draws = _draw_count(params)
         self.default_supervisor = supervisor is None  # the compiled training loop knows only this one
         if supervisor is None:
-            from pipefollow.heuristic import heuristic_action
 
             def supervisor(obs):
                 return heuristic_action(float(obs[0]), float(obs[1]))
@@ -216,8 +233,12 @@ class Cacla:
             z0 = z1 = self.rng.standard_normal()
             if self._draws == 2:
                 z1 = self.rng.standard_normal()
-        a_sup = self.supervisor(obs) if self.params.supervised else 0.0
-        a, a_rl = act_packed(self.weights, phi, sigma, z0, z1, a_sup, self._packed)
+        if self.default_supervisor:
+            x = np.asarray(obs, dtype=np.float64)
+            a, a_rl, a_sup = act_heuristic_packed(self.weights, phi, sigma, z0, z1, x[0], x[1], self._packed)
+        else:
+            a_sup = self.supervisor(obs) if self.params.supervised else 0.0
+            a, a_rl = act_packed(self.weights, phi, sigma, z0, z1, a_sup, self._packed)
         self._pending = (key, phi, a_rl, a_sup)
         return a
 
@@ -239,16 +260,33 @@ class Cacla:
             a_rl = float(action)
             a_sup = self.supervisor(obs) if self.params.supervised else 0.0
         self._pending = None
-        return update_packed(
+        next_obs = np.asarray(next_obs, dtype=np.float64)
+        next_key = next_obs.tobytes()
+        cache = self._phi_cache
+        if cache is not None and cache[0] == next_key:
+            return update_packed(
+                self.weights, phi, a_rl, a_sup, float(reward), float(discount), cache[1], self._packed
+            )
+        if next_obs.shape != (self.grid.ndim,):
+            raise ValueError(f"next_obs must have {self.grid.ndim} entries, got shape {next_obs.shape}")
+        phi_next = np.empty(self.grid.n_features)
+        delta, finite = update_next_packed(
             self.weights,
             phi,
             a_rl,
             a_sup,
             float(reward),
             float(discount),
-            self._cached_features(next_obs, _key(next_obs)),
+            next_obs,
+            self.grid.packed,
+            self.grid.form == "normalized",
+            phi_next,
             self._packed,
         )
+        if not finite:
+            raise ValueError(f"next_obs must be finite, got {next_obs}")
+        self._phi_cache = (next_key, phi_next)
+        return delta
 
 
 def _key(obs) -> bytes:

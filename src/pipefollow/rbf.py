@@ -159,7 +159,7 @@ def grid_features(x, centres_flat, offsets, widths, normalized, out):
 
 
 @njit(cache=True)
-def _checked_features(x, centres_flat, offsets, widths, normalized, out):
+def features_if_finite(x, centres_flat, offsets, widths, normalized, out):
     """:func:`grid_features` if every entry of ``x`` is finite (returns True), else False."""
     for j in range(x.shape[0]):
         if not math.isfinite(x[j]):
@@ -263,7 +263,7 @@ class RBFGrid:
         elif not isinstance(out, np.ndarray) or out.shape != (self._n_features,) or out.dtype != np.float64:
             raise ValueError(f"out must be a float64 array of shape ({self._n_features},)")
         c, o, w = self._packed
-        if not _checked_features(x, c, o, w, self._normalized, out):
+        if not features_if_finite(x, c, o, w, self._normalized, out):
             raise ValueError(f"x must be finite, got {x}")
         return out
 
