@@ -13,6 +13,7 @@ is missing. Backends differ in where trials run, never in their numbers:
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import logging
 import multiprocessing
@@ -20,6 +21,7 @@ import os
 import signal
 import sys
 import time
+import warnings
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import closing
@@ -99,6 +101,21 @@ def check_inputs(exp: ExperimentConfig) -> None:
             resolve(t.evaluate_on)
 
 
+@contextlib.contextmanager
+def _forking():
+    """Fork without Python ≥ 3.12's warning about forking a multi-threaded process.
+
+    The threads are BLAS's idle pool from importing NumPy; the forked workers run only our
+    compiled code, which does not call BLAS, so the deadlock the warning guards against cannot
+    occur, and forking lets the workers inherit the compiled code instead of loading it again.
+    """
+    with warnings.catch_warnings():
+        warnings.filterwarnings(
+            "ignore", message=r".*use of fork\(\) may lead to deadlocks", category=DeprecationWarning
+        )
+        yield
+
+
 def _compile_quietly(config: TrialConfig) -> None:
     """In a forked helper: compile (and cache) one kind of trial, then leave without a trace.
 
@@ -135,7 +152,8 @@ def warm_up(configs: list[TrialConfig], parallel: bool = False) -> None:
         helper = multiprocessing.get_context("fork").Process(
             target=_compile_quietly, args=(other,), daemon=True
         )
-        helper.start()
+        with _forking():
+            helper.start()
         first = [c for c in tiny if c.algorithm == algorithms[0]]
         for c in first:
             run_trial(c, 0)
@@ -196,7 +214,8 @@ def _process(work: Work, trial_fn: TrialFn, workers: int) -> Iterator[tuple[Tria
     futures = {}
     complete = False
     try:
-        futures = {pool.submit(trial_fn, config, seed): (config, seed) for config, seed in work}
+        with _forking():  # the pool forks its workers on the first submissions
+            futures = {pool.submit(trial_fn, config, seed): (config, seed) for config, seed in work}
         for fut in as_completed(futures):
             config, seed = futures[fut]
             try:
