@@ -43,12 +43,39 @@ def test_actor_unchanged_when_td_error_not_positive():
     np.testing.assert_allclose(w[V], weights()[V] + 0.4 * delta * PHI)
 
 
-def test_skew_update_sign_and_cap():
+NORM2 = 0.2**2 + 0.5**2 + 0.3**2  # ‖φ‖² = 0.38
+
+
+def test_skew_update_moves_gamma_itself_by_the_step_by_default():
     p = CaclaParams(skew=0.5)
-    # δ > 0 and a > A(s): γ grows by Δγ φ
+    assert p.skew_step == cacla.STEP_GAMMA
+    # δ > 0 and a > A(s): w_γ += Δγ φ/‖φ‖², so γ(s) = w_γ·φ grows by exactly Δγ = 0.5
+    w = weights()
+    cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
+    np.testing.assert_allclose(w[G], [0.1 / 0.38, 0.25 / 0.38, 0.15 / 0.38])
+    assert w[G] @ PHI == pytest.approx(0.5)
+    # δ < 0 and a > A(s): γ(s) falls by Δγ
+    w = weights()
+    cacla.update(w, PHI, 0.6, 0.0, -1.0, 0.8, PHI_NEXT, p)
+    assert w[G] @ PHI == pytest.approx(-0.5)
+    # from γ(s) = 0.75 < γ_max = 1 one more step is made (to 1.25; clipped where it is used) ...
+    w = weights()
+    w[G] = 0.75 * PHI / NORM2
+    cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
+    assert w[G] @ PHI == pytest.approx(1.25)
+    # ... and none past it
+    before = w[G].copy()
+    cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
+    np.testing.assert_array_equal(w[G], before)
+
+
+def test_skew_update_sign_and_cap_with_the_weights_step():
+    p = CaclaParams(skew=0.5, skew_step=cacla.STEP_WEIGHTS)
+    # δ > 0 and a > A(s): the weights grow by Δγ φ, so γ(s) by Δγ‖φ‖² = 0.19
     w = weights()
     cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
     np.testing.assert_allclose(w[G], 0.5 * PHI)
+    assert w[G] @ PHI == pytest.approx(0.19)
     # δ > 0 and a < A(s): γ shrinks
     w = weights()
     cacla.update(w, PHI, -0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
@@ -65,6 +92,21 @@ def test_skew_update_sign_and_cap():
     # ... but a decrease is still allowed
     cacla.update(w, PHI, -0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
     np.testing.assert_allclose(w[G], 2.0 - 0.5 * PHI)
+
+
+def test_k_update_readings():
+    w = weights()
+    cacla.update(w, PHI, 0.6, 0.0, -1.0, 0.8, PHI_NEXT, CaclaParams(supervised=True))  # δ < 0
+    np.testing.assert_allclose(w[K], 0.05 * PHI)  # every visit (default): w_k += Δk φ
+    w = weights()
+    p = CaclaParams(supervised=True, k_update=cacla.K_POSITIVE)
+    cacla.update(w, PHI, 0.6, 0.0, -1.0, 0.8, PHI_NEXT, p)
+    np.testing.assert_array_equal(w[K], 0.0)  # only when δ > 0
+    cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)  # δ = 0.55
+    np.testing.assert_allclose(w[K], 0.05 * PHI)
+    w = weights()
+    cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, CaclaParams(supervised=True, k_step=cacla.STEP_GAMMA))
+    assert w[K] @ PHI == pytest.approx(0.05)  # k(s) itself moves by Δk
 
 
 def test_supervised_actor_target_mixes_rl_and_supervisor_and_k_grows_to_cap():
@@ -180,17 +222,30 @@ def test_make_agent_validation():
     assert math.isclose(make_agent("cacla", skew_deg=45).params.skew, 1.0)
 
 
-@pytest.mark.parametrize("centred, mean", [(False, math.sqrt(0.5) * math.sqrt(2 / math.pi)), (True, 0.0)])
-def test_skew_exploration_mean_shift_and_the_centred_extension(centred, mean):
+DELTA1 = math.sqrt(0.5)  # δ of γ = 1
+SHIFT1 = DELTA1 * math.sqrt(2 / math.pi)  # mean of SkewNormal(γ = 1)
+SD1 = math.sqrt(1 - SHIFT1**2)
+
+
+@pytest.mark.parametrize(
+    "sample, mean, sd",
+    [
+        (cacla.SAMPLE_LOCATION, SHIFT1, SD1),  # the paper's location/scale form
+        (cacla.SAMPLE_CENTRED, 0.0, SD1),
+        (cacla.SAMPLE_MOMENTS, 0.0, 1.0),
+    ],
+)
+def test_skew_sample_readings_mean_and_sd(sample, mean, sd):
     w = weights()
     w[G] = [1.0, 1.0, 1.0]  # γ(s) = 1 → δ = 1/√2
-    p = CaclaParams(skew=0.5, skew_centred=centred)
+    p = CaclaParams(skew=0.5, skew_sample=sample)
     rng = np.random.default_rng(0)
     sigma = 0.05  # small enough that no sample is clipped
     z = np.array(
         [(cacla.act(w, PHI, sigma, *rng.standard_normal(2), 0.0, p)[1] - 0.09) / sigma for _ in range(20000)]
     )
     assert z.mean() == pytest.approx(mean, abs=4 * z.std() / math.sqrt(z.size))
+    assert z.std() == pytest.approx(sd, rel=0.03)
 
 
 def test_update_for_another_observation_than_the_last_act_uses_that_observation():

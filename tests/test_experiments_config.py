@@ -104,7 +104,7 @@ def test_invalid_choice_names_the_key_and_the_allowed_values(tmp_path):
     with pytest.raises(ConfigError, match=r"'algorithm' must be one of sarsa, cacla, got 'ppo'"):
         load_experiment(write_toml(tmp_path, MINIMAL + 'algorithm = "ppo"\n'))
     with pytest.raises(ConfigError, match=r"'rbf' must be one of normalized, literal"):
-        load_experiment(write_toml(tmp_path, MINIMAL + 'rbf = "cosine"\n'))
+        load_experiment(write_toml(tmp_path, MINIMAL + 'readings = ["rbf=cosine"]\n'))
 
 
 @pytest.mark.parametrize(
@@ -131,7 +131,8 @@ def test_wrong_experiment_value(tmp_path, line, pattern):
         ("sigma_start = 0.001", r"'sigma_start' must be ≥ sigma_end"),
         ("episode_seconds = nan", r"'episode_seconds' must be a finite number"),
         ("episode_seconds = 1e308", r"'episode_seconds' must be from 1 to 86400"),
-        ("skew_centred = true", r"skew_centred needs skew_deg > 0"),
+        ('readings = ["gamma_max=-1"]', r"'gamma_max' must be a number in \(0, 100\]"),
+        ("readings = \"skew_step=weights\"", r"'readings' must be a list of strings"),
         ('phases = [{ pipeline = "paper-left", episodes = 0 }]', r"'episodes' must be from 1 to 10,000,000"),
         (
             'phases = [{ pipeline = "paper-left", epsiodes = 3 }]',
@@ -141,7 +142,7 @@ def test_wrong_experiment_value(tmp_path, line, pattern):
         ('figures = "fig5"', r"'figures' must be a list of strings"),
         (
             'algorithm = "sarsa"\nskew_deg = 22.5',
-            r"skew_deg, skew_centred and supervised apply to algorithm 'cacla' only",
+            r"skew_deg and supervised apply to algorithm 'cacla' only",
         ),
     ],
 )

@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 from scipy import stats as sps
 
-from pipefollow.experiments import report
+from pipefollow.experiments import claims, report, summary
 from pipefollow.experiments.config import ExperimentConfig, Phase, TrialConfig, to_dict, with_overrides
 from pipefollow.experiments.figures import learning_curve_figure, sliding_average
 from pipefollow.pipeline import builtin
@@ -244,7 +244,7 @@ def run(tmp_path, paper_short, monkeypatch):
 
 def _findings(run_dir):
     cfg = report.from_dict(json.loads((run_dir / "config.json").read_text()))
-    return report.compute_findings(
+    return claims.compute_findings(
         cfg, report.read_rows(run_dir / "results.csv"), report.read_rows(run_dir / "evaluation.csv")
     )
 
@@ -296,19 +296,19 @@ def test_learning_curve_figure_draws_the_smoothed_mean_and_saves_a_png(tmp_path)
 
 def test_convergence_rule_thresholds_and_window():
     n = 120
-    good_view, good_prog = np.full(n, report.CONVERGE_MIN_IN_VIEW), np.full(n, report.CONVERGE_MIN_PROGRESS_M)
-    assert report.repeat_stats(0, np.zeros(n), good_view, good_prog).converged  # thresholds inclusive
-    assert not report.repeat_stats(0, np.zeros(n), good_view - 0.001, good_prog).converged
-    assert not report.repeat_stats(0, np.zeros(n), good_view, good_prog - 0.01).converged
+    good_view, good_prog = np.full(n, summary.CONVERGE_MIN_IN_VIEW), np.full(n, summary.CONVERGE_MIN_PROGRESS_M)
+    assert summary.repeat_stats(0, np.zeros(n), good_view, good_prog).converged  # thresholds inclusive
+    assert not summary.repeat_stats(0, np.zeros(n), good_view - 0.001, good_prog).converged
+    assert not summary.repeat_stats(0, np.zeros(n), good_view, good_prog - 0.01).converged
     # only the last 50 episodes count: a bad start does not matter, a bad end does
-    view = np.where(np.arange(n) < n - report.CONVERGE_EPISODES, 0.0, 1.0)
-    assert report.repeat_stats(0, np.zeros(n), view, good_prog).converged
-    assert not report.repeat_stats(0, np.zeros(n), view[::-1], good_prog).converged
+    view = np.where(np.arange(n) < n - summary.CONVERGE_EPISODES, 0.0, 1.0)
+    assert summary.repeat_stats(0, np.zeros(n), view, good_prog).converged
+    assert not summary.repeat_stats(0, np.zeros(n), view[::-1], good_prog).converged
 
 
 def test_repeat_stats_windows():
     ret = np.arange(200.0)
-    r = report.repeat_stats(5, ret, np.ones(200), np.full(200, 5.0))
+    r = summary.repeat_stats(5, ret, np.ones(200), np.full(200, 5.0))
     assert r.first_return == pytest.approx(np.mean(ret[:100]))
     assert r.last_return == pytest.approx(np.mean(ret[150:]))
     assert (r.seed, r.episodes) == (5, 200)
@@ -316,10 +316,10 @@ def test_repeat_stats_windows():
 
 def test_welch_matches_scipy():
     a, b = [1.0, 2.5, 3.0, 7.0], [0.5, 0.0, 1.0]
-    diff, se = report.welch(a, b)
+    diff, se = summary.welch(a, b)
     assert diff == pytest.approx(np.mean(a) - np.mean(b))
     assert diff / se == pytest.approx(sps.ttest_ind(a, b, equal_var=False).statistic)
-    assert math.isnan(report.welch([1.0], b)[1])
+    assert math.isnan(summary.welch([1.0], b)[1])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -329,21 +329,21 @@ def test_welch_matches_scipy():
 def test_verdicts_on_the_designed_run(run):
     f = _findings(run)
     fig5 = _parts(f, 1)
-    assert [p.verdict for p in fig5] == [report.CONFIRMED] * 3  # SARSA none, both CACLAs all
+    assert [p.verdict for p in fig5] == [claims.CONFIRMED] * 3  # SARSA none, both CACLAs all
     assert "SARSA: 0/3 repeats converged" in fig5[0].ours
     converge6, helps6 = _parts(f, 2)
-    assert converge6.verdict == report.CONFIRMED
-    assert helps6.verdict == report.NOT_CONFIRMED  # skew 45° starts like plain CACLA
+    assert converge6.verdict == claims.CONFIRMED
+    assert helps6.verdict == claims.NOT_CONFIRMED  # skew 45° starts like plain CACLA
     assert "mixed: 2 of 3 variants" in helps6.ours
-    assert [p.verdict for p in _parts(f, 3)] == [report.CONFIRMED, report.CONFIRMED]
+    assert [p.verdict for p in _parts(f, 3)] == [claims.CONFIRMED, claims.CONFIRMED]
     beats, right = _parts(f, 4)
-    assert beats.verdict == right.verdict == report.CONFIRMED
+    assert beats.verdict == right.verdict == claims.CONFIRMED
     assert "3/3 repeats" in beats.ours
     assert [c.verdict for c in f.claims] == [
-        report.CONFIRMED,
-        report.NOT_CONFIRMED,
-        report.CONFIRMED,
-        report.CONFIRMED,
+        claims.CONFIRMED,
+        claims.NOT_CONFIRMED,
+        claims.CONFIRMED,
+        claims.CONFIRMED,
     ]
 
 
@@ -351,7 +351,7 @@ def test_every_skew_variant_clearly_better_confirms_claim_2(tmp_path, paper_shor
     exp = with_overrides(paper_short, trials=["cacla", "cacla-skew11.25", "cacla-skew22.5"])
     run, _ = make_run(tmp_path, exp)
     converge, helps = _parts(_findings(run), 2)
-    assert converge.verdict == helps.verdict == report.CONFIRMED
+    assert converge.verdict == helps.verdict == claims.CONFIRMED
     assert "all 2 variants better" in helps.ours
 
 
@@ -366,8 +366,8 @@ def test_a_failed_repeat_is_not_confirmed_and_listed_as_a_difference(tmp_path, p
     run, _ = make_run(tmp_path, exp, spec_override={"cacla": _not_converging_repeat})
     f = _findings(run)
     sarsa, cacla, supervised = _parts(f, 1)
-    assert cacla.verdict == report.NOT_CONFIRMED and "2/3 repeats converged" in cacla.ours
-    assert sarsa.verdict == supervised.verdict == report.CONFIRMED
+    assert cacla.verdict == claims.NOT_CONFIRMED and "2/3 repeats converged" in cacla.ours
+    assert sarsa.verdict == supervised.verdict == claims.CONFIRMED
     text = report.render_markdown(f)
     differ = text.split("## Where we differ from the paper")[1]
     assert "Not confirmed — claim 1 (Fig. 5): CACLA converges in every repeat." in differ
@@ -380,7 +380,7 @@ def test_sarsa_converging_is_not_confirmed(tmp_path, paper_short):
         tmp_path, exp, spec_override={"sarsa": lambda r, n: (np.zeros(n), np.ones(n), np.full(n, 6.0))}
     )
     (sarsa,) = _parts(_findings(run), 1)
-    assert sarsa.verdict == report.NOT_CONFIRMED
+    assert sarsa.verdict == claims.NOT_CONFIRMED
 
 
 def test_skew_advantage_in_supervised_cacla_is_not_confirmed(tmp_path, paper_short):
@@ -388,8 +388,8 @@ def test_skew_advantage_in_supervised_cacla_is_not_confirmed(tmp_path, paper_sho
     better = {"supervised-cacla-skew22.5": lambda r, n: (np.full(n, 10.0 + r), np.ones(n), np.full(n, 5.0))}
     run, _ = make_run(tmp_path, exp, spec_override=better)
     converge, same = _parts(_findings(run), 3)
-    assert converge.verdict == report.CONFIRMED
-    assert same.verdict == report.NOT_CONFIRMED
+    assert converge.verdict == claims.CONFIRMED
+    assert same.verdict == claims.NOT_CONFIRMED
 
 
 def test_learned_worse_than_heuristic_is_not_confirmed(tmp_path, paper_short):
@@ -397,7 +397,7 @@ def test_learned_worse_than_heuristic_is_not_confirmed(tmp_path, paper_short):
     run, _ = make_run(tmp_path, exp, learned=(-30.0, -26.0, -31.0))
     f = _findings(run)
     beats = _parts(f, 4)[0]
-    assert beats.verdict == report.NOT_CONFIRMED
+    assert beats.verdict == claims.NOT_CONFIRMED
     assert "1/3 repeats" in beats.ours
     assert f.table1.median_seed == f.config.seed  # returns -30, -26, -31: the median is the first repeat
 
@@ -406,7 +406,7 @@ def test_single_repeat_gives_no_standard_error_and_no_confirmation(tmp_path, pap
     exp = with_overrides(paper_short, repeats=1, trials=["cacla", "cacla-skew22.5"])
     run, _ = make_run(tmp_path, exp)
     helps = _parts(_findings(run), 2)[1]
-    assert helps.verdict == report.NOT_CONFIRMED
+    assert helps.verdict == claims.NOT_CONFIRMED
     assert "standard error undefined" in helps.ours
 
 

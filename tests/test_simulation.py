@@ -198,7 +198,15 @@ def non_default_params():
     ctrl = ControllerParams(*(20.0 + 0.11 * i for i in range(len(ControllerParams._fields))))
     cam = CameraParams(1.7, 4.2)
     return sim.SimParams(
-        auv, ctrl, cam, dt=0.02, substeps=13, lost_reward=-7.5, progress_back=1.25, progress_ahead=4.5
+        auv,
+        ctrl,
+        cam,
+        dt=0.02,
+        substeps=13,
+        lost_reward=-7.5,
+        progress_back=1.25,
+        progress_ahead=4.5,
+        start_speed=0.3,
     )
 
 
@@ -210,7 +218,7 @@ def test_pack_unpack_round_trip():
         assert all(a != b for a, b in zip(group, default, strict=True))
     assert all(a != b for a, b in zip(p[3:], defaults[3:], strict=True))
     packed = sim.pack_params(p)
-    assert packed.dtype == np.float64 and packed.shape == (37,)
+    assert packed.dtype == np.float64 and packed.shape == (38,)
     back = sim.unpack_params(packed)
     assert back == p
     assert isinstance(back.substeps, int)

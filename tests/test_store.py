@@ -243,7 +243,7 @@ def test_prepare_accepts_a_folder_written_before_a_config_field_existed(tmp_path
     store.prepare(run, EXP)
     stored = json.loads((run / "config.json").read_text())
     for t in stored["trials"]:
-        del t["skew_centred"]  # as written by a version without that field
+        del t["readings"]  # as written by a version without that field
     (run / "config.json").write_text(json.dumps(stored))
     store.prepare(run, EXP)
 

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from pipefollow import readings as rd
 from pipefollow.agents import make_agent
 from pipefollow.env import PipelineFollowingEnv
 from pipefollow.pipeline import builtin
@@ -12,8 +13,20 @@ KINDS = {
     "cacla": dict(algorithm="cacla"),
     "cacla-skew": dict(algorithm="cacla", skew_deg=45.0),
     "supervised-skew": dict(algorithm="cacla", skew_deg=22.5, supervised=True),
-    "supervised-skew-centred": dict(algorithm="cacla", skew_deg=22.5, supervised=True, skew_centred=True),
+    "supervised-skew-weights-step": dict(
+        algorithm="cacla", skew_deg=22.5, supervised=True, readings=rd.parse("skew_step=weights")
+    ),
+    "supervised-skew-centred-k": dict(
+        algorithm="cacla",
+        skew_deg=22.5,
+        supervised=True,
+        readings=rd.parse("skew_sample=centred,k_update=positive,k_step=k"),
+    ),
+    "cacla-skew-moments-literal": dict(
+        algorithm="cacla", skew_deg=45.0, readings=rd.parse("skew_sample=moments,rbf=literal,gamma_max=2")
+    ),
     "sarsa": dict(algorithm="sarsa"),
+    "sarsa-wide": dict(algorithm="sarsa", readings=rd.parse("rbf_width=half-range")),
 }
 
 
@@ -26,6 +39,7 @@ def test_compiled_path_equals_environment_path(kind, pipeline):
     b = make_agent(rng=np.random.default_rng(3), **KINDS[kind])
     stats_env = train(PipelineFollowingEnv(pipe, 20), a, episodes)
     stats_fast = train_compiled(b, pipe, episodes, chunk=5)
+    assert a.readings == KINDS[kind].get("readings", rd.DEFAULT).id
     np.testing.assert_allclose(stats_fast, stats_env, rtol=0, atol=1e-9)
     np.testing.assert_allclose(b.weights, a.weights, rtol=0, atol=1e-9)
     # both consumed the same random numbers
@@ -106,3 +120,16 @@ def test_compiled_loop_refuses_a_custom_supervisor():
     agent = Cacla(CaclaParams(supervised=True), supervisor=lambda obs: 0.0)
     with pytest.raises(TypeError, match="heuristic only"):
         train_compiled(agent, builtin("paper-left"), 1)
+
+
+def test_equivalence_with_a_cruise_start():
+    pipe = builtin("paper-left")
+    params = rd.sim_params(rd.parse("start_speed=cruise"))
+    a = make_agent("cacla", skew_deg=22.5, rng=np.random.default_rng(1))
+    b = make_agent("cacla", skew_deg=22.5, rng=np.random.default_rng(1))
+    stats_env = train(PipelineFollowingEnv(pipe, 20, params=params), a, 8)
+    stats_fast = train_compiled(b, pipe, 8, params=params)
+    np.testing.assert_allclose(stats_fast, stats_env, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(b.weights, a.weights, rtol=0, atol=1e-9)
+    rest = train_compiled(make_agent("cacla", skew_deg=22.5, rng=np.random.default_rng(1)), pipe, 8)
+    assert not np.array_equal(rest, stats_fast)  # the start speed changes the episodes

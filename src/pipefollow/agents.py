@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipefollow.cacla import Cacla, CaclaParams
+from pipefollow import readings as rd
+from pipefollow.cacla import Cacla
 from pipefollow.exploration import skew_step_to_gamma
 from pipefollow.sarsa import Sarsa, SarsaParams
 
@@ -27,16 +28,26 @@ def make_agent(
     skew_deg: float = 0.0,
     supervised: bool = False,
     rng: np.random.Generator | None = None,
+    readings: rd.Readings = rd.DEFAULT,
     **params,
 ) -> Cacla | Sarsa:
     """A fresh learner: ``sarsa`` or ``cacla`` (with ``skew_deg`` Δγ in degrees and ``supervised``).
 
-    Extra keyword arguments override fields of :class:`CaclaParams` / :class:`SarsaParams`.
+    ``readings`` fixes the open points (RBF form and widths, the skew and k(s) rules); extra
+    keyword arguments override fields of :class:`~pipefollow.cacla.CaclaParams` /
+    :class:`~pipefollow.sarsa.SarsaParams`.
     """
+    grid = rd.state_grid(readings)
     if algorithm == "sarsa":
         if skew_deg or supervised:
             raise ValueError("skew and supervision apply to CACLA only")
-        return Sarsa(SarsaParams(**params), rng=rng)
+        agent = Sarsa(SarsaParams(**params), grid=grid, action_grid=rd.action_grid(readings), rng=rng)
+        agent.readings = readings.id
+        return agent
     if algorithm == "cacla":
-        return Cacla(CaclaParams(skew=skew_step_to_gamma(skew_deg), supervised=supervised, **params), rng=rng)
+        skew_step_to_gamma(skew_deg)  # checks the value
+        params = rd.cacla_params(readings, skew_deg, supervised=supervised, **params)
+        agent = Cacla(params, grid=grid, rng=rng)
+        agent.readings = readings.id
+        return agent
     raise ValueError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {algorithm!r}")

@@ -3,7 +3,7 @@
 All four heads are linear in the same RBF state features φ(s) (paper §4):
 
 * critic ``V(s) = w_V·φ(s)`` (eqs. 5–6), actor mean ``A(s) = w_A·φ(s)`` (eq. 7),
-* skew ``γ(s) = w_γ·φ(s)`` (eq. 15, only with ``skew > 0``),
+* skew ``γ(s) = w_γ·φ(s)`` (eqs. 14–15, only with ``skew > 0``),
 * supervisor trust ``k(s) = w_k·φ(s)`` (eq. 13, only when ``supervised``).
 
 The update rules are compiled functions of plain arrays, so that the agent class below and the
@@ -27,9 +27,14 @@ from pipefollow.rbf import STATE_GRID, RBFGrid, features_if_finite
 
 V, A, G, K = 0, 1, 2, 3  # rows of the weight matrix: critic, actor, skew, supervisor trust
 
+# Readings of open points (docs/design.md, "Readings"); codes as stored in CaclaParams.
+SAMPLE_LOCATION, SAMPLE_CENTRED, SAMPLE_MOMENTS = 0, 1, 2  # skew sample: location/scale, centred, mean/s.d.
+STEP_GAMMA, STEP_WEIGHTS = 0, 1  # eqs. 13, 15: the head's value moves by the step, or its weights by step·φ
+K_EVERY, K_POSITIVE = 0, 1  # eq. 13: k(s) grows at every visit, or only when δ > 0
+
 
 class CaclaParams(NamedTuple):
-    """CACLA's step sizes and options (paper §4; DESIGN.md)."""
+    """CACLA's step sizes and options (paper §4; docs/design.md)."""
 
     alpha_v: float = 0.4  # critic step size α_V (paper §4)
     alpha_pi: float = 0.2  # actor step size α_π (paper §4)
@@ -40,7 +45,10 @@ class CaclaParams(NamedTuple):
     delta_k: float = 0.05  # Δk per visit (paper §4.1)
     k_max: float = 1.0  # cap on k(s) (eq. 13)
     forgetting: float = 0.0  # per-update decay of w_k (Rosenstein & Barto); the paper uses none
-    skew_centred: bool = False  # subtract the skew-normal's mean shift σδ√(2/π): an extension
+    skew_sample: int = SAMPLE_LOCATION  # skew sample: location/scale, centred on A(s), or mean/s.d.
+    skew_step: int = STEP_GAMMA  # eq. 15 step: γ(s) moves by Δγ (default) or w_γ by Δγ·φ(s)
+    k_update: int = K_EVERY  # eq. 13: k(s) grows at every visit (default) or only when δ > 0
+    k_step: int = STEP_WEIGHTS  # eq. 13 step: w_k by Δk·φ(s) (default) or k(s) by Δk (STEP_GAMMA)
 
 
 PAPER_CACLA = CaclaParams()
@@ -54,7 +62,8 @@ def pack(p: CaclaParams) -> np.ndarray:
 @njit(cache=True)
 def unpack(a):
     """Inverse of :func:`pack` inside compiled code."""
-    return CaclaParams(a[0], a[1], a[2], a[3], a[4], a[5] != 0.0, a[6], a[7], a[8], a[9] != 0.0)
+    flags = int(a[9]), int(a[10]), int(a[11]), int(a[12])
+    return CaclaParams(a[0], a[1], a[2], a[3], a[4], a[5] != 0.0, a[6], a[7], a[8], *flags)
 
 
 @njit(cache=True)
@@ -68,16 +77,21 @@ def act(w, phi, sigma, z0, z1, a_sup, p):
     """Action for features ``phi``: returns ``(a, a_rl)``, executed and learner's action.
 
     ``a_rl = clip(A(s) + σ z)`` with z Gaussian (eq. 8) or skew-normal with skew γ(s) (eq. 14),
-    built from the standard normals ``z0, z1``; σ = 0 gives the deterministic policy. Supervised
-    agents execute ``a = k(s) a_rl + (1 − k(s)) a_sup`` (eq. 10).
+    built from the standard normals ``z0, z1``; σ = 0 gives the deterministic policy. The skew
+    sample's reading (``p.skew_sample``): A(s) and σ are the location and scale (the paper's form),
+    or z is shifted to mean 0 (``centred``), or standardized to mean 0 and s.d. 1 (``moments``).
+    Supervised agents execute ``a = k(s) a_rl + (1 − k(s)) a_sup`` (eq. 10).
     """
     mu = dot(w[A], phi)
     if sigma > 0.0:
         if p.skew > 0.0:
             g = min(p.gamma_max, max(-p.gamma_max, dot(w[G], phi)))
             z = skew_normal_from_normals(g, z0, z1)
-            if p.skew_centred:  # keep the exploration's mean on A(s); the paper does not
-                z -= g / math.sqrt(1.0 + g * g) * math.sqrt(2.0 / math.pi)
+            if p.skew_sample != SAMPLE_LOCATION:  # readings that keep the exploration's mean on A(s)
+                d = g / math.sqrt(1.0 + g * g)
+                z -= d * math.sqrt(2.0 / math.pi)
+                if p.skew_sample == SAMPLE_MOMENTS:
+                    z /= math.sqrt(1.0 - 2.0 * d * d / math.pi)
         else:
             z = z0
         a_rl = clip1(mu + sigma * z)
@@ -93,7 +107,11 @@ def act(w, phi, sigma, z0, z1, a_sup, p):
 def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p):
     """One CACLA update for the transition from φ(s) with reward and bootstrap ``discount``·V(s').
 
-    ``discount`` is γ_d^n for a transition of n decisions (semi-Markov, DESIGN.md). Returns δ.
+    ``discount`` is γ_d^n for a transition of n decisions (semi-Markov, docs/design.md). Returns δ.
+
+    Eq. 15 (``skew > 0``) moves γ(s) by ``Δγ·sgn(δ)·sgn(a_rl − A(s))``: with the default step
+    reading the weights move along ``φ(s)/‖φ(s)‖²``, which changes γ(s) = w_γ·φ(s) by exactly that
+    amount; the ``weights`` reading moves them by ``Δγ·…·φ(s)``, which changes γ(s) by ``Δγ‖φ‖²``.
     """
     v = dot(w[V], phi)
     delta = reward + discount * dot(w[V], phi_next) - v  # eq. 4, pre-update critic
@@ -113,14 +131,21 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p):
         inc = p.skew * np.sign(delta) * np.sign(a_rl - clip1(mu))
         g = dot(w[G], phi)
         if (inc > 0.0 and g < p.gamma_max) or (inc < 0.0 and g > -p.gamma_max):
+            if p.skew_step == STEP_GAMMA:
+                norm2 = dot(phi, phi)
+                inc = inc / norm2 if norm2 > 0.0 else 0.0
             for i in range(phi.shape[0]):
                 w[G, i] += inc * phi[i]
     if p.supervised:  # eq. 13
         if p.forgetting > 0.0:
             w[K] *= 1.0 - p.forgetting
-        if dot(w[K], phi) < p.k_max:
+        if (p.k_update == K_EVERY or delta > 0.0) and dot(w[K], phi) < p.k_max:
+            inc = p.delta_k
+            if p.k_step == STEP_GAMMA:  # k(s) itself moves by Δk
+                norm2 = dot(phi, phi)
+                inc = inc / norm2 if norm2 > 0.0 else 0.0
             for i in range(phi.shape[0]):
-                w[K, i] += p.delta_k * phi[i]
+                w[K, i] += inc * phi[i]
     return delta
 
 
@@ -178,6 +203,7 @@ class Cacla:
     ) -> None:
         self.params = params
         self.grid = grid
+        self.readings = "default"  # id of the readings it learns under (set by make_agent)
         self.rng = rng if rng is not None else np.random.default_rng(seed)
         self.weights = np.zeros((4, grid.n_features))
         self.sigma = 1.0
@@ -294,9 +320,12 @@ def _key(obs) -> bytes:
     return np.asarray(obs, dtype=np.float64).tobytes()
 
 
+SAMPLE_SUFFIX = {SAMPLE_LOCATION: "", SAMPLE_CENTRED: " centred", SAMPLE_MOMENTS: " mean/s.d."}
+
+
 def cacla_label(p: CaclaParams) -> str:
     """Label such as ``supervised CACLA, skew 22.5°``."""
     name = "supervised CACLA" if p.supervised else "CACLA"
     if p.skew > 0.0:
-        name += f", skew {p.skew * DEGREES_PER_GAMMA:g}°" + (" centred" if p.skew_centred else "")
+        name += f", skew {p.skew * DEGREES_PER_GAMMA:g}°" + SAMPLE_SUFFIX[p.skew_sample]
     return name

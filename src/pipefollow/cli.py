@@ -108,10 +108,28 @@ def _writable_folder(path: str, option: str) -> Path:
     return folder
 
 
+def _reading_option(help_text: str):
+    """``--reading ID`` (repeatable): readings of the paper's open points, ``key=value[,key=value]``."""
+    return click.option("--reading", "readings", multiple=True, metavar="ID", help=help_text)
+
+
+def _readings(ids, base: str = "default"):
+    """The readings ``base`` (an id) changed by the ``--reading`` ids; a one-line error if malformed."""
+    from pipefollow import readings as rd
+
+    try:
+        return rd.parse(ids, rd.parse(base, source="policy readings"), source="--reading")
+    except rd.ReadingError as e:
+        raise UserError(str(e)) from None
+
+
 def _default_seconds(pipeline: str, seconds: float | None) -> float:
     if seconds is not None:
         return seconds
     return 60.0 if pipeline == "paper-validation" else 20.0
+
+
+_LEARNING_RATES = ("alpha_v", "alpha_pi", "discount", "delta_k", "k_max", "forgetting")  # not train options
 
 
 def load_controller(spec: str, seed: int):
@@ -188,17 +206,24 @@ def _summary(stats) -> dict:
     default=None,
     help="Save a trajectory plot (PNG) of the first episode.",
 )
+@_reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @_guard
-def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading_noise, plot_path, as_json):
+def evaluate(
+    controller, pipeline, episodes, seconds, seed, start_noise, heading_noise, plot_path, readings, as_json
+):
     """Evaluate a controller deterministically (σ = 0) on a pipeline."""
     from pipefollow.env import PipelineFollowingEnv
     from pipefollow.pipeline import resolve
+    from pipefollow.readings import sim_params
     from pipefollow.training import run_episode
 
     pipe = resolve(pipeline)
     agent = load_controller(controller, seed)
-    env = PipelineFollowingEnv(pipe, _default_seconds(pipeline, seconds), start_noise, heading_noise)
+    reading = _readings(readings, getattr(agent, "readings", "default"))
+    env = PipelineFollowingEnv(
+        pipe, _default_seconds(pipeline, seconds), start_noise, heading_noise, params=sim_params(reading)
+    )
     stats = []
     for e in range(episodes):
         stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
@@ -206,6 +231,7 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
         "controller": controller,
         "pipeline": pipeline,
         "seconds": env.episode_seconds,
+        "readings": reading.id,
         **_summary(stats),
     }
     if plot_path:
@@ -243,11 +269,6 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
 )
 @click.option("--supervised", is_flag=True, help="Supervised CACLA with the heuristic as supervisor.")
 @click.option(
-    "--skew-centred",
-    is_flag=True,
-    help="Extension: keep skew-normal exploration centred on the actor's action (the paper does not).",
-)
-@click.option(
     "--pipeline", default="paper-left", show_default=True, help="Built-in name or JSON file to train on."
 )
 @click.option("--episodes", default=500, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
@@ -274,52 +295,55 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
     default=None,
     help="Continue training from this policy file (e.g. left turns, then right turns).",
 )
+@_reading_option(
+    "Reading of an open point, e.g. skew_step=weights or skew_sample=centred (repeatable; "
+    "see docs/design.md) [default: the project's readings, or those of --init]."
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
 @_guard
 def train(
     algorithm,
     skew,
     supervised,
-    skew_centred,
     pipeline,
     episodes,
     seconds,
     seed,
     out_dir,
     init_policy,
+    readings,
     as_json,
 ):
     """Train a learner; writes the policy and its learning curve."""
     from pipefollow.agents import make_agent
-    from pipefollow.exploration import skew_step_to_gamma
     from pipefollow.pipeline import resolve
+    from pipefollow.readings import cacla_params, sigma_scale, sim_params
     from pipefollow.training import STAT_NAMES, train_compiled
 
-    if algorithm == "sarsa" and (skew or supervised or skew_centred):
-        raise UserError("--skew, --skew-centred and --supervised apply to --algorithm cacla only")
-    if skew_centred and not skew:
-        raise UserError("--skew-centred needs --skew > 0")
+    if algorithm == "sarsa" and (skew or supervised):
+        raise UserError("--skew and --supervised apply to --algorithm cacla only")
     pipe = resolve(pipeline)
     rng = np.random.default_rng(seed)
     if init_policy:
         from pipefollow.policy import load_policy
 
         agent = load_policy(init_policy)
+        reading = _readings(readings, agent.readings)
         if agent.algorithm != algorithm:
             raise UserError(f"--init {init_policy}: holds a {agent.name} policy, not {algorithm}")
-        options = (skew_step_to_gamma(skew), supervised, skew_centred)
-        if algorithm == "cacla" and options != (
-            agent.params.skew,
-            agent.params.supervised,
-            agent.params.skew_centred,
-        ):
-            raise UserError(
-                f"--init {init_policy}: holds a {agent.name} policy; its options differ from these"
-            )
+        if algorithm == "cacla":
+            wanted = cacla_params(reading, skew, supervised=supervised)
+            held = agent.params._replace(**{k: getattr(wanted, k) for k in _LEARNING_RATES})
+            if held != wanted:
+                raise UserError(
+                    f"--init {init_policy}: holds a {agent.name} policy under readings "
+                    f"'{agent.readings}'; its options differ from these"
+                )
+        agent.readings = reading.id
         agent.rng = rng
     else:
-        extra = {"skew_centred": True} if skew_centred else {}
-        agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng, **extra)
+        reading = _readings(readings)
+        agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng, readings=reading)
     out = _writable_folder(out_dir, "--out")  # before training, after the checks of --init
     show = not as_json and sys.stderr.isatty()
     with click.progressbar(
@@ -331,7 +355,17 @@ def train(
             bar.update(n - done[0])
             done[0] = n
 
-        stats = train_compiled(agent, pipe, episodes, episode_seconds=seconds, progress=progress)
+        scale = sigma_scale(reading)
+        stats = train_compiled(
+            agent,
+            pipe,
+            episodes,
+            episode_seconds=seconds,
+            sigma_start=scale,
+            sigma_end=0.01 * scale,
+            params=sim_params(reading),
+            progress=progress,
+        )
     from pipefollow.policy import save_policy
     from pipefollow.results import write_learning_curve
 
@@ -339,6 +373,7 @@ def train(
     curve_path = write_learning_curve(out / "learning_curve.csv", stats, episodes)
     result = {
         "algorithm": agent.name,
+        "readings": reading.id,
         "policy": str(policy_path),
         "learning_curve": str(curve_path),
         "returns": stats[:, 0].tolist(),
@@ -415,7 +450,8 @@ def _write_figures(run_dir: Path, required: bool) -> list[Path]:
     "--experiment",
     default="paper",
     show_default=True,
-    help="'paper' (the shipped paper.toml) or an experiment TOML file.",
+    help="A shipped experiment ('paper'; 'readings': the claims under each reading of the paper's open "
+    "points) or an experiment TOML file.",
 )
 @click.option(
     "--trial",
@@ -429,6 +465,7 @@ def _write_figures(run_dir: Path, required: bool) -> list[Path]:
     is_flag=True,
     help="Small smoke-test version: 2 repeats, 30 episodes per phase, --out ./reproduction-quick.",
 )
+@_reading_option("Reading of an open point applied to every trial, e.g. start_speed=cruise (repeatable).")
 @click.option("--no-figures", is_flag=True, help="Do not draw figures and REPORT.md.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
 @_guard
@@ -443,6 +480,7 @@ def reproduce(
     experiment,
     trials,
     quick,
+    readings,
     no_figures,
     as_json,
 ):
@@ -452,6 +490,7 @@ def reproduce(
     (policies/), results.csv and evaluation.csv (tidy tables for pandas), and the figures and
     REPORT.md. An interrupted run resumes where it stopped when started again with the same options.
     """
+    from pipefollow.experiments import sensitivity
     from pipefollow.experiments.config import load_experiment, with_overrides
     from pipefollow.experiments.runner import RunInterrupted, run_experiment
     from pipefollow.experiments.store import summary
@@ -459,10 +498,15 @@ def reproduce(
     if quick:
         repeats = 2 if repeats is None else repeats
         episodes = 30 if episodes is None else episodes
-    out = Path(out_dir) if out_dir else Path("reproduction-quick" if quick else "reproduction")
+    base = load_experiment(experiment)
     exp = with_overrides(
-        load_experiment(experiment), repeats=repeats, episodes=episodes, seed=seed, trials=list(trials)
+        base, repeats=repeats, episodes=episodes, seed=seed, trials=list(trials), readings=list(readings)
     )
+    exp = sensitivity.expand(exp)
+    if not out_dir:
+        stem = "reproduction" if base.name == "paper" else f"reproduction-{base.name}"
+        out_dir = f"{stem}-quick" if quick else stem
+    out = Path(out_dir)
     try:
         run = run_experiment(
             exp, out, backend=backend, workers=workers, ray_address=ray_address, show_progress=not as_json
@@ -495,6 +539,9 @@ def reproduce(
         f"{exp.name}: {run.trials_total} trials ({run.trials_computed} computed, {run.trials_reused} reused) "
         f"in {run.wall_seconds:.1f} s, backend {run.backend} ({run.workers} workers)"
     )
+    if exp.compare_readings:
+        _echo_sensitivity(run.run_dir, outputs)
+        return
     width = max(len(r["label"]) for r in per_trial.values()) if per_trial else 5
     click.echo(f"{'trial':<{width}}  {'return, last 50 (mean ± sd over seeds)':>38}  {'in view':>7}")
     for row in per_trial.values():
@@ -504,6 +551,20 @@ def reproduce(
         if exp.trial(name).evaluate_on:
             evals = ", ".join(f"{c} {v:.2f}" for c, v in row["evaluation_mean_return"].items())
             click.echo(f"{row['label']} on {row['evaluation_pipeline']} (mean return): {evals}")
+    for p in outputs:
+        click.echo(f"wrote {p}")
+
+
+def _echo_sensitivity(run_dir: Path, outputs: list[Path]) -> None:
+    """The per-claim lines of a sensitivity study."""
+    from pipefollow.experiments import sensitivity
+    from pipefollow.experiments.config import from_dict
+    from pipefollow.experiments.summary import read_rows
+
+    config = from_dict(json.loads((run_dir / "config.json").read_text()))
+    s = sensitivity.compute(config, read_rows(run_dir / "results.csv"), read_rows(run_dir / "evaluation.csv"))
+    for claim in s.claim_ids():
+        click.echo(f"claim {claim}: {s.verdict_line(claim)}")
     for p in outputs:
         click.echo(f"wrote {p}")
 

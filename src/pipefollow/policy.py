@@ -2,7 +2,12 @@
 
 A file holds ``format`` (``pipefollow-policy``), ``format_version``, ``package_version``,
 ``algorithm`` (``cacla`` or ``sarsa``), ``params`` (JSON of the agent's parameter record),
-``grid`` and, for SARSA, ``action_grid`` (JSON feature specifications) and ``weights``.
+``grid`` and, for SARSA, ``action_grid`` (JSON feature specifications), ``weights`` and
+``readings``: the id of the readings the policy was trained under (docs/design.md), under which
+it is evaluated unless told otherwise. The loaded agent carries it as ``agent.readings``.
+
+Format versions: 3 adds ``readings`` and CACLA's reading fields; files of version 2 and older were
+trained with eq. 15 moving the weights by Δγ·φ(s), and load with ``skew_step=weights``.
 """
 
 from __future__ import annotations
@@ -15,13 +20,14 @@ from pathlib import Path
 import numpy as np
 
 import pipefollow
+from pipefollow import cacla
 from pipefollow.atomic import atomic_file
 from pipefollow.cacla import Cacla, CaclaParams
 from pipefollow.rbf import RBFGrid
 from pipefollow.sarsa import Sarsa, SarsaParams
 
 FORMAT = "pipefollow-policy"
-FORMAT_VERSION = 2  # 2: SARSA weights stored per action centre (13 × 1,764)
+FORMAT_VERSION = 3  # 2: SARSA weights per action centre (13 × 1,764); 3: readings
 
 
 class PolicyError(ValueError):
@@ -29,7 +35,10 @@ class PolicyError(ValueError):
 
 
 def save_policy(agent: Cacla | Sarsa, path: str | os.PathLike, **metadata) -> Path:
-    """Write ``agent`` to ``path`` (``.npz``) atomically; extra string ``metadata`` is stored too."""
+    """Write ``agent`` to ``path`` (``.npz``) atomically, with its readings' id (``agent.readings``).
+
+    Extra string ``metadata`` is stored too.
+    """
     path = Path(path)
     if isinstance(agent, Cacla):
         algorithm, extra = "cacla", {}
@@ -47,6 +56,7 @@ def save_policy(agent: Cacla | Sarsa, path: str | os.PathLike, **metadata) -> Pa
         "grid": np.array(json.dumps(agent.grid.to_dict())),
         "metadata": np.array(json.dumps({k: str(v) for k, v in metadata.items()})),
         "weights": agent.weights,
+        "readings": np.array(getattr(agent, "readings", "default")),
         **{k: np.array(v) for k, v in extra.items()},
     }
     with atomic_file(path) as f:
@@ -77,6 +87,14 @@ def load_policy(path: str | os.PathLike, seed: int | None = None) -> Cacla | Sar
         raise PolicyError(f"{src}: missing or malformed entry ({e})") from None
     if version > FORMAT_VERSION:
         raise PolicyError(f"{src}: format version {version} is newer than this pipefollow reads")
+    trained = str(data.get("readings", "default"))
+    if algorithm == "cacla" and version < 3 and isinstance(params, dict):
+        # before readings: a boolean skew_centred, and eq. 15 moved the weights by Δγ·φ(s)
+        centred = params.pop("skew_centred", False)
+        params["skew_sample"] = cacla.SAMPLE_CENTRED if centred else cacla.SAMPLE_LOCATION
+        params["skew_step"] = cacla.STEP_WEIGHTS
+        if params.get("skew", 0.0) > 0.0:
+            trained = "skew_step=weights" + (",skew_sample=centred" if centred else "")
     try:
         if algorithm == "cacla":
             agent = Cacla(CaclaParams(**params), grid=grid, seed=seed)
@@ -96,4 +114,5 @@ def load_policy(path: str | os.PathLike, seed: int | None = None) -> Cacla | Sar
     if not np.all(np.isfinite(weights)):
         raise PolicyError(f"{src}: weights contain NaN or infinite values")
     agent.weights[...] = weights
+    agent.readings = trained
     return agent

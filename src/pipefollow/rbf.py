@@ -5,15 +5,17 @@ full grid. The Gaussian of eq. 18 factorizes over the dimensions, so a feature v
 product of one short activation vector per dimension: 7 · 6 · 7 · 6 = 1,764 state features cost
 26 exponentials and 1,764 multiplications.
 
-Two forms (DESIGN.md, "RBF network"):
+Two forms (docs/design.md, "RBF network"):
 
 * ``"normalized"`` (default): per dimension ``g_i = exp(−(x − c_i)² / (2σ_j²))``, divided by their
   sum. The sum over the full grid factorizes per dimension, so normalizing each dimension
   normalizes the product: the features sum to 1 and a step size α moves a prediction by at most α.
 * ``"literal"``: eq. 18 as printed, per dimension ``exp(−(x − c_i)² / σ_j)``, unnormalized.
 
-``σ_j`` is half the largest spacing between consecutive centres of dimension ``j``. Inputs
-outside the grid are clipped to its range, dimension by dimension.
+``σ_j`` is half the largest spacing between consecutive centres of dimension ``j`` (the paper's
+"half the largest distance between centers"; the ``half-range`` width reads it as half the distance
+between the outermost centres). Inputs outside the grid are clipped to its range, dimension by
+dimension.
 
 The compiled functions :func:`dim_activations` and :func:`grid_features` work on plain arrays
 (:attr:`RBFGrid.packed`) so that the agents and the compiled training loop share them.
@@ -29,6 +31,7 @@ import numpy as np
 from numba import njit
 
 FORMS = ("normalized", "literal")
+WIDTHS = ("half-spacing", "half-range")  # σ_j: half the largest spacing, or half the span of the centres
 
 
 def _frozen(a) -> np.ndarray:
@@ -38,7 +41,7 @@ def _frozen(a) -> np.ndarray:
     return out
 
 
-# Centres in observation order (x1, y1, x2, v_x) (paper §4; DESIGN.md, "centres").
+# Centres in observation order (x1, y1, x2, v_x) (paper §4; docs/design.md, "centres").
 STATE_CENTRES: tuple[np.ndarray, ...] = (
     _frozen([-1.0, -0.8, -0.4, 0.0, 0.4, 0.8, 1.0]),  # x1: far end of the pipe, lateral (m)
     _frozen([0.0, 0.375, 1.125, 1.875, 2.625, 3.0]),  # y1: far end of the pipe, forward (m)
@@ -175,12 +178,15 @@ class RBFGrid:
     Attributes:
         centres: one strictly increasing array of at least two finite centres per input
             dimension, in the input's order. Stored as read-only float64 arrays.
-        form: ``"normalized"`` (DESIGN.md; features sum to 1) or ``"literal"`` (eq. 18 as
+        form: ``"normalized"`` (docs/design.md; features sum to 1) or ``"literal"`` (eq. 18 as
             printed, unnormalized).
+        width: σ_j of each dimension: ``"half-spacing"`` (half the largest spacing between
+            consecutive centres) or ``"half-range"`` (half the distance between the outermost).
     """
 
     centres: tuple[np.ndarray, ...]
     form: str = "normalized"
+    width: str = "half-spacing"
 
     def __post_init__(self) -> None:
         if isinstance(self.centres, np.ndarray | str) or not hasattr(self.centres, "__len__"):
@@ -205,8 +211,13 @@ class RBFGrid:
             dims.append(a)
         if self.form not in FORMS:
             raise ValueError(f"form must be one of {', '.join(map(repr, FORMS))}, got {self.form!r}")
+        if self.width not in WIDTHS:
+            raise ValueError(f"width must be one of {', '.join(map(repr, WIDTHS))}, got {self.width!r}")
         object.__setattr__(self, "centres", tuple(dims))
-        widths = _frozen([0.5 * np.max(np.diff(a)) for a in dims])
+        if self.width == "half-spacing":
+            widths = _frozen([0.5 * np.max(np.diff(a)) for a in dims])
+        else:
+            widths = _frozen([0.5 * (a[-1] - a[0]) for a in dims])
         offsets = np.zeros(len(dims) + 1, dtype=np.int64)
         offsets[1:] = np.cumsum([a.size for a in dims])
         offsets.setflags(write=False)
@@ -216,7 +227,7 @@ class RBFGrid:
 
     @property
     def widths(self) -> np.ndarray:
-        """σ_j per dimension: half the largest spacing between consecutive centres."""
+        """σ_j per dimension (see ``width``)."""
         return self._packed[2]
 
     @property
@@ -268,25 +279,26 @@ class RBFGrid:
         return out
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain lists and strings (JSON-ready): ``{"centres": [[...], ...], "form": ...}``."""
-        return {"centres": [a.tolist() for a in self.centres], "form": self.form}
+        """Plain lists and strings (JSON-ready): ``{"centres": [[...], ...], "form": ..., "width": ...}``."""
+        return {"centres": [a.tolist() for a in self.centres], "form": self.form, "width": self.width}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> RBFGrid:
         """Inverse of :meth:`to_dict`."""
-        return cls(tuple(d["centres"]), d.get("form", "normalized"))
+        return cls(tuple(d["centres"]), d.get("form", "normalized"), d.get("width", "half-spacing"))
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, RBFGrid):
             return NotImplemented
         return (
             self.form == other.form
+            and self.width == other.width
             and len(self.centres) == len(other.centres)
             and all(np.array_equal(a, b) for a, b in zip(self.centres, other.centres, strict=True))
         )
 
     def __hash__(self) -> int:
-        return hash((self.form, tuple(tuple(a.tolist()) for a in self.centres)))
+        return hash((self.form, self.width, tuple(tuple(a.tolist()) for a in self.centres)))
 
 
 STATE_GRID = RBFGrid(STATE_CENTRES)  # 1,764 state features

@@ -108,6 +108,7 @@ class Sarsa:
         self.params = params
         self.grid = grid
         self.action_grid = action_grid
+        self.readings = "default"  # id of the readings it learns under (set by make_agent)
         self.rng = rng if rng is not None else np.random.default_rng(seed)
         # Q(s, a) = Σ_ji W_ji ψ_j(a) φ_i(s): one row of state weights per action centre
         self.weights = np.zeros((action_grid.n_features, grid.n_features))

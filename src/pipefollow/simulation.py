@@ -34,6 +34,7 @@ class SimParams(NamedTuple):
     lost_reward: float = LOST_REWARD  # reward per decision while the pipe is lost (paper §4)
     progress_back: float = 1.5  # progress search window behind the last progress (m)
     progress_ahead: float = 1.5  # and ahead of it (m): ≥ 1 s of travel plus a corner cut (√2 × 1 m)
+    start_speed: float = 0.0  # surge speed u at the start (m/s): at rest (docs/design.md, "start")
 
 
 PAPER_SIM = SimParams()
@@ -107,9 +108,10 @@ def read_camera(s, points, cum, p):
 
 @njit(cache=True)
 def init_state(s, points, cum, x, y, psi, p):
-    """Fill ``s`` for an AUV at rest at pose (x, y, ψ) next to the pipeline."""
+    """Fill ``s`` for an AUV at pose (x, y, ψ) next to the pipeline, surging at ``p.start_speed``."""
     s[:] = 0.0
     s[X], s[Y], s[PSI] = x, y, psi
+    s[U] = p.start_speed
     s[PROGRESS] = project(points, cum, x, y, -np.inf, np.inf)
     s[PROGRESS_MAX] = s[PROGRESS]
     s[LAST_SIDE] = 1.0
@@ -173,6 +175,7 @@ def pack_params(p: SimParams) -> np.ndarray:
             p.lost_reward,
             p.progress_back,
             p.progress_ahead,
+            p.start_speed,
         ],
         dtype=np.float64,
     )
@@ -207,7 +210,7 @@ def unpack_params(a):
     )
     ctrl = ControllerParams(a[22], a[23], a[24], a[25], a[26], a[27], a[28], a[29])
     cam = CameraParams(a[30], a[31])
-    return SimParams(auv, ctrl, cam, a[32], int(a[33]), a[34], a[35], a[36])
+    return SimParams(auv, ctrl, cam, a[32], int(a[33]), a[34], a[35], a[36], a[37])
 
 
 @njit(cache=True)

@@ -15,8 +15,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from pipefollow import readings as rd
 from pipefollow.agents import ALGORITHMS
-from pipefollow.rbf import FORMS as RBF_FORMS
 
 # Bounds that keep a run finite (a day of simulated time per episode is far beyond any use).
 MAX_EPISODES = 10_000_000
@@ -49,9 +49,6 @@ class TrialConfig:
     algorithm: str = _f("cacla", "learner: sarsa (eq. 3) or cacla (eqs. 5-7)", choices=ALGORITHMS)
     skew_deg: float = _f(0.0, "CACLA skew step Δγ (deg, eq. 15); 0 = Gaussian exploration (paper §4.1)")
     supervised: bool = _f(False, "supervised CACLA with the heuristic as supervisor (eqs. 10-13)")
-    skew_centred: bool = _f(
-        False, "extension: re-centre skew-normal exploration on A(s) (the paper does not)"
-    )
     phases: tuple[Phase, ...] = _f((Phase(),), "training phases in order (paper §4.2: left, then right)")
     episode_seconds: float = _f(20.0, "episode length (s); one decision per second (paper §4.1)")
     sigma_start: float = _f(1.0, "exploration σ of the first episode, normalized action units (paper §4)")
@@ -62,7 +59,9 @@ class TrialConfig:
     discount: float = _f(0.8, "discount factor γ_d (paper §4)")
     delta_k: float = _f(0.05, "supervised CACLA: increment Δk of k(s) per visit (paper §4.1)")
     forgetting: float = _f(0.0, "supervised CACLA: per-update decay of k's weights; the paper uses none")
-    rbf: str = _f("normalized", "RBF features: normalized Gaussians or the literal eq. 18", choices=RBF_FORMS)
+    readings: tuple[str, ...] = _f(
+        (), "readings of the paper's open points, as key=value ids (docs/design.md); later ones win"
+    )
     evaluate_on: str = _f("", "after training, evaluate deterministically on this pipeline ('' = none)")
     evaluate_seconds: float = _f(60.0, "length of the evaluation episode (s) (paper §4.2)")
     figures: tuple[str, ...] = _f((), "figures/tables of the report that use this trial (fig5, fig6, ...)")
@@ -77,6 +76,11 @@ class TrialConfig:
         """Episodes over all phases."""
         return sum(p.episodes for p in self.phases)
 
+    @property
+    def reading(self) -> rd.Readings:
+        """The trial's readings of the open points (the defaults, changed by ``readings``)."""
+        return rd.parse(self.readings)
+
 
 @dataclass(frozen=True)
 class ExperimentConfig:
@@ -85,6 +89,10 @@ class ExperimentConfig:
     name: str = _f("experiment", "identifier of the experiment")
     repeats: int = _f(5, "repeats of every trial (paper §4.1: 5)")
     seed: int = _f(2010, "seed of the first repeat; repeat k uses seed + k")
+    trials_from: str = _f("", "take the trials (and their defaults) of this experiment: 'paper' or a file")
+    compare_readings: tuple[str, ...] = _f(
+        (), "sensitivity study: run every trial under each of these reading ids ('default' = none)"
+    )
     trials: tuple[TrialConfig, ...] = _f((), "the trials")
 
     def seeds(self) -> list[int]:
@@ -129,7 +137,7 @@ def _coerce(cls, data: dict, where: str):
         if f.name == "trials":
             kwargs[f.name] = value
             continue
-        if f.name == "figures":
+        if f.name in ("figures", "readings", "compare_readings"):
             if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
                 raise ConfigError(f"{key} must be a list of strings")
             kwargs[f.name] = tuple(value)
@@ -156,6 +164,16 @@ def _coerce(cls, data: dict, where: str):
     return obj
 
 
+NAME_PATTERN = r"[A-Za-z0-9_.@=,+-]+"  # trial names are file names; '@' joins a name and a reading id
+
+
+def _check_readings(ids, where: str) -> None:
+    try:
+        rd.parse(ids)
+    except rd.ReadingError as e:
+        raise ConfigError(f"{where}: {e}") from None
+
+
 def validate(obj, where: str) -> None:
     """Range checks of a config record; raises :class:`ConfigError`."""
 
@@ -168,14 +186,11 @@ def validate(obj, where: str) -> None:
     elif isinstance(obj, TrialConfig):
         import re
 
-        if not re.fullmatch(r"[A-Za-z0-9_.-]+", obj.name):
-            raise bad("name", "letters, digits, '-', '_' or '.'", obj.name)
-        if obj.algorithm == "sarsa" and (obj.skew_deg or obj.supervised or obj.skew_centred):
-            raise ConfigError(
-                f"{where}: skew_deg, skew_centred and supervised apply to algorithm 'cacla' only"
-            )
-        if obj.skew_centred and not obj.skew_deg:
-            raise ConfigError(f"{where}: skew_centred needs skew_deg > 0")
+        if not re.fullmatch(NAME_PATTERN, obj.name):
+            raise bad("name", "letters, digits and any of - _ . @ = , +", obj.name)
+        if obj.algorithm == "sarsa" and (obj.skew_deg or obj.supervised):
+            raise ConfigError(f"{where}: skew_deg and supervised apply to algorithm 'cacla' only")
+        _check_readings(obj.readings, f"{where}: key 'readings'")
         for key in ("alpha_v", "alpha_pi", "alpha_q", "discount"):
             v = getattr(obj, key)
             if not 0.0 < v <= 1.0:
@@ -193,6 +208,8 @@ def validate(obj, where: str) -> None:
         if obj.skew_deg > 180.0:
             raise bad("skew_deg", "at most 180 (deg)", obj.skew_deg)
     elif isinstance(obj, ExperimentConfig):
+        for rid in obj.compare_readings:
+            _check_readings((rid,), f"{where}: key 'compare_readings'")
         if not 1 <= obj.repeats <= MAX_REPEATS:
             raise bad("repeats", f"from 1 to {MAX_REPEATS:,}", obj.repeats)
         names = [t.name for t in obj.trials]
@@ -220,6 +237,17 @@ def parse_experiment(data: dict, source: str) -> ExperimentConfig:
     tables = data.get("trial", [])
     if not isinstance(tables, list):
         raise ConfigError(f"{source}: 'trial' must be an array of tables [[trial]]")
+    if "trials_from" in head:
+        base = head["trials_from"]
+        if not isinstance(base, str) or tables or defaults:
+            raise ConfigError(
+                f"{source} [experiment]: 'trials_from' must name an experiment, with no [defaults] "
+                "or [[trial]] tables beside it"
+            )
+        if base == head.get("name") or base == source:
+            raise ConfigError(f"{source} [experiment]: 'trials_from' names this experiment itself")
+        head = {**head, "trials": load_experiment(base).trials}
+        return _coerce(ExperimentConfig, head, f"{source} [experiment]")
     trials = []
     for i, table in enumerate(tables):
         if not isinstance(table, dict):
@@ -229,11 +257,17 @@ def parse_experiment(data: dict, source: str) -> ExperimentConfig:
     return _coerce(ExperimentConfig, {**head, "trials": tuple(trials)}, f"{source} [experiment]")
 
 
+def shipped_experiments() -> list[str]:
+    """Names of the experiments shipped with the package (``paper``, ``readings``)."""
+    folder = resources.files("pipefollow.experiments")
+    return sorted(p.name[: -len(".toml")] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
 def load_experiment(spec: str | Path = "paper") -> ExperimentConfig:
-    """Read an experiment: ``paper`` (the shipped ``paper.toml``) or a path to a TOML file."""
-    if str(spec) == "paper":
-        text = resources.files("pipefollow.experiments").joinpath("paper.toml").read_text()
-        source = "paper.toml"
+    """Read an experiment: a shipped one by name (``paper``, ``readings``) or a path to a TOML file."""
+    if str(spec) in shipped_experiments():
+        text = resources.files("pipefollow.experiments").joinpath(f"{spec}.toml").read_text()
+        source = f"{spec}.toml"
     else:
         path = Path(spec)
         source = f"experiment file '{path}'"
@@ -257,9 +291,20 @@ def with_overrides(
     episodes: int | None = None,
     seed: int | None = None,
     trials: list[str] | None = None,
+    readings: list[str] | None = None,
 ) -> ExperimentConfig:
-    """A copy with command-line overrides: repeats, episodes of every phase, seed, a subset of trials."""
+    """A copy with command-line overrides.
+
+    Overrides are: repeats, episodes of every phase, seed, a subset of trials, and readings applied
+    to every trial (after the trials' own).
+    """
     out = exp
+    if readings:
+        _check_readings(readings, "--reading")
+        extra = tuple(readings)
+        out = dataclasses.replace(
+            out, trials=tuple(dataclasses.replace(t, readings=t.readings + extra) for t in out.trials)
+        )
     if trials:
         known = [t.name for t in exp.trials]
         for name in trials:
@@ -295,7 +340,21 @@ def to_dict(obj) -> dict:
 def from_dict(data: dict) -> ExperimentConfig:
     """Inverse of :func:`to_dict`."""
     trials = tuple(
-        TrialConfig(**{**t, "phases": tuple(Phase(**p) for p in t["phases"]), "figures": tuple(t["figures"])})
+        TrialConfig(
+            **{
+                **t,
+                "phases": tuple(Phase(**p) for p in t["phases"]),
+                "figures": tuple(t["figures"]),
+                "readings": tuple(t.get("readings", ())),
+            }
+        )
         for t in data["trials"]
     )
-    return ExperimentConfig(name=data["name"], repeats=data["repeats"], seed=data["seed"], trials=trials)
+    return ExperimentConfig(
+        name=data["name"],
+        repeats=data["repeats"],
+        seed=data["seed"],
+        trials_from=data.get("trials_from", ""),
+        compare_readings=tuple(data.get("compare_readings", ())),
+        trials=trials,
+    )

@@ -140,7 +140,7 @@ def warm_up(configs: list[TrialConfig], parallel: bool = False) -> None:
     """
     kinds: dict[tuple, TrialConfig] = {}
     for c in configs:
-        kinds.setdefault((c.algorithm, c.skew_deg > 0, c.supervised, c.rbf), c)
+        kinds.setdefault((c.algorithm, c.skew_deg > 0, c.supervised), c)
     tiny = [
         dataclasses.replace(c, phases=(dataclasses.replace(c.phases[0], episodes=1),), evaluate_on="")
         for c in kinds.values()

@@ -14,8 +14,7 @@ from pipefollow.experiments.config import TrialConfig
 from pipefollow.exploration import linear_sigma
 from pipefollow.heuristic import Heuristic
 from pipefollow.pipeline import resolve
-from pipefollow.rbf import ACTION_GRID, STATE_GRID, RBFGrid
-from pipefollow.sarsa import Sarsa
+from pipefollow.readings import sigma_scale, sim_params
 from pipefollow.training import run_episode, train_compiled
 
 
@@ -51,30 +50,20 @@ class TrialResult:
 
 
 def build_agent(config: TrialConfig, rng: np.random.Generator | None = None):
-    """A fresh agent for ``config``."""
-    grid = STATE_GRID if config.rbf == "normalized" else RBFGrid(STATE_GRID.centres, form=config.rbf)
+    """A fresh agent for ``config`` under its readings."""
+    kw = {"rng": rng, "readings": config.reading, "discount": config.discount}
     if config.algorithm == "sarsa":
-        agent = make_agent("sarsa", rng=rng, alpha=config.alpha_q, discount=config.discount)
-    else:
-        agent = make_agent(
-            "cacla",
-            skew_deg=config.skew_deg,
-            supervised=config.supervised,
-            rng=rng,
-            alpha_v=config.alpha_v,
-            alpha_pi=config.alpha_pi,
-            discount=config.discount,
-            delta_k=config.delta_k,
-            forgetting=config.forgetting,
-            skew_centred=config.skew_centred,
-        )
-    if config.rbf != "normalized":  # the literal eq. 18 form for every grid of the learner
-        if config.algorithm == "sarsa":
-            action_grid = RBFGrid(ACTION_GRID.centres, form=config.rbf)
-            agent = Sarsa(agent.params, grid=grid, action_grid=action_grid, rng=rng)
-        else:
-            agent = Cacla(agent.params, grid=grid, rng=rng)
-    return agent
+        return make_agent("sarsa", alpha=config.alpha_q, **kw)
+    return make_agent(
+        "cacla",
+        skew_deg=config.skew_deg,
+        supervised=config.supervised,
+        alpha_v=config.alpha_v,
+        alpha_pi=config.alpha_pi,
+        delta_k=config.delta_k,
+        forgetting=config.forgetting,
+        **kw,
+    )
 
 
 class ActorOnly:
@@ -97,6 +86,9 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
     agent = build_agent(config, rng)
+    params = sim_params(config.reading)
+    scale = sigma_scale(config.reading)  # σ in normalized action units
+    sigma_start, sigma_end = config.sigma_start * scale, config.sigma_end * scale
     stats, phase, sigma = [], [], []
     for i, ph in enumerate(config.phases):
         pipe = resolve(ph.pipeline)
@@ -106,17 +98,16 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
                 pipe,
                 ph.episodes,
                 episode_seconds=config.episode_seconds,
-                sigma_start=config.sigma_start,
-                sigma_end=config.sigma_end,
+                sigma_start=sigma_start,
+                sigma_end=sigma_end,
+                params=params,
             )
         )
         phase.append(np.full(ph.episodes, i))
-        sigma.append(
-            [linear_sigma(e, ph.episodes, config.sigma_start, config.sigma_end) for e in range(ph.episodes)]
-        )
+        sigma.append([linear_sigma(e, ph.episodes, sigma_start, sigma_end) for e in range(ph.episodes)])
     eval_name = config.evaluate_on or config.phases[-1].pipeline
     eval_seconds = config.evaluate_seconds if config.evaluate_on else config.episode_seconds
-    env = PipelineFollowingEnv(resolve(eval_name), eval_seconds)
+    env = PipelineFollowingEnv(resolve(eval_name), eval_seconds, params=params)
     controllers = {"learned": agent, "heuristic": Heuristic()}
     if config.algorithm == "cacla" and config.supervised:
         controllers["actor"] = ActorOnly(agent)

@@ -1,0 +1,378 @@
+"""The paper's claims, checked part by part against a run's per-repeat statistics.
+
+:func:`compute_findings` turns a run's configuration and the rows of ``results.csv`` and
+``evaluation.csv`` into a :class:`Findings` record; every number comes from the stored results.
+The only numbers written here are the paper's own (for comparison) and the rules' constants.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pipefollow.experiments.config import ExperimentConfig, TrialConfig
+from pipefollow.experiments.summary import (
+    CONVERGE_EPISODES,
+    EARLY_EPISODES,
+    Evaluation,
+    PhaseSummary,
+    Rows,
+    mean_sd,
+    read_evaluations,
+    summarize_trial,
+    welch,
+)
+
+SE_FACTOR = 2.0  # a difference is "clear" when it exceeds 2 standard errors
+
+# The paper's set-up and numbers, for comparison only (never substituted for ours).
+PAPER_REPEATS = 5  # §4.1
+PAPER_EPISODES = 500  # §4.1
+PAPER_TABLE1 = {"learned": -23.2349, "heuristic": -27.8590}  # Table 1, accumulated reward
+
+CONFIRMED = "confirmed"
+NOT_CONFIRMED = "not confirmed"
+NOT_TESTED = "not tested"
+
+
+# ---------------------------------------------------------------------------------------------
+# Claims
+
+
+@dataclass(frozen=True)
+class Part:
+    """One checkable part of a claim.
+
+    Attributes:
+        statement: what the paper says (this part).
+        ours: our numbers.
+        verdict: ``confirmed``, ``not confirmed`` or ``not tested``.
+        passed: cases in which the statement held: repeats (summed over set-ups) for convergence
+            and Table 1, (variant, repeat) pairs of the same seed for a skew comparison.
+        total: cases counted.
+    """
+
+    statement: str
+    ours: str
+    verdict: str
+    passed: int = 0
+    total: int = 0
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One of the paper's claims (docs/design.md), checked part by part.
+
+    Attributes:
+        number: 1-4.
+        source: where the paper makes it (``Fig. 5`` ...).
+        paper: the paper's statement.
+        parts: the parts with their verdicts.
+    """
+
+    number: int
+    source: str
+    paper: str
+    parts: tuple[Part, ...]
+
+    @property
+    def verdict(self) -> str:
+        """``confirmed`` if every part is, ``not tested`` if no part was tested, else ``not confirmed``."""
+        verdicts = {p.verdict for p in self.parts}
+        if verdicts == {CONFIRMED}:
+            return CONFIRMED
+        if verdicts == {NOT_TESTED}:
+            return NOT_TESTED
+        return NOT_CONFIRMED
+
+
+def pm(values, digits: int = 2, scale: float = 1.0) -> str:
+    """``mean ± sd`` over repeats (just the mean for a single repeat)."""
+    m, s = mean_sd(np.asarray(values, dtype=np.float64) * scale)
+    if math.isnan(m):
+        return "—"
+    return f"{m:.{digits}f}" if math.isnan(s) else f"{m:.{digits}f} ± {s:.{digits}f}"
+
+
+def _se_text(diff: float, se: float) -> str:
+    if math.isnan(se):
+        return f"difference {diff:+.2f} (standard error undefined with fewer than two repeats)"
+    ratio = "" if se == 0 else f", {diff / se:+.1f} SE"
+    return f"difference {diff:+.2f} ± {se:.2f} (Welch SE{ratio})"
+
+
+def _verdict(ok: bool) -> str:
+    return CONFIRMED if ok else NOT_CONFIRMED
+
+
+def _convergence_part(summaries: Sequence[PhaseSummary], statement: str, expect_all: bool = True) -> Part:
+    """All listed set-ups converge in every repeat (``expect_all``) or in none."""
+    if not summaries:
+        return Part(statement, "no such trial in this run", NOT_TESTED)
+    ours = "; ".join(f"{s.label}: {s.n_converged}/{s.n} repeats converged" for s in summaries)
+    ok = all((s.n_converged == s.n if expect_all else s.n_converged == 0) and s.n > 0 for s in summaries)
+    total = sum(s.n for s in summaries)
+    converged = sum(s.n_converged for s in summaries)
+    return Part(statement, ours, _verdict(ok), converged if expect_all else total - converged, total)
+
+
+def _paired(base: PhaseSummary, variant: PhaseSummary, stat: str, variant_better: bool) -> tuple[int, int]:
+    """(repeats of the same seed in which the variant is better — or not better —, repeats paired)."""
+    b = {r.seed: getattr(r, stat) for r in base.repeats}
+    pairs = [(getattr(r, stat), b[r.seed]) for r in variant.repeats if r.seed in b]
+    return sum((v > w) == variant_better for v, w in pairs), len(pairs)
+
+
+def _group(trials: Iterable[TrialConfig], key: str, summaries: Mapping[str, list[PhaseSummary]]):
+    """Trials of a figure group that have results."""
+    return [t for t in trials if key in t.figures and summaries.get(t.name)]
+
+
+def claim_fig5(trials: Sequence[TrialConfig], summaries: Mapping[str, list[PhaseSummary]]) -> Claim:
+    """Claim 1: CACLA and supervised CACLA converge in every repeat; SARSA in none."""
+    group = _group(trials, "fig5", summaries)
+    parts = []
+    for t in group:
+        first = summaries[t.name][0]
+        if t.algorithm == "sarsa":
+            parts.append(_convergence_part([first], f"{t.title} does not converge in any repeat", False))
+        else:
+            parts.append(_convergence_part([first], f"{t.title} converges in every repeat"))
+    if not parts:
+        statement = "CACLA and supervised CACLA converge; SARSA does not"
+        parts.append(Part(statement, "no fig5 trials in this run", NOT_TESTED))
+    paper = (
+        '"The Sarsa algorithm did not converge to a result able to track the pipeline within the '
+        "allotted number of episodes in any instance. Both versions of CACLA converged to a successful "
+        'policy in all instances." (§5.1)'
+    )
+    return Claim(1, "Fig. 5", paper, tuple(parts))
+
+
+def _baseline_and_variants(group: Sequence[TrialConfig], supervised: bool):
+    base = [t for t in group if t.algorithm == "cacla" and t.supervised == supervised and t.skew_deg == 0]
+    variants = [t for t in group if t.algorithm == "cacla" and t.supervised == supervised and t.skew_deg > 0]
+    return (base[0] if base else None), variants
+
+
+def _comparisons(base: TrialConfig, variants, summaries, stat: str) -> list[tuple[TrialConfig, float, float]]:
+    """(variant, mean difference variant − baseline, Welch SE) of a per-repeat statistic, first phase."""
+    b = summaries[base.name][0].values(stat)
+    return [(v, *welch(summaries[v.name][0].values(stat), b)) for v in variants]
+
+
+def claim_fig6(trials: Sequence[TrialConfig], summaries: Mapping[str, list[PhaseSummary]]) -> Claim:
+    """Claim 2: CACLA with skew converges; skew helps in the early, high-exploration episodes."""
+    group = _group(trials, "fig6", summaries)
+    base, variants = _baseline_and_variants(group, supervised=False)
+    first = [summaries[t.name][0] for t in group]
+    converge = _convergence_part(first, "every set-up (plain and skewed CACLA) converges in every repeat")
+    statement = (
+        f"skew helps early: each skew variant's mean return over the first {EARLY_EPISODES} "
+        f"episodes is above plain CACLA's by more than {SE_FACTOR:g} standard errors"
+    )
+    if base is None or not variants:
+        helps = Part(statement, "needs plain CACLA and at least one skew variant in fig6", NOT_TESTED)
+    else:
+        comps = _comparisons(base, variants, summaries, "first_return")
+        better = [not math.isnan(se) and d > SE_FACTOR * se for _, d, se in comps]
+        lines = [f"{base.title}: {pm(summaries[base.name][0].values('first_return'))}"]
+        lines += [
+            f"{v.title}: {pm(summaries[v.name][0].values('first_return'))}, {_se_text(d, se)}"
+            for v, d, se in comps
+        ]
+        if all(better):
+            tally = f"all {len(comps)} variants better by more than {SE_FACTOR:g} SE"
+        elif any(better):
+            tally = f"mixed: {sum(better)} of {len(comps)} variants better by more than {SE_FACTOR:g} SE"
+        else:
+            tally = f"none of the {len(comps)} variants better by more than {SE_FACTOR:g} SE"
+        head = f"first {EARLY_EPISODES} episodes, mean return over repeats: "
+        ours = head + "; ".join(lines) + f" — {tally}"
+        b0 = summaries[base.name][0]
+        counts = [_paired(b0, summaries[v.name][0], "first_return", True) for v in variants]
+        helps = Part(statement, ours, _verdict(all(better)), *map(sum, zip(*counts, strict=True)))
+    paper = (
+        '"All cases converged to a successful policy in all instances." (§5.1) "Adding skew '
+        "exploration also seems to have a positive effect on early stages of the tabula rasa CACLA "
+        'algorithm – the stages with more heavy exploration." (§6)'
+    )
+    return Claim(2, "Fig. 6", paper, (converge, helps))
+
+
+def claim_fig7(trials: Sequence[TrialConfig], summaries: Mapping[str, list[PhaseSummary]]) -> Claim:
+    """Claim 3: supervised CACLA with and without skew both converge; no advantage from skew."""
+    group = _group(trials, "fig7", summaries)
+    base, variants = _baseline_and_variants(group, supervised=True)
+    first = [summaries[t.name][0] for t in group]
+    converge = _convergence_part(first, "supervised CACLA with and without skew converges in every repeat")
+    statement = (
+        f"no advantage from skew: the last-{CONVERGE_EPISODES}-episode mean returns with and "
+        f"without skew differ by less than {SE_FACTOR:g} standard errors"
+    )
+    if base is None or not variants:
+        same = Part(statement, "needs supervised CACLA with and without skew in fig7", NOT_TESTED)
+    else:
+        comps = _comparisons(base, variants, summaries, "last_return")
+        alike = [not math.isnan(se) and abs(d) < SE_FACTOR * se for _, d, se in comps]
+        lines = [f"{base.title}: {pm(summaries[base.name][0].values('last_return'))}"]
+        lines += [
+            f"{v.title}: {pm(summaries[v.name][0].values('last_return'))}, {_se_text(d, se)}"
+            for v, d, se in comps
+        ]
+        ours = f"last {CONVERGE_EPISODES} episodes, mean return over repeats: " + "; ".join(lines)
+        b0 = summaries[base.name][0]
+        counts = [_paired(b0, summaries[v.name][0], "last_return", False) for v in variants]
+        same = Part(statement, ours, _verdict(all(alike)), *map(sum, zip(*counts, strict=True)))
+    paper = (
+        '"Both cases converged to a successful policy in all instances." (§5.1) "Comparing the '
+        "supervised CACLA algorithm with and without skew, we see no advantage of using the skew "
+        'exploration parameter." (§6)'
+    )
+    return Claim(3, "Fig. 7", paper, (converge, same))
+
+
+@dataclass(frozen=True)
+class Table1:
+    """Deterministic evaluation of the validation trial (paper Table 1).
+
+    Attributes:
+        trial: the trial's name.
+        label: its label.
+        pipeline: the evaluation pipeline.
+        seconds: length of the evaluation episode (s).
+        seeds: seeds of the repeats.
+        learned: learned controller's return per repeat (as executed, with k(s) for supervised agents).
+        heuristic: heuristic's return per repeat (deterministic, so normally all equal).
+        actor: pure actor's return per repeat (empty if not evaluated).
+    """
+
+    trial: str
+    label: str
+    pipeline: str
+    seconds: float
+    seeds: tuple[int, ...]
+    learned: np.ndarray
+    heuristic: np.ndarray
+    actor: np.ndarray
+
+    @property
+    def improvement_pct(self) -> float:
+        """Relative improvement of the mean learned return over the mean heuristic return (%)."""
+        h = float(self.heuristic.mean())
+        return (float(self.learned.mean()) - h) / abs(h) * 100.0
+
+    @property
+    def n_beat(self) -> int:
+        """Repeats whose learned return is above that repeat's heuristic return."""
+        return int(np.sum(self.learned > self.heuristic))
+
+    @property
+    def median_seed(self) -> int:
+        """Seed of the repeat with the median learned return (the lower one for an even count)."""
+        order = np.argsort(self.learned, kind="stable")
+        return self.seeds[int(order[(len(order) - 1) // 2])]
+
+
+def table1_from(trial: TrialConfig, evaluation: Evaluation) -> Table1 | None:
+    """Table 1 data of a trial, if its learned and heuristic controllers were both evaluated."""
+    learned, heuristic = evaluation.returns.get("learned", {}), evaluation.returns.get("heuristic", {})
+    seeds = tuple(sorted(set(learned) & set(heuristic)))
+    if not seeds:
+        return None
+    actor = evaluation.returns.get("actor", {})
+    seconds = trial.evaluate_seconds if trial.evaluate_on else trial.episode_seconds
+    return Table1(
+        trial=trial.name,
+        label=trial.title,
+        pipeline=evaluation.pipeline,
+        seconds=seconds,
+        seeds=seeds,
+        learned=np.array([learned[s] for s in seeds]),
+        heuristic=np.array([heuristic[s] for s in seeds]),
+        actor=np.array([actor[s] for s in seeds if s in actor]),
+    )
+
+
+def paper_improvement_pct() -> float:
+    """The paper's Table 1: learned relative to heuristic (%)."""
+    return (PAPER_TABLE1["learned"] - PAPER_TABLE1["heuristic"]) / abs(PAPER_TABLE1["heuristic"]) * 100.0
+
+
+def claim_table1(table: Table1 | None, later_phases: Sequence[PhaseSummary]) -> Claim:
+    """Claim 4: the learned policy beats the heuristic on the validation pipe (and learned right turns)."""
+    statement = "the learned policy's accumulated reward on the unseen validation pipe beats the heuristic's"
+    if table is None:
+        beats = Part(statement, "no table1 trial with a learned and a heuristic evaluation", NOT_TESTED)
+    else:
+        lm, hm = float(table.learned.mean()), float(table.heuristic.mean())
+        ours = (
+            f"on `{table.pipeline}` for {table.seconds:g} s (σ = 0): learned {pm(table.learned)} "
+            f"(mean ± sd over {len(table.seeds)} repeats) vs heuristic {hm:.2f}: "
+            f"{table.improvement_pct:+.1f} % relative to the heuristic (paper: "
+            f"{paper_improvement_pct():+.1f} %); the learned policy beats the heuristic in "
+            f"{table.n_beat}/{len(table.seeds)} repeats"
+        )
+        beats = Part(statement, ours, _verdict(lm > hm), table.n_beat, len(table.seeds))
+    parts = [beats]
+    for s in later_phases:
+        part = f"training on `{s.pipeline}` (phase {s.phase + 1}) also converges in every repeat"
+        parts.append(_convergence_part([s], part))
+    paper = (
+        '"Training of the supervised CACLA algorithm resulted in a successful policy also for right '
+        f'turns." (§5.2) Table 1: CACLA {PAPER_TABLE1["learned"]:.4f}, heuristic '
+        f"{PAPER_TABLE1['heuristic']:.4f} accumulated reward ({paper_improvement_pct():.1f} % better)."
+    )
+    return Claim(4, "Table 1", paper, tuple(parts))
+
+
+# ---------------------------------------------------------------------------------------------
+# Findings
+
+
+@dataclass(frozen=True)
+class Findings:
+    """Everything the report states, computed from the stored tables.
+
+    Attributes:
+        config: the experiment.
+        summaries: trial name → its phases' summaries (trials with results only).
+        evaluations: trial name → its deterministic evaluation.
+        claims: the four claims with verdicts.
+        table1: the validation trial's evaluation, if any.
+        wall_seconds: summed wall time of the trials (s), if known.
+        notes: extra lines for the end of the report (what could not be drawn, and why).
+    """
+
+    config: ExperimentConfig
+    summaries: Mapping[str, list[PhaseSummary]]
+    evaluations: Mapping[str, Evaluation]
+    claims: tuple[Claim, ...]
+    table1: Table1 | None = None
+    wall_seconds: float | None = None
+    notes: tuple[str, ...] = field(default=())
+
+
+def compute_findings(
+    config: ExperimentConfig, results: Rows, evaluation: Rows, wall_seconds: float | None = None
+) -> Findings:
+    """The findings of a run from its configuration and the rows of ``results.csv``/``evaluation.csv``."""
+    summaries = {t.name: s for t in config.trials if (s := summarize_trial(results, t))}
+    evaluations = read_evaluations(evaluation)
+    table_trial = next((t for t in config.trials if any("table1" in f for f in t.figures)), None)
+    table = None
+    later: list[PhaseSummary] = []
+    if table_trial is not None:
+        if table_trial.name in evaluations:
+            table = table1_from(table_trial, evaluations[table_trial.name])
+        later = summaries.get(table_trial.name, [])[1:]
+    claims = (
+        claim_fig5(config.trials, summaries),
+        claim_fig6(config.trials, summaries),
+        claim_fig7(config.trials, summaries),
+        claim_table1(table, later),
+    )
+    return Findings(config, summaries, evaluations, claims, table, wall_seconds)

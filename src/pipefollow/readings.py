@@ -1,0 +1,302 @@
+"""Readings: named choices for the points the paper leaves open (docs/design.md, "Readings").
+
+Where the paper can be read in more than one way and the choice can change a verdict, each way
+is a *reading* with a name. A reading id is ``key=value`` (``skew_step=weights``); several join
+with ``,`` (``skew_step=weights,start_speed=cruise``). :class:`Readings` holds one value per open
+point; the defaults are the project's readings. The functions at the end turn a :class:`Readings`
+into the parameter records of the layers below (learners, features, simulation), so every path —
+the compiled trainer, the Gymnasium environment, the report — applies a reading the same way.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from pipefollow import cacla
+from pipefollow.cacla import CaclaParams
+from pipefollow.rbf import ACTION_CENTRES, FORMS, STATE_CENTRES, WIDTHS, RBFGrid
+from pipefollow.simulation import PAPER_SIM, SimParams
+
+# The AUV's steady surge speed with the waypoint straight ahead (action 0), with the paper's
+# model and gains: the start speed of the ``cruise`` reading (m/s). Measured by simulation and
+# checked in the tests against the analytic surge balance.
+CRUISE_SPEED = 0.476
+
+
+class ReadingError(ValueError):
+    """A reading id that cannot be used; the message names it and what is allowed."""
+
+
+@dataclass(frozen=True)
+class OpenPoint:
+    """One point the paper leaves open.
+
+    Attributes:
+        key: the reading's key.
+        choices: the allowed values (``()`` for a number).
+        default: the project's reading.
+        paper: the paper's words that leave the point open.
+        meaning: what the choices mean.
+    """
+
+    key: str
+    choices: tuple[str, ...]
+    default: str
+    paper: str
+    meaning: str
+
+
+OPEN_POINTS: tuple[OpenPoint, ...] = (
+    OpenPoint(
+        "skew_step",
+        ("gamma", "weights"),
+        "gamma",
+        'eq. 15: φ_γ = φ_γ + Γ(sgn(δ) sgn(a − A(s)) Δγ); "22.5° equals absolute value of 0.5" (§4.2)',
+        "gamma: γ(s) itself moves by Δγ (w_γ += Δγ·sgn·sgn·φ/‖φ‖²); weights: the weights move by "
+        "Δγ·sgn·sgn·φ(s), so γ(s) moves by Δγ‖φ‖² (≈ 0.08 Δγ with normalized features)",
+    ),
+    OpenPoint(
+        "skew_sample",
+        ("location", "centred", "moments"),
+        "location",
+        'eq. 14 gives the density with parameters μ, σ, γ; "keeping the current estimate μ of the '
+        'optimal action fixed" (§2.3)',
+        "location: a = A(s) + σz, A(s) and σ the location and scale (the mean moves by σδ√(2/π)); "
+        "centred: z shifted to mean 0; moments: z standardized to mean 0 and s.d. 1",
+    ),
+    OpenPoint(
+        "gamma_max",
+        (),
+        "1",
+        '"Γ caps updates of φ_α at α_max = 1 in all cases" (§4.1)',
+        "the cap |γ(s)| ≤ γ_max, in units of γ",
+    ),
+    OpenPoint(
+        "skew_unit",
+        ("deg45", "rad"),
+        "deg45",
+        'Δγ = (11.25°, 22.5°, 45°) (§4.1); "γ = 22.5° skew (equals absolute value of 0.5 in relation to '
+        'Fig. 1)" (§4.2)',
+        "deg45: 45° is one unit of γ (22.5° ↦ 0.5); rad: Δγ in radians (22.5° ↦ 0.393)",
+    ),
+    OpenPoint(
+        "start_speed",
+        ("rest", "cruise"),
+        "rest",
+        "the paper does not say how an episode starts",
+        f"rest: u = 0 at the start; cruise: u = {CRUISE_SPEED} m/s, the steady speed with action 0",
+    ),
+    OpenPoint(
+        "rbf",
+        FORMS,
+        "normalized",
+        "eq. 18: ρ = exp(−‖x − c‖²/σ) = Π_j exp(−(x_j − c_ij)²/σ_j)",
+        "normalized: Gaussians exp(−d²/(2σ_j²)) divided by their sum; literal: eq. 18 as printed, "
+        "unnormalized",
+    ),
+    OpenPoint(
+        "rbf_width",
+        WIDTHS,
+        "half-spacing",
+        '"the width is calculated as half the largest distance between centers" (§4)',
+        "half-spacing: σ_j is half the largest gap between neighbouring centres; half-range: half the "
+        "distance between the outermost centres",
+    ),
+    OpenPoint(
+        "sigma_unit",
+        ("normalized", "rad"),
+        "normalized",
+        '"The exploration factor starts at σ = 1 and decreases linearly per episode towards σ = 0.01" (§4)',
+        "normalized: σ in action units (1 ↦ 90° of waypoint bearing); rad: σ in radians of bearing",
+    ),
+    OpenPoint(
+        "k_update",
+        ("every", "positive"),
+        "every",
+        'eq. 13: k(s) = k(s) + Γ_k(Δ_k); "States that have been visited more often can yield more '
+        'trust" (§2.2)',
+        "every: k(s) grows at every update of a visited state; positive: only when δ > 0",
+    ),
+    OpenPoint(
+        "k_step",
+        ("weights", "k"),
+        "weights",
+        "eq. 13: k(s) = k(s) + Γ_k(Δ_k), with k(s) an RBF network (§4.1)",
+        "weights: the weights move by Δk·φ(s), so k(s) moves by Δk‖φ‖²; k: k(s) itself moves by Δk",
+    ),
+    OpenPoint(
+        "converge_in_view",
+        (),
+        "0.95",
+        '"converged to a successful policy" (§5.1) is not defined',
+        "the fraction of decisions, averaged over the last 50 training episodes, that must end with "
+        "the pipe in view",
+    ),
+    OpenPoint(
+        "converge_progress_m",
+        (),
+        "4",
+        '"converged to a successful policy" (§5.1) is not defined',
+        "the mean arc length along the pipe (m) the last 50 training episodes must reach",
+    ),
+)
+
+POINTS = {p.key: p for p in OPEN_POINTS}
+REPORT_ONLY = ("converge_in_view", "converge_progress_m")  # readings that change no training
+
+
+@dataclass(frozen=True)
+class Readings:
+    """One value per open point; the defaults are the project's readings (docs/design.md)."""
+
+    skew_step: str = "gamma"
+    skew_sample: str = "location"
+    gamma_max: float = 1.0
+    skew_unit: str = "deg45"
+    start_speed: str = "rest"
+    rbf: str = "normalized"
+    rbf_width: str = "half-spacing"
+    sigma_unit: str = "normalized"
+    k_update: str = "every"
+    k_step: str = "weights"
+    converge_in_view: float = 0.95
+    converge_progress_m: float = 4.0
+
+    @property
+    def id(self) -> str:
+        """The canonical id: the non-default readings as ``key=value`` joined by ``,``; else ``default``."""
+        parts = [f"{k}={_text(v)}" for k, v in self.changes().items()]
+        return ",".join(parts) or "default"
+
+    def changes(self) -> dict[str, object]:
+        """The readings that differ from the defaults, in the order of :data:`OPEN_POINTS`."""
+        return {
+            p.key: getattr(self, p.key)
+            for p in OPEN_POINTS
+            if getattr(self, p.key) != getattr(DEFAULT, p.key)
+        }
+
+    def with_ids(self, ids: Iterable[str]) -> Readings:
+        """A copy with the readings of ``ids`` applied in order (later ones win)."""
+        return parse(ids, self)
+
+    @property
+    def trains_like_default(self) -> bool:
+        """True if only report-level readings (the convergence thresholds) differ from the defaults."""
+        return all(k in REPORT_ONLY for k in self.changes())
+
+
+DEFAULT = Readings()
+
+
+def _text(v: object) -> str:
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+def _value(point: OpenPoint, text: str, source: str) -> object:
+    if point.choices:
+        if text not in point.choices:
+            raise ReadingError(
+                f"{source}: '{point.key}' must be one of {', '.join(point.choices)}, got '{text}'"
+            )
+        return text
+    try:
+        v = float(text)
+    except ValueError:
+        v = math.nan
+    if point.key == "converge_in_view":
+        ok, what = 0.0 <= v <= 1.0, "a fraction from 0 to 1"
+    elif point.key == "converge_progress_m":
+        ok, what = 0.0 <= v < math.inf, "a finite number of metres ≥ 0"
+    else:  # gamma_max
+        ok, what = 0.0 < v <= 100.0, "a number in (0, 100]"
+    if not ok:
+        raise ReadingError(f"{source}: '{point.key}' must be {what}, got '{text}'")
+    return v
+
+
+def parse(ids: Iterable[str] | str, base: Readings = DEFAULT, source: str = "reading") -> Readings:
+    """Apply reading ids (``key=value``, several joined by ``,``; ``default`` adds nothing) to ``base``.
+
+    Raises:
+        ReadingError: an unknown key, a missing ``=``, or a value that is not allowed.
+    """
+    if isinstance(ids, str):
+        ids = [ids]
+    changes: dict[str, object] = {}
+    for rid in ids:
+        for item in str(rid).split(","):
+            item = item.strip()
+            if item in ("", "default"):
+                continue
+            key, sep, text = item.partition("=")
+            key, text = key.strip(), text.strip()
+            if not sep:
+                raise ReadingError(f"{source} '{rid}': expected key=value, got '{item}'")
+            if key not in POINTS:
+                raise ReadingError(f"{source} '{rid}': unknown key '{key}'; known: {', '.join(POINTS)}")
+            changes[key] = _value(POINTS[key], text, f"{source} '{rid}'")
+    return dataclasses.replace(base, **changes)
+
+
+# ---------------------------------------------------------------------------------------------
+# What a reading means for the layers below
+
+
+def skew_gamma(skew_deg: float, r: Readings = DEFAULT) -> float:
+    """Δγ of eq. 15 from degrees to units of γ under the ``skew_unit`` reading."""
+    return math.radians(skew_deg) if r.skew_unit == "rad" else skew_deg / 45.0
+
+
+def cacla_params(r: Readings = DEFAULT, skew_deg: float = 0.0, **fields) -> CaclaParams:
+    """CACLA's parameter record under ``r``, with Δγ from degrees and other ``fields`` as given."""
+    return CaclaParams(
+        skew=skew_gamma(skew_deg, r),
+        gamma_max=r.gamma_max,
+        skew_sample={
+            "location": cacla.SAMPLE_LOCATION,
+            "centred": cacla.SAMPLE_CENTRED,
+            "moments": cacla.SAMPLE_MOMENTS,
+        }[r.skew_sample],
+        skew_step=cacla.STEP_GAMMA if r.skew_step == "gamma" else cacla.STEP_WEIGHTS,
+        k_update=cacla.K_EVERY if r.k_update == "every" else cacla.K_POSITIVE,
+        k_step=cacla.STEP_GAMMA if r.k_step == "k" else cacla.STEP_WEIGHTS,
+        **fields,
+    )
+
+
+def state_grid(r: Readings = DEFAULT) -> RBFGrid:
+    """The 1,764-feature state grid under the ``rbf`` and ``rbf_width`` readings."""
+    return RBFGrid(STATE_CENTRES, form=r.rbf, width=r.rbf_width)
+
+
+def action_grid(r: Readings = DEFAULT) -> RBFGrid:
+    """SARSA's 13-centre action grid under the ``rbf`` and ``rbf_width`` readings."""
+    return RBFGrid((ACTION_CENTRES,), form=r.rbf, width=r.rbf_width)
+
+
+def sim_params(r: Readings = DEFAULT, base: SimParams = PAPER_SIM) -> SimParams:
+    """The simulation's parameters under the ``start_speed`` reading."""
+    return base._replace(start_speed=CRUISE_SPEED if r.start_speed == "cruise" else 0.0)
+
+
+def sigma_scale(r: Readings = DEFAULT) -> float:
+    """Factor from the paper's σ to normalized action units: 1, or 1/(π/2) for σ in radians."""
+    return 2.0 / math.pi if r.sigma_unit == "rad" else 1.0
+
+
+def table_markdown() -> str:
+    """The open points as a markdown table: key, choices (default first, in bold), paper's words."""
+    rows = [
+        "| reading | choices (default in bold) | what they mean | the paper's words |",
+        "|---|---|---|---|",
+    ]
+    for p in OPEN_POINTS:
+        choices = (
+            ", ".join(f"**{c}**" if c == p.default else c for c in p.choices) or f"a number (**{p.default}**)"
+        )
+        rows.append(f"| `{p.key}` | {choices} | {p.meaning} | {p.paper} |")
+    return "\n".join(rows)
