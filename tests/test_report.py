@@ -296,7 +296,8 @@ def test_learning_curve_figure_draws_the_smoothed_mean_and_saves_a_png(tmp_path)
 
 def test_convergence_rule_thresholds_and_window():
     n = 120
-    good_view, good_prog = np.full(n, summary.CONVERGE_MIN_IN_VIEW), np.full(n, summary.CONVERGE_MIN_PROGRESS_M)
+    good_view = np.full(n, summary.CONVERGE_MIN_IN_VIEW)
+    good_prog = np.full(n, summary.CONVERGE_MIN_PROGRESS_M)
     assert summary.repeat_stats(0, np.zeros(n), good_view, good_prog).converged  # thresholds inclusive
     assert not summary.repeat_stats(0, np.zeros(n), good_view - 0.001, good_prog).converged
     assert not summary.repeat_stats(0, np.zeros(n), good_view, good_prog - 0.01).converged
