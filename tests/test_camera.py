@@ -1,4 +1,4 @@
-"""The camera footprint (DESIGN.md): clipping, the visible piece, and the tracking errors.
+"""The camera footprint (docs/design.md): clipping, the visible piece, and the tracking errors.
 
 Footprint: lateral x ∈ [-1, 1] m (positive to starboard), forward y ∈ [0, 3] m. The earth frame
 is x north, y east, so an AUV heading north (ψ = 0) sees east as +x and north as +y.

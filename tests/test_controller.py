@@ -1,4 +1,4 @@
-"""The PD waypoint controller (paper §3, DESIGN.md): forces, waypoints, and the closed loop."""
+"""The PD waypoint controller (paper §3, docs/design.md): forces, waypoints, and the closed loop."""
 
 import math
 

@@ -174,7 +174,7 @@ def test_features_accept_lists_and_float32():
 
 
 def test_features_time():
-    # DESIGN target: one state's features through the Python method in ≤ 5 µs (median).
+    # target: one state's features through the Python method in ≤ 5 µs (median).
     x = np.array([0.1, 1.0, -0.3, 0.2])
     out = np.empty(STATE_GRID.n_features)
     STATE_GRID.features(x, out)

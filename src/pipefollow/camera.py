@@ -9,7 +9,7 @@ progress along the pipe:
 
 * ``(x1, y1)``: the piece's far end (furthest along the pipe's direction),
 * ``x2``: lateral position of its near end (``y_near`` is its forward position),
-* ``e_dist = (x1 + x2) / 2`` and ``e_angl = atan2(x1 − x2, y1 − y_near)`` (DESIGN.md).
+* ``e_dist = (x1 + x2) / 2`` and ``e_angl = atan2(x1 − x2, y1 − y_near)`` (docs/design.md).
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from numba import njit
 
 
 class CameraParams(NamedTuple):
-    """Camera footprint in the body frame (DESIGN.md; matches the paper's state ranges)."""
+    """Camera footprint in the body frame (docs/design.md; matches the paper's state ranges)."""
 
     half_width: float = 1.0  # lateral half-width of the footprint (m)
     depth: float = 3.0  # forward extent of the footprint from the AUV's centre (m)
@@ -120,7 +120,7 @@ def _closer(best, piece, progress):
 
 @njit(cache=True)
 def tracking_errors(x1, y1, x2, y_near):
-    """``e_dist`` (m) and ``e_angl`` (rad) of DESIGN.md: pipe centred and vertical in the frame.
+    """``e_dist`` (m) and ``e_angl`` (rad) of docs/design.md: pipe centred and vertical in the frame.
 
     ``e_angl`` is the angle between the pipe's line and the frame's vertical, in [−π/2, π/2]: a
     line's deviation from the vertical, whichever way the pipe runs. So the worst in-view reward

@@ -20,7 +20,7 @@ from numba import njit
 
 
 class ControllerParams(NamedTuple):
-    """PD waypoint-controller gains (paper §3) and waypoint geometry (DESIGN.md)."""
+    """PD waypoint-controller gains (paper §3) and waypoint geometry (docs/design.md)."""
 
     kp_u: float = 1.5  # surge gain on the body-x waypoint error (N/m)
     kp_v: float = 0.3  # sway gain on the body-y waypoint error (N/m)
@@ -28,7 +28,7 @@ class ControllerParams(NamedTuple):
     kd_u: float = 6.0  # surge damping gain (N s/m)
     kd_v: float = 4.0  # sway damping gain (N s/m)
     kd_r: float = 2.0  # yaw damping gain (N m s/rad)
-    radius: float = 3.0  # waypoint circle radius R (m), DESIGN.md
+    radius: float = 3.0  # waypoint circle radius R (m), docs/design.md
     max_bearing: float = math.pi / 2  # bearing of a = ±1 (rad): the paper's ±90° limit
 
 

@@ -3,9 +3,9 @@
 The exploring action is ``a = clip(μ + σ z, −1, 1)`` in normalized action units (a = 1 ↦ 90°),
 with ``z ~ N(0, 1)`` (eq. 8) or ``z ~ SkewNormal(γ)`` (eq. 14). The skew-normal is used in its
 location/scale form, *not* re-centred: with γ ≠ 0 the mean of ``z`` is ``δ √(2/π)``, so exploration
-leans towards the side that has earned positive TD-errors (DESIGN.md, "skew-normal").
+leans towards the side that has earned positive TD-errors (docs/design.md, "skew-normal").
 
-σ falls linearly from 1 to 0.01 over the episodes of a trial (paper §4; DESIGN.md, "exploration σ").
+σ falls linearly from 1 to 0.01 over the episodes of a trial (paper §4; docs/design.md, "exploration σ").
 
 Randomness comes only from an explicit ``numpy.random.Generator``. The learners draw their
 standard normals themselves and build the sample with :func:`skew_normal_from_normals`, so that

@@ -148,7 +148,7 @@ def _polyline(lengths, turns_deg, name: str) -> Pipeline:
 
 
 def builtin(name: str) -> Pipeline:
-    """The built-in pipelines of DESIGN.md.
+    """The built-in pipelines of docs/design.md.
 
     ``paper-left``: 2 m, 2.5 m, 8 m with 90° left turns (paper §4.1); ``paper-right``: its
     mirror image; ``paper-validation``: mixed ±45° and ±90° turns, segments 3–6 m (paper §4.2).

@@ -72,7 +72,7 @@ OPEN_POINTS: tuple[OpenPoint, ...] = (
         (),
         "1",
         '"Γ caps updates of φ_α at α_max = 1 in all cases" (§4.1)',
-        "the cap |γ(s)| ≤ γ_max, in units of γ",
+        "the cap −γ_max ≤ γ(s) ≤ γ_max, in units of γ",
     ),
     OpenPoint(
         "skew_unit",

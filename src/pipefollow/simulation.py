@@ -1,4 +1,4 @@
-"""One decision of the closed loop, composed from the pure stages (DESIGN.md, data flow).
+"""One decision of the closed loop, composed from the pure stages (docs/design.md, data flow).
 
 A decision lasts ``substeps * dt`` seconds (1 s = 20 RK4 steps of 0.05 s). It places the
 waypoint (or, with the pipe lost, runs the search behaviour), integrates controller and vehicle
@@ -29,7 +29,7 @@ class SimParams(NamedTuple):
     auv: AUVParams = PAPER_AUV
     controller: ControllerParams = PAPER_CONTROLLER
     camera: CameraParams = PAPER_CAMERA
-    dt: float = 0.05  # RK4 step (s), DESIGN.md
+    dt: float = 0.05  # RK4 step (s), docs/design.md
     substeps: int = 20  # RK4 steps per decision: decisions every 1 s (paper §4.1)
     lost_reward: float = LOST_REWARD  # reward per decision while the pipe is lost (paper §4)
     progress_back: float = 1.5  # progress search window behind the last progress (m)

@@ -1,6 +1,6 @@
 """Episodes and training: through the Gymnasium environment, and as one compiled loop.
 
-Both paths follow the same protocol (DESIGN.md):
+Both paths follow the same protocol (docs/design.md):
 
 * one decision per second; the agent acts only while the pipe is in view, otherwise the search
   behaviour flies the AUV and the agent's action is ignored;
