@@ -62,7 +62,8 @@ def test_skew_unit_and_sigma_unit():
 
 def test_cacla_params_under_each_reading():
     p = rd.cacla_params(skew_deg=45.0, supervised=True)
-    assert (p.skew, p.gamma_max, p.skew_step, p.skew_sample) == (1.0, 1.0, cacla.STEP_GAMMA, cacla.SAMPLE_LOCATION)
+    expected = (1.0, 1.0, cacla.STEP_GAMMA, cacla.SAMPLE_LOCATION)
+    assert (p.skew, p.gamma_max, p.skew_step, p.skew_sample) == expected
     assert (p.k_update, p.k_step, p.supervised) == (cacla.K_EVERY, cacla.STEP_WEIGHTS, True)
     r = rd.parse("skew_step=weights,skew_sample=moments,gamma_max=0.5,k_update=positive,k_step=k")
     q = rd.cacla_params(r, 22.5)

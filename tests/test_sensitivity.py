@@ -72,7 +72,8 @@ def test_a_small_readings_run_writes_the_table_and_the_report(tmp_path):
     toml = tmp_path / "small.toml"
     toml.write_text(SMALL)
     out = tmp_path / "run"
-    args = ["reproduce", "--experiment", str(toml), "--out", str(out), "--episodes", "3", "--backend", "serial"]
+    args = ["reproduce", "--experiment", str(toml), "--out", str(out), "--episodes", "3"]
+    args += ["--backend", "serial"]
     result = CliRunner().invoke(main, args)
     assert result.exit_code == 0, result.output
     config = json.loads((out / "config.json").read_text())
