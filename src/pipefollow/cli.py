@@ -558,11 +558,8 @@ def reproduce(
 def _echo_sensitivity(run_dir: Path, outputs: list[Path]) -> None:
     """The per-claim lines of a sensitivity study."""
     from pipefollow.experiments import sensitivity
-    from pipefollow.experiments.config import from_dict
-    from pipefollow.experiments.summary import read_rows
 
-    config = from_dict(json.loads((run_dir / "config.json").read_text()))
-    s = sensitivity.compute(config, read_rows(run_dir / "results.csv"), read_rows(run_dir / "evaluation.csv"))
+    s = sensitivity.load(run_dir)
     for claim in s.claim_ids():
         click.echo(f"claim {claim}: {s.verdict_line(claim)}")
     for p in outputs:

@@ -20,6 +20,8 @@ from pipefollow.experiments.summary import (
     Evaluation,
     PhaseSummary,
     Rows,
+    Training,
+    as_training,
     mean_sd,
     read_evaluations,
     summarize_trial,
@@ -357,10 +359,11 @@ class Findings:
 
 
 def compute_findings(
-    config: ExperimentConfig, results: Rows, evaluation: Rows, wall_seconds: float | None = None
+    config: ExperimentConfig, results: Rows | Training, evaluation: Rows, wall_seconds: float | None = None
 ) -> Findings:
-    """The findings of a run from its configuration and the rows of ``results.csv``/``evaluation.csv``."""
-    summaries = {t.name: s for t in config.trials if (s := summarize_trial(results, t))}
+    """The findings of a run from its configuration, ``results.csv`` (rows or series), ``evaluation.csv``."""
+    training = as_training(results)
+    summaries = {t.name: s for t in config.trials if (s := summarize_trial(training, t))}
     evaluations = read_evaluations(evaluation)
     table_trial = next((t for t in config.trials if any("table1" in f for f in t.figures)), None)
     table = None

@@ -36,8 +36,10 @@ from pipefollow.experiments.summary import (
     EARLY_EPISODES,
     Evaluation,
     Rows,
+    Training,
     learning_curves,
     read_rows,
+    read_training,
 )
 
 FIGURES = {
@@ -317,7 +319,7 @@ def _wall_seconds(run_dir: Path, config: ExperimentConfig, load: Callable) -> fl
 
 
 def draw_learning_curves(
-    run_dir: Path, config: ExperimentConfig, results: Rows, evaluations: Mapping[str, Evaluation]
+    run_dir: Path, config: ExperimentConfig, results: Rows | Training, evaluations: Mapping[str, Evaluation]
 ) -> dict[str, str]:
     """Draw fig5/6/7.png for the groups with results; returns key → file name of those drawn."""
     drawn = {}
@@ -381,7 +383,7 @@ def write_outputs(run_dir: str | Path) -> list[Path]:
         from pipefollow.experiments import sensitivity
 
         return sensitivity.write_outputs(run_dir, _wall_seconds(run_dir, config, _load_trial))
-    results = read_rows(run_dir / "results.csv")
+    results = read_training(run_dir / "results.csv")
     evaluation = read_rows(run_dir / "evaluation.csv")
     findings = compute_findings(config, results, evaluation, _wall_seconds(run_dir, config, _load_trial))
     drawn = draw_learning_curves(run_dir, config, results, findings.evaluations)

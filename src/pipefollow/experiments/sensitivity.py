@@ -20,7 +20,7 @@ from pathlib import Path
 from pipefollow import readings as rd
 from pipefollow.experiments.claims import CONFIRMED, NOT_CONFIRMED, NOT_TESTED, Findings, compute_findings
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig, from_dict
-from pipefollow.experiments.summary import read_rows
+from pipefollow.experiments.summary import as_training, read_rows, read_training
 
 SEP = "@"  # joins a trial's name and the reading id it was trained under
 READINGS_CSV = "readings.csv"
@@ -136,6 +136,7 @@ def _names(ids: list[str]) -> str:
 def compute(config: ExperimentConfig, results, evaluation) -> Sensitivity:
     """The sensitivity of every claim, from an expanded experiment's tables."""
     ids = tuple(compared(config))
+    results = as_training(results)
     findings, rows = {}, []
     for rid in ids:
         f = compute_findings(under(config, rid), results, evaluation)
@@ -203,13 +204,19 @@ def csv_text(s: Sensitivity) -> str:
     return buf.getvalue()
 
 
+def load(run_dir: str | Path) -> Sensitivity:
+    """The sensitivity study of a run folder, computed from its tables."""
+    run_dir = Path(run_dir)
+    config = from_dict(json.loads((run_dir / "config.json").read_text()))
+    return compute(config, read_training(run_dir / "results.csv"), read_rows(run_dir / "evaluation.csv"))
+
+
 def write_outputs(run_dir: str | Path, wall_seconds: float | None = None) -> list[Path]:
     """Write ``readings.csv`` and ``REPORT.md`` into the run folder of a sensitivity study."""
     from pipefollow.atomic import write_text_atomic
 
     run_dir = Path(run_dir)
-    config = from_dict(json.loads((run_dir / "config.json").read_text()))
-    s = compute(config, read_rows(run_dir / "results.csv"), read_rows(run_dir / "evaluation.csv"))
+    s = load(run_dir)
     table = run_dir / READINGS_CSV
     write_text_atomic(table, csv_text(s))
     report = run_dir / "REPORT.md"
