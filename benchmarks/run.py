@@ -1,6 +1,6 @@
 """Benchmarks: medians of the hot paths, each beside its floor and target, in one run.
 
-Usage: ``python benchmarks/run.py [--repeats N] [--no-reproduce] [--json FILE]``
+Usage: ``python benchmarks/run.py [--repeats N] [--no-reproduce] [--readings] [--json FILE]``
 
 The floors are estimates of what compiled C would need (issue "Speed near the physical limit"):
 an RK4 substep ≈ 0.09 µs; a 500-episode trial is 200,000 substeps plus 10,000 learning updates,
@@ -114,14 +114,14 @@ def _trial_bench(algorithm, repeats, **kw):
     return median_time(one, max(3, repeats // 3))
 
 
-def bench_reproduce(repeats):
+def bench_reproduce(repeats, extra=(), runs=None):
     exe = os.path.join(os.path.dirname(sys.executable), "pipefollow")
     times = []
-    for _ in range(max(1, repeats // 5)):
+    for _ in range(runs or max(1, repeats // 5)):
         with tempfile.TemporaryDirectory() as out:
             t = time.perf_counter()
             subprocess.run(
-                [exe, "reproduce", "--out", out, "--no-figures"],
+                [exe, "reproduce", "--out", out, "--no-figures", *extra],
                 check=True,
                 stdout=subprocess.DEVNULL,
                 stderr=subprocess.DEVNULL,
@@ -146,6 +146,13 @@ BENCHES = [
     ),
     ("SARSA trial, 500 episodes", lambda r: _trial_bench("sarsa", r), 0.1, 0.3),
     ("pipefollow reproduce (warm)", bench_reproduce, 1.5, 8.0),
+    # 13 training readings × 8 trials × 10 repeats (1,040 trials); opt in with --readings
+    (
+        "reproduce --experiment readings",
+        lambda r: bench_reproduce(r, ("--experiment", "readings"), runs=1),
+        None,
+        180.0,
+    ),
 ]
 
 
@@ -162,6 +169,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=15, help="repeats per benchmark (median)")
     ap.add_argument("--no-reproduce", action="store_true", help="skip the full-reproduction benchmark")
+    ap.add_argument("--readings", action="store_true", help="also time the readings experiment (minutes)")
     ap.add_argument("--json", help="also write the figures to this JSON file")
     args = ap.parse_args(argv)
     print(
@@ -171,7 +179,7 @@ def main(argv=None) -> int:
     print(f"{'benchmark':<32}{'median':>12}{'floor':>12}{'×floor':>8}{'target':>12}  ok")
     results = {}
     for name, fn, floor, target in BENCHES:
-        if args.no_reproduce and "reproduce" in name:
+        if (args.no_reproduce and "reproduce" in name) or ("readings" in name and not args.readings):
             continue
         t = fn(args.repeats)
         results[name] = {"median_s": t, "floor_s": floor, "target_s": target}
