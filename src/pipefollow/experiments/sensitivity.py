@@ -187,8 +187,40 @@ def render_markdown(s: Sensitivity, wall_seconds: float | None = None) -> str:
     for rid in s.readings:
         cells = {r.claim: f"{r.passed}/{r.repeats} {mark[r.verdict]}" for r in s.rows if r.reading == rid}
         lines.append(f"| `{rid}` | " + " | ".join(cells.get(c, "") for c in claims) + " |")
+    lines += _setup_lines(s)
     lines += ["", "## The open points", "", rd.table_markdown(), ""]
     return "\n".join(lines).rstrip() + "\n"
+
+
+def _setup_lines(s: Sensitivity) -> list[str]:
+    """Converged repeats and last-50 mean return of every set-up (and phase) under every reading."""
+    first = s.findings[s.readings[0]].config.trials
+    columns = [(t.name.rsplit(SEP, 1)[0], t.title, k) for t in first for k in range(len(t.phases))]
+    lines = [
+        "",
+        "## Per set-up",
+        "",
+        "Converged repeats and the mean return of the last 50 training episodes, per set-up and "
+        "training phase (the validation set-up's second phase trains on `paper-right`).",
+        "",
+        "| reading | "
+        + " | ".join(f"{title}{f' (phase {k + 1})' if k else ''}" for _, title, k in columns)
+        + " |",
+        "|---|" + "---|" * len(columns),
+    ]
+    for rid in s.readings:
+        f = s.findings[rid]
+        by_base = {t.name.rsplit(SEP, 1)[0]: t.name for t in f.config.trials}
+        cells = []
+        for base, _, k in columns:
+            phases = f.summaries.get(by_base.get(base, ""), [])
+            if k < len(phases):
+                p = phases[k]
+                cells.append(f"{p.n_converged}/{p.n}, {p.values('last_return').mean():.1f}")
+            else:
+                cells.append("—")
+        lines.append(f"| `{rid}` | " + " | ".join(cells) + " |")
+    return lines
 
 
 def csv_text(s: Sensitivity) -> str:
