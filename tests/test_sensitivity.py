@@ -93,7 +93,8 @@ def test_a_small_readings_run_writes_the_table_and_the_report(tmp_path):
     assert by["converge_in_view=0.99", "4a"] == {**by["default", "4a"], "reading": "converge_in_view=0.99"}
     report = (out / "REPORT.md").read_text()
     assert "| `skew_step=weights` |" in report and "## The open points" in report
-    assert "## Per set-up" in report and "| `start_speed=cruise` | 0/2, " not in report.split("## Per set-up")[0]
+    per_setup = report.split("## Per set-up")[1].split("## The open points")[0]
+    assert all(f"| `{r}` | " in per_setup for r in readings)
     for c in claims:
         assert f"- **{c}**" in report
     assert "claim 1a:" in result.output
