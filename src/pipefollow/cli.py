@@ -525,5 +525,164 @@ def plot(run_dir, as_json):
         click.echo(f"wrote {p}")
 
 
+@main.group(invoke_without_command=True)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@click.pass_context
+def suites(ctx, as_json):
+    """List the pipeline suites: training families and held-out test suites."""
+    if ctx.invoked_subcommand is not None:
+        return
+    from pipefollow.suites import SUITES
+
+    rows = [s.summary() for s in SUITES.values()]
+    if as_json:
+        click.echo(json.dumps({"suites": rows}))
+        return
+    head = ("suite", "kind", "pipes", "turns", "straights", "arc radii")
+    click.echo("{:<15} {:<8} {:>5} {:>9} {:>10} {:>10}  description".format(*head))
+    for r in rows:
+        count = "∞" if r["count"] is None else str(r["count"])
+        turns = "{:g}–{:g}°".format(*r["turn_deg"])
+        straights = "{:g}–{:g} m".format(*r["straight_m"])
+        radii = "{:g}–{:g} m".format(*r["arc_radius_m"])
+        cells = (r["name"], r["kind"], count, turns, straights, radii, r["description"])
+        click.echo("{:<15} {:<8} {:>5} {:>9} {:>10} {:>10}  {}".format(*cells))
+
+
+@suites.command("export")
+@click.argument("name")
+@click.option(
+    "--out", "out_dir", type=click.Path(file_okay=False), required=True, help="Folder for the JSON files."
+)
+@click.option(
+    "--pipes",
+    type=click.IntRange(min=1, max=100_000),
+    default=None,
+    help="Number of pipes [default: all of a held-out suite, 100 of a training family].",
+)
+@click.option(
+    "--seconds",
+    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
+    callback=_finite,
+    default=60.0,
+    show_default=True,
+    help="Episode length the pipes must be long enough for.",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object: the files written.")
+@_guard
+def suites_export(name, out_dir, pipes, seconds, as_json):
+    """Write the pipes of suite NAME as pipeline JSON files (NAME-000.json, ...)."""
+    from pipefollow.suites import export_suite, get_suite, min_length_for
+
+    suite = get_suite(name)
+    n = pipes if pipes is not None else (suite.count or 100)
+    if suite.count is not None and n > suite.count:
+        raise UserError(f"--pipes {n}: suite '{name}' has {suite.count} pipes")
+    out = _writable_folder(out_dir, "--out")
+    paths = export_suite(suite, out, n, min_length_for(seconds))
+    if as_json:
+        click.echo(json.dumps({"suite": name, "files": [str(p) for p in paths]}))
+        return
+    click.echo(f"wrote {len(paths)} pipes of '{name}' to {out}")
+
+
+def _benchmark_params():
+    """The simulated system of a benchmark's episodes.
+
+    Disturbance options of ``benchmark`` (current, camera noise, missed detections) are turned
+    into fields of the returned :class:`~pipefollow.simulation.SimParams` here.
+    """
+    from pipefollow.simulation import PAPER_SIM
+
+    return PAPER_SIM
+
+
+@main.command()
+@click.option(
+    "--controller",
+    default="heuristic",
+    show_default=True,
+    help="'heuristic' or a policy file (.npz) written by 'pipefollow train'.",
+)
+@click.option(
+    "--suite", "suite_name", default="heldout", show_default=True, help="Suite (see 'pipefollow suites')."
+)
+@click.option(
+    "--seconds",
+    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
+    callback=_finite,
+    default=60.0,
+    show_default=True,
+    help="Episode length in seconds.",
+)
+@click.option(
+    "--pipes",
+    type=click.IntRange(min=1, max=100_000),
+    default=None,
+    help="Number of pipes [default: all of a held-out suite, 100 of a training family].",
+)
+@click.option("--seed", default=0, show_default=True, type=int, help="Seed of the bootstrap resampling.")
+@click.option(
+    "--plot",
+    "plot_path",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Save a PNG: per-pipe return differences to the heuristic and a few trajectories.",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@_guard
+def benchmark(controller, suite_name, seconds, pipes, seed, plot_path, as_json):
+    """Run a controller deterministically on every pipe of a suite, beside the heuristic.
+
+    Reports the mean return with a bootstrap 95 % confidence interval, the interquartile mean,
+    the success rate (pipe in view at ≥ 95 % of the decisions) and, for a controller other than
+    the heuristic, the paired per-pipe difference to the heuristic with its confidence interval.
+    """
+    from pipefollow.benchmark import benchmark as run_benchmark
+    from pipefollow.benchmark import load_controller as load_benchmark_controller
+    from pipefollow.suites import get_suite
+
+    suite = get_suite(suite_name)
+    if suite.count is not None and pipes is not None and pipes > suite.count:
+        raise UserError(f"--pipes {pipes}: suite '{suite_name}' has {suite.count} pipes")
+    agent = load_benchmark_controller(controller, seed)
+    run = run_benchmark(
+        agent,
+        suite,
+        controller=controller,
+        seconds=seconds,
+        params=_benchmark_params(),
+        n_pipes=pipes,
+        seed=seed,
+    )
+    if plot_path:
+        from pipefollow.benchmark_plot import plot_benchmark
+
+        plot_benchmark(run, plot_path)
+    r = run.summary
+    if as_json:
+        click.echo(json.dumps(r))
+        return
+    lo, hi = r["ci95_return"]
+    click.echo(f"{controller} on '{suite.name}': {r['n_episodes']} pipes, {seconds:g} s each, σ = 0")
+    click.echo(
+        f"  mean return    {r['mean_return']:9.2f}  (95 % CI {lo:.2f} to {hi:.2f}; IQM {r['iqm_return']:.2f})"
+    )
+    click.echo(f"  success rate   {r['success_rate']:9.1%}  (pipe in view ≥ 95 % of the decisions)")
+    click.echo(f"  pipe in view   {r['mean_pipe_in_view']:9.1%}")
+    rms = "—" if r["rms_e_dist"] is None else f"{r['rms_e_dist']:.3f} m"
+    click.echo(f"  rms e_dist     {rms:>9}")
+    click.echo(f"  progress       {r['mean_progress_m']:7.2f} m")
+    if "vs_heuristic" in r:
+        v = r["vs_heuristic"]
+        dlo, dhi = v["ci95_diff"]
+        click.echo(
+            f"  vs heuristic   {v['mean_diff']:+9.2f}  (95 % CI {dlo:+.2f} to {dhi:+.2f}; "
+            f"better on {v['win_rate']:.0%} of the pipes)"
+        )
+    if plot_path:
+        click.echo(f"plot: {plot_path}")
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()
