@@ -248,7 +248,11 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
     help="Extension: keep skew-normal exploration centred on the actor's action (the paper does not).",
 )
 @click.option(
-    "--pipeline", default="paper-left", show_default=True, help="Built-in name or JSON file to train on."
+    "--pipeline",
+    default="paper-left",
+    show_default=True,
+    help="Built-in name or JSON file to train on, or random[:FAMILY] for a new pipe every episode "
+    "(families: see 'pipefollow suites'; random = random:mixed).",
 )
 @click.option("--episodes", default=500, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
 @click.option(
@@ -292,14 +296,14 @@ def train(
     """Train a learner; writes the policy and its learning curve."""
     from pipefollow.agents import make_agent
     from pipefollow.exploration import skew_step_to_gamma
-    from pipefollow.pipeline import resolve
-    from pipefollow.training import STAT_NAMES, train_compiled
+    from pipefollow.suites import Suite, resolve_training
+    from pipefollow.training import STAT_NAMES, train_compiled, train_random_compiled
 
     if algorithm == "sarsa" and (skew or supervised or skew_centred):
         raise UserError("--skew, --skew-centred and --supervised apply to --algorithm cacla only")
     if skew_centred and not skew:
         raise UserError("--skew-centred needs --skew > 0")
-    pipe = resolve(pipeline)
+    pipe = resolve_training(pipeline)  # a Pipeline, or a Suite for random[:FAMILY]
     rng = np.random.default_rng(seed)
     if init_policy:
         from pipefollow.policy import load_policy
@@ -331,7 +335,12 @@ def train(
             bar.update(n - done[0])
             done[0] = n
 
-        stats = train_compiled(agent, pipe, episodes, episode_seconds=seconds, progress=progress)
+        if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the seed's generator
+            stats = train_random_compiled(
+                agent, pipe, episodes, pipe_rng=rng.spawn(1)[0], episode_seconds=seconds, progress=progress
+            )
+        else:
+            stats = train_compiled(agent, pipe, episodes, episode_seconds=seconds, progress=progress)
     from pipefollow.policy import save_policy
     from pipefollow.results import write_learning_curve
 
