@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 
@@ -36,7 +37,8 @@ def plot_benchmark(run: BenchmarkRun, path: str | os.PathLike) -> None:
     ax.axhline(mean, color="tab:green", lw=1.5, label=f"mean {mean:.2f}")
     ax.set_xlabel("pipes, sorted")
     ax.set_ylabel(ylabel)
-    ax.set_title(f"{s['controller']} on '{s['suite']}' ({s['n_episodes']} pipes)", fontsize=9)
+    name = Path(s["controller"]).stem if s["controller"].endswith(".npz") else s["controller"]
+    ax.set_title(f"{name} on '{s['suite']}' ({s['n_episodes']} pipes)", fontsize=9)
     ax.legend(fontsize=8, loc="upper left")
     ranked = np.argsort(run.returns, kind="stable")
     picks = [("worst", ranked[0]), ("median", ranked[len(ranked) // 2]), ("best", ranked[-1])]
