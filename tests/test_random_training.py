@@ -140,3 +140,33 @@ def test_cli_train_on_random_pipes(tmp_path):
     bad = CliRunner().invoke(main, [*args[:4], "random:heldout", *args[5:], "--out", str(tmp_path / "c")])
     assert bad.exit_code == 2 and bad.stderr.startswith("pipefollow: error: ") and "held-out" in bad.stderr
     assert not (tmp_path / "c").exists()
+
+
+def test_reset_option_switches_between_a_family_and_a_fixed_pipe():
+    env = PipelineFollowingEnv("paper-left", 5)
+    env.reset(seed=1, options={"pipeline": "random:medium"})
+    rng = np.random.default_rng(1)
+    np.testing.assert_array_equal(
+        env.pipeline.points, get_suite("medium").draw(rng, min_length_for(5)).points
+    )
+    env.reset(options={"pipeline": "paper-right"})
+    assert env.pipeline.name == "paper-right" and env.suite is None
+    env.reset()
+    assert env.pipeline.name == "paper-right"
+
+
+@pytest.mark.parametrize("spec", ["random:nope", "random:heldout-hard"])
+def test_experiment_with_a_bad_random_phase_is_refused_before_any_work(tmp_path, spec):
+    toml = tmp_path / "e.toml"
+    toml.write_text(
+        '[experiment]\nname = "e"\n[[trial]]\nname = "t"\n'
+        f'phases = [{{ pipeline = "{spec}", episodes = 2 }}]\n'
+    )
+    out = tmp_path / "run"
+    res = CliRunner().invoke(
+        main, ["reproduce", "--experiment", str(toml), "--out", str(out), "--backend", "serial"]
+    )
+    assert res.exit_code == 2, res.output
+    assert res.stderr.startswith("pipefollow: error: ") and res.stderr.count("\n") == 1
+    assert spec.partition(":")[2] in res.stderr
+    assert not (out / "trials").exists() or not any((out / "trials").iterdir())

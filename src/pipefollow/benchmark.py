@@ -257,3 +257,26 @@ def benchmark(
         for pipe, row in zip(pipes, res, strict=True)
     ]
     return BenchmarkRun(summary, pipes, ret, h_res[:, RET].copy(), poses, h_poses)
+
+
+def format_summary(r: dict, seconds: float) -> str:
+    """A benchmark summary as a few lines of text."""
+    lo, hi = r["ci95_return"]
+    rms = "—" if r["rms_e_dist"] is None else f"{r['rms_e_dist']:.3f} m"
+    lines = [
+        f"{r['controller']} on '{r['suite']}': {r['n_episodes']} pipes, {seconds:g} s each, σ = 0",
+        f"  mean return    {r['mean_return']:9.2f}  (95 % CI {lo:.2f} to {hi:.2f}; "
+        f"IQM {r['iqm_return']:.2f})",
+        f"  success rate   {r['success_rate']:9.1%}  (pipe in view ≥ 95 % of the decisions)",
+        f"  pipe in view   {r['mean_pipe_in_view']:9.1%}",
+        f"  rms e_dist     {rms:>9}",
+        f"  progress       {r['mean_progress_m']:7.2f} m",
+    ]
+    if "vs_heuristic" in r:
+        v = r["vs_heuristic"]
+        dlo, dhi = v["ci95_diff"]
+        lines.append(
+            f"  vs heuristic   {v['mean_diff']:+9.2f}  (95 % CI {dlo:+.2f} to {dhi:+.2f}; "
+            f"better on {v['win_rate']:.0%} of the pipes)"
+        )
+    return "\n".join(lines)

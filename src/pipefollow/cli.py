@@ -648,6 +648,7 @@ def benchmark(controller, suite_name, seconds, pipes, seed, plot_path, as_json):
     the heuristic, the paired per-pipe difference to the heuristic with its confidence interval.
     """
     from pipefollow.benchmark import benchmark as run_benchmark
+    from pipefollow.benchmark import format_summary
     from pipefollow.benchmark import load_controller as load_benchmark_controller
     from pipefollow.suites import get_suite
 
@@ -668,27 +669,10 @@ def benchmark(controller, suite_name, seconds, pipes, seed, plot_path, as_json):
         from pipefollow.benchmark_plot import plot_benchmark
 
         plot_benchmark(run, plot_path)
-    r = run.summary
     if as_json:
-        click.echo(json.dumps(r))
+        click.echo(json.dumps(run.summary))
         return
-    lo, hi = r["ci95_return"]
-    click.echo(f"{controller} on '{suite.name}': {r['n_episodes']} pipes, {seconds:g} s each, σ = 0")
-    click.echo(
-        f"  mean return    {r['mean_return']:9.2f}  (95 % CI {lo:.2f} to {hi:.2f}; IQM {r['iqm_return']:.2f})"
-    )
-    click.echo(f"  success rate   {r['success_rate']:9.1%}  (pipe in view ≥ 95 % of the decisions)")
-    click.echo(f"  pipe in view   {r['mean_pipe_in_view']:9.1%}")
-    rms = "—" if r["rms_e_dist"] is None else f"{r['rms_e_dist']:.3f} m"
-    click.echo(f"  rms e_dist     {rms:>9}")
-    click.echo(f"  progress       {r['mean_progress_m']:7.2f} m")
-    if "vs_heuristic" in r:
-        v = r["vs_heuristic"]
-        dlo, dhi = v["ci95_diff"]
-        click.echo(
-            f"  vs heuristic   {v['mean_diff']:+9.2f}  (95 % CI {dlo:+.2f} to {dhi:+.2f}; "
-            f"better on {v['win_rate']:.0%} of the pipes)"
-        )
+    click.echo(format_summary(run.summary, seconds))
     if plot_path:
         click.echo(f"plot: {plot_path}")
 
