@@ -138,8 +138,6 @@ class PipelineFollowingEnv(gym.Env):
         options = dict(options or {})
         if "pipeline" in options:
             self._set_pipeline(options.pop("pipeline"))
-        if self.suite is not None:  # a new pipe of the training family every episode
-            self.pipeline = self.suite.draw(self.np_random, min_length_for(self.episode_seconds))
         lateral = options.pop("lateral_offset", None)
         heading_deg = options.pop("heading_offset_deg", None)
         if options:
@@ -147,6 +145,8 @@ class PipelineFollowingEnv(gym.Env):
                 f"unknown reset option(s) {sorted(options)}; "
                 "allowed: pipeline, lateral_offset, heading_offset_deg"
             )
+        if self.suite is not None:  # a new pipe of the training family every episode
+            self.pipeline = self.suite.draw(self.np_random, min_length_for(self.episode_seconds))
         # without start noise no number is drawn: the generator then serves the random pipes alone
         if lateral is None:
             noise = self.start_lateral_noise
