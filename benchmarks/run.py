@@ -130,6 +130,37 @@ def bench_reproduce(repeats, extra=(), runs=None):
     return statistics.median(times)
 
 
+def bench_suite_benchmark(repeats):
+    """``pipefollow benchmark`` of a CACLA policy: 100 held-out pipes × 60 s, heuristic and CIs included."""
+    from pipefollow.agents import make_agent
+    from pipefollow.benchmark import benchmark
+    from pipefollow.suites import get_suite
+    from pipefollow.training import train_random_compiled
+
+    agent = make_agent("cacla", rng=np.random.default_rng(0))
+    rng = np.random.default_rng(1)
+    train_random_compiled(agent, get_suite("mixed"), 200, pipe_rng=rng, episode_seconds=60)
+    suite = get_suite("heldout")
+    benchmark(agent, suite, controller="cacla")  # compile
+    return median_time(lambda: benchmark(agent, suite, controller="cacla"), max(3, repeats // 3))
+
+
+def bench_random_training(repeats):
+    """CACLA on a new pipe of the mixed family every episode: 2,500 episodes × 40 s = 100,000 decisions."""
+    from pipefollow.agents import make_agent
+    from pipefollow.suites import get_suite
+    from pipefollow.training import train_random_compiled
+
+    suite = get_suite("mixed")
+
+    def one(episodes=2500):
+        agent = make_agent("cacla", rng=np.random.default_rng(0))
+        train_random_compiled(agent, suite, episodes, pipe_rng=np.random.default_rng(1), episode_seconds=40)
+
+    one(2)  # compile
+    return median_time(one, max(3, repeats // 5))
+
+
 # name, function, floor (s), target (s), unit for display
 BENCHES = [
     ("RK4 substep (closed loop)", bench_substep, 0.09e-6, None),
@@ -145,6 +176,8 @@ BENCHES = [
         0.1,
     ),
     ("SARSA trial, 500 episodes", lambda r: _trial_bench("sarsa", r), 0.1, 0.3),
+    ("benchmark, 100 pipes × 60 s", bench_suite_benchmark, None, 1.0),
+    ("random-pipe CACLA, 100k dec.", bench_random_training, None, 3.0),
     ("pipefollow reproduce (warm)", bench_reproduce, 1.5, 8.0),
     # 13 training readings × 8 trials × 10 repeats (1,040 trials); opt in with --readings
     (

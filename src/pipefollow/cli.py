@@ -269,7 +269,11 @@ def evaluate(
 )
 @click.option("--supervised", is_flag=True, help="Supervised CACLA with the heuristic as supervisor.")
 @click.option(
-    "--pipeline", default="paper-left", show_default=True, help="Built-in name or JSON file to train on."
+    "--pipeline",
+    default="paper-left",
+    show_default=True,
+    help="Built-in name or JSON file to train on, or random[:FAMILY] for a new pipe every episode "
+    "(families: see 'pipefollow suites'; random = random:mixed).",
 )
 @click.option("--episodes", default=500, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
 @click.option(
@@ -316,13 +320,13 @@ def train(
 ):
     """Train a learner; writes the policy and its learning curve."""
     from pipefollow.agents import make_agent
-    from pipefollow.pipeline import resolve
     from pipefollow.readings import cacla_params, sigma_scale, sim_params
-    from pipefollow.training import STAT_NAMES, train_compiled
+    from pipefollow.suites import Suite, resolve_training
+    from pipefollow.training import STAT_NAMES, train_compiled, train_random_compiled
 
     if algorithm == "sarsa" and (skew or supervised):
         raise UserError("--skew and --supervised apply to --algorithm cacla only")
-    pipe = resolve(pipeline)
+    pipe = resolve_training(pipeline)  # a Pipeline, or a Suite for random[:FAMILY]
     rng = np.random.default_rng(seed)
     if init_policy:
         from pipefollow.policy import load_policy
@@ -356,16 +360,17 @@ def train(
             done[0] = n
 
         scale = sigma_scale(reading)
-        stats = train_compiled(
-            agent,
-            pipe,
-            episodes,
+        schedule = dict(
             episode_seconds=seconds,
             sigma_start=scale,
             sigma_end=0.01 * scale,
             params=sim_params(reading),
             progress=progress,
         )
+        if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the seed's generator
+            stats = train_random_compiled(agent, pipe, episodes, pipe_rng=rng.spawn(1)[0], **schedule)
+        else:
+            stats = train_compiled(agent, pipe, episodes, **schedule)
     from pipefollow.policy import save_policy
     from pipefollow.results import write_learning_curve
 
@@ -581,6 +586,149 @@ def plot(run_dir, as_json):
         return
     for p in outputs:
         click.echo(f"wrote {p}")
+
+
+@main.group(invoke_without_command=True)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@click.pass_context
+def suites(ctx, as_json):
+    """List the pipeline suites: training families and held-out test suites."""
+    if ctx.invoked_subcommand is not None:
+        return
+    from pipefollow.suites import SUITES
+
+    rows = [s.summary() for s in SUITES.values()]
+    if as_json:
+        click.echo(json.dumps({"suites": rows}))
+        return
+    head = ("suite", "kind", "pipes", "turns", "straights", "arc radii")
+    click.echo("{:<15} {:<8} {:>5} {:>9} {:>10} {:>10}  description".format(*head))
+    for r in rows:
+        count = "∞" if r["count"] is None else str(r["count"])
+        turns = "{:g}–{:g}°".format(*r["turn_deg"])
+        straights = "{:g}–{:g} m".format(*r["straight_m"])
+        radii = "{:g}–{:g} m".format(*r["arc_radius_m"])
+        cells = (r["name"], r["kind"], count, turns, straights, radii, r["description"])
+        click.echo("{:<15} {:<8} {:>5} {:>9} {:>10} {:>10}  {}".format(*cells))
+
+
+@suites.command("export")
+@click.argument("name")
+@click.option(
+    "--out", "out_dir", type=click.Path(file_okay=False), required=True, help="Folder for the JSON files."
+)
+@click.option(
+    "--pipes",
+    type=click.IntRange(min=1, max=100_000),
+    default=None,
+    help="Number of pipes [default: all of a held-out suite, 100 of a training family].",
+)
+@click.option(
+    "--seconds",
+    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
+    callback=_finite,
+    default=60.0,
+    show_default=True,
+    help="Episode length the pipes must be long enough for.",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object: the files written.")
+@_guard
+def suites_export(name, out_dir, pipes, seconds, as_json):
+    """Write the pipes of suite NAME as pipeline JSON files (NAME-000.json, ...)."""
+    from pipefollow.suites import export_suite, get_suite, min_length_for
+
+    suite = get_suite(name)
+    n = pipes if pipes is not None else (suite.count or 100)
+    if suite.count is not None and n > suite.count:
+        raise UserError(f"--pipes {n}: suite '{name}' has {suite.count} pipes")
+    out = _writable_folder(out_dir, "--out")
+    paths = export_suite(suite, out, n, min_length_for(seconds))
+    if as_json:
+        click.echo(json.dumps({"suite": name, "files": [str(p) for p in paths]}))
+        return
+    click.echo(f"wrote {len(paths)} pipes of '{name}' to {out}")
+
+
+def _benchmark_params():
+    """The simulated system of a benchmark's episodes.
+
+    Disturbance options of ``benchmark`` (current, camera noise, missed detections) are turned
+    into fields of the returned :class:`~pipefollow.simulation.SimParams` here.
+    """
+    from pipefollow.simulation import PAPER_SIM
+
+    return PAPER_SIM
+
+
+@main.command()
+@click.option(
+    "--controller",
+    default="heuristic",
+    show_default=True,
+    help="'heuristic' or a policy file (.npz) written by 'pipefollow train'.",
+)
+@click.option(
+    "--suite", "suite_name", default="heldout", show_default=True, help="Suite (see 'pipefollow suites')."
+)
+@click.option(
+    "--seconds",
+    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
+    callback=_finite,
+    default=60.0,
+    show_default=True,
+    help="Episode length in seconds.",
+)
+@click.option(
+    "--pipes",
+    type=click.IntRange(min=1, max=100_000),
+    default=None,
+    help="Number of pipes [default: all of a held-out suite, 100 of a training family].",
+)
+@click.option("--seed", default=0, show_default=True, type=int, help="Seed of the bootstrap resampling.")
+@click.option(
+    "--plot",
+    "plot_path",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Save a PNG: per-pipe return differences to the heuristic and a few trajectories.",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@_guard
+def benchmark(controller, suite_name, seconds, pipes, seed, plot_path, as_json):
+    """Run a controller deterministically on every pipe of a suite, beside the heuristic.
+
+    Reports the mean return with a bootstrap 95 % confidence interval, the interquartile mean,
+    the success rate (pipe in view at ≥ 95 % of the decisions) and, for a controller other than
+    the heuristic, the paired per-pipe difference to the heuristic with its confidence interval.
+    """
+    from pipefollow.benchmark import benchmark as run_benchmark
+    from pipefollow.benchmark import format_summary
+    from pipefollow.benchmark import load_controller as load_benchmark_controller
+    from pipefollow.suites import get_suite
+
+    suite = get_suite(suite_name)
+    if suite.count is not None and pipes is not None and pipes > suite.count:
+        raise UserError(f"--pipes {pipes}: suite '{suite_name}' has {suite.count} pipes")
+    agent = load_benchmark_controller(controller, seed)
+    run = run_benchmark(
+        agent,
+        suite,
+        controller=controller,
+        seconds=seconds,
+        params=_benchmark_params(),
+        n_pipes=pipes,
+        seed=seed,
+    )
+    if plot_path:
+        from pipefollow.benchmark_plot import plot_benchmark
+
+        plot_benchmark(run, plot_path)
+    if as_json:
+        click.echo(json.dumps(run.summary))
+        return
+    click.echo(format_summary(run.summary, seconds))
+    if plot_path:
+        click.echo(f"plot: {plot_path}")
 
 
 if __name__ == "__main__":  # pragma: no cover

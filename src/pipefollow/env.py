@@ -12,6 +12,7 @@ from gymnasium import spaces
 
 from pipefollow import simulation as sim
 from pipefollow.pipeline import Pipeline, resolve
+from pipefollow.suites import min_length_for, parse_random_spec
 
 
 class PipelineFollowingEnv(gym.Env):
@@ -69,7 +70,10 @@ class PipelineFollowingEnv(gym.Env):
 
     * ``pipeline``: built-in name (``paper-left``, ``paper-right``, ``paper-validation``), path of a
       JSON file ``{"points": [[x, y], ...]}`` or a :class:`~pipefollow.pipeline.Pipeline`.
-      ``reset(options={"pipeline": ...})`` switches it.
+      ``reset(options={"pipeline": ...})`` switches it. ``random`` or ``random:NAME`` (a training
+      family of :mod:`pipefollow.suites`; ``random`` is ``mixed``) draws a new pipe from the
+      environment's generator at every reset, so auto-resetting vector environments train on a
+      fresh pipe every episode.
     * ``episode_seconds``: episode length in seconds (default 20).
     * ``start_lateral_noise``, ``start_heading_noise_deg``: start perturbation (default 0).
     * ``render_mode``: ``None`` or ``"rgb_array"`` (the paper's Fig. 2 view).
@@ -80,7 +84,10 @@ class PipelineFollowingEnv(gym.Env):
     ``pipe_in_view``, ``overridden`` (the search behaviour acted), ``e_dist``, ``e_angl``,
     ``progress_m`` (arc length reached along the pipe), ``pose`` (x north, y east, ψ),
     ``nu`` (u, v, r), ``waypoint``, ``executed_action``, ``time_s``. Like the observation,
-    ``e_dist`` and ``e_angl`` hold the last sighting's values while the pipe is lost.
+    ``e_dist`` and ``e_angl`` hold the last sighting's values while the pipe is lost. At the
+    episode's last step also its summary: ``episode_pipe_in_view`` (share of decisions ending
+    with the pipe in view), ``episode_progress_m`` and ``episode_rms_e_dist`` (RMS of ``e_dist``
+    over those decisions; NaN if none).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
@@ -105,8 +112,8 @@ class PipelineFollowingEnv(gym.Env):
         ):
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"{name} must be a finite number ≥ 0, got {value}")
-        self.pipeline = resolve(pipeline)
         self.episode_seconds = float(episode_seconds)
+        self._set_pipeline(pipeline)
         self.max_decisions = int(round(self.episode_seconds / decision_seconds))
         self.start_lateral_noise = float(start_lateral_noise)
         self.start_heading_noise_deg = float(start_heading_noise_deg)
@@ -122,6 +129,7 @@ class PipelineFollowingEnv(gym.Env):
         self.action_space = spaces.Box(-1.0, 1.0, (1,), dtype=np.float32)
         self.state = np.zeros(sim.STATE_SIZE)
         self._decisions = 0
+        self._seen, self._sum_e2 = 0, 0.0
         self.trail: list[tuple[float, float, float]] = []
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -129,7 +137,7 @@ class PipelineFollowingEnv(gym.Env):
         super().reset(seed=seed)
         options = dict(options or {})
         if "pipeline" in options:
-            self.pipeline = resolve(options.pop("pipeline"))
+            self._set_pipeline(options.pop("pipeline"))
         lateral = options.pop("lateral_offset", None)
         heading_deg = options.pop("heading_offset_deg", None)
         if options:
@@ -137,10 +145,15 @@ class PipelineFollowingEnv(gym.Env):
                 f"unknown reset option(s) {sorted(options)}; "
                 "allowed: pipeline, lateral_offset, heading_offset_deg"
             )
+        if self.suite is not None:  # a new pipe of the training family every episode
+            self.pipeline = self.suite.draw(self.np_random, min_length_for(self.episode_seconds))
+        # without start noise no number is drawn: the generator then serves the random pipes alone
         if lateral is None:
-            lateral = self.np_random.uniform(-1.0, 1.0) * self.start_lateral_noise
+            noise = self.start_lateral_noise
+            lateral = self.np_random.uniform(-1.0, 1.0) * noise if noise > 0.0 else 0.0
         if heading_deg is None:
-            heading_deg = self.np_random.uniform(-1.0, 1.0) * self.start_heading_noise_deg
+            noise = self.start_heading_noise_deg
+            heading_deg = self.np_random.uniform(-1.0, 1.0) * noise if noise > 0.0 else 0.0
         p0 = self.pipeline.points[0]
         h = self.pipeline.start_heading
         # positive lateral offset = to starboard of the pipe's direction
@@ -151,8 +164,15 @@ class PipelineFollowingEnv(gym.Env):
             self.state, self.pipeline.points, self.pipeline.cumulative, x, y, psi, self._packed
         )
         self._decisions = 0
+        self._seen, self._sum_e2 = 0, 0.0
         self.trail = [(x, y, psi)]
         return self.state[:4].copy(), self._info()
+
+    def _set_pipeline(self, spec) -> None:
+        """A fixed pipeline, or a training family (``random[:NAME]``) to draw from at every reset."""
+        self.suite = parse_random_spec(spec)
+        # until the first reset, a family shows its first pipe
+        self.pipeline = resolve(spec) if self.suite is None else self.suite.pipe(0)
 
     def step(self, action):
         """One 1-s decision; see the class docstring."""
@@ -164,8 +184,16 @@ class PipelineFollowingEnv(gym.Env):
         r = sim.decide_packed(s, a, self.pipeline.points, self.pipeline.cumulative, self._packed)
         self._decisions += 1
         self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
+        if s[sim.IN_VIEW] != 0.0:
+            self._seen += 1
+            self._sum_e2 += s[sim.E_DIST] ** 2
         truncated = self._decisions >= self.max_decisions
-        return s[:4].copy(), r, False, truncated, self._info()
+        info = self._info()
+        if truncated:  # the episode's summary, for clients that log per episode
+            info["episode_pipe_in_view"] = self._seen / self._decisions
+            info["episode_progress_m"] = s[sim.PROGRESS_MAX]
+            info["episode_rms_e_dist"] = math.sqrt(self._sum_e2 / self._seen) if self._seen else math.nan
+        return s[:4].copy(), r, False, truncated, info
 
     def _info(self) -> dict[str, Any]:
         s = self.state

@@ -36,7 +36,10 @@ def _f(default, help: str, **kw):
 class Phase:
     """One stretch of training on one pipeline."""
 
-    pipeline: str = _f("paper-left", "pipeline to train on: built-in name or JSON file")
+    pipeline: str = _f(
+        "paper-left",
+        "pipeline to train on: built-in name, JSON file, or random:FAMILY (a new pipe every episode)",
+    )
     episodes: int = _f(500, "episodes of this phase; σ runs from sigma_start to sigma_end over them")
 
 

@@ -93,9 +93,10 @@ def import_ray():
 def check_inputs(exp: ExperimentConfig) -> None:
     """Fail before any work on what the trials would fail on late: unreadable pipelines."""
     from pipefollow.pipeline import resolve
+    from pipefollow.suites import resolve_training
 
     for name in dict.fromkeys(p.pipeline for t in exp.trials for p in t.phases):
-        resolve(name)
+        resolve_training(name)
     for t in exp.trials:
         if t.evaluate_on:
             resolve(t.evaluate_on)

@@ -13,9 +13,9 @@ from pipefollow.env import PipelineFollowingEnv
 from pipefollow.experiments.config import TrialConfig
 from pipefollow.exploration import linear_sigma
 from pipefollow.heuristic import Heuristic
-from pipefollow.pipeline import resolve
 from pipefollow.readings import sigma_scale, sim_params
-from pipefollow.training import run_episode, train_compiled
+from pipefollow.suites import Suite, min_length_for, resolve_training
+from pipefollow.training import run_episode, train_compiled, train_random_compiled
 
 
 @dataclass(frozen=True)
@@ -90,24 +90,28 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
     scale = sigma_scale(config.reading)  # σ in normalized action units
     sigma_start, sigma_end = config.sigma_start * scale, config.sigma_end * scale
     stats, phase, sigma = [], [], []
+    pipe_rng = None
     for i, ph in enumerate(config.phases):
-        pipe = resolve(ph.pipeline)
-        stats.append(
-            train_compiled(
-                agent,
-                pipe,
-                ph.episodes,
-                episode_seconds=config.episode_seconds,
-                sigma_start=sigma_start,
-                sigma_end=sigma_end,
-                params=params,
-            )
+        pipe = resolve_training(ph.pipeline)
+        schedule = dict(
+            episode_seconds=config.episode_seconds,
+            sigma_start=sigma_start,
+            sigma_end=sigma_end,
+            params=params,
         )
+        if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the trial's generator
+            pipe_rng = pipe_rng if pipe_rng is not None else rng.spawn(1)[0]
+            stats.append(train_random_compiled(agent, pipe, ph.episodes, pipe_rng=pipe_rng, **schedule))
+        else:
+            stats.append(train_compiled(agent, pipe, ph.episodes, **schedule))
         phase.append(np.full(ph.episodes, i))
         sigma.append([linear_sigma(e, ph.episodes, sigma_start, sigma_end) for e in range(ph.episodes)])
     eval_name = config.evaluate_on or config.phases[-1].pipeline
     eval_seconds = config.evaluate_seconds if config.evaluate_on else config.episode_seconds
-    env = PipelineFollowingEnv(resolve(eval_name), eval_seconds, params=params)
+    eval_pipe = resolve_training(eval_name)
+    if isinstance(eval_pipe, Suite):  # trained on random pipes only: the family's first pipe
+        eval_pipe = eval_pipe.pipe(0, min_length_for(eval_seconds))
+    env = PipelineFollowingEnv(eval_pipe, eval_seconds, params=params)
     controllers = {"learned": agent, "heuristic": Heuristic()}
     if config.algorithm == "cacla" and config.supervised:
         controllers["actor"] = ActorOnly(agent)

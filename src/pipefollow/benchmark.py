@@ -1,0 +1,282 @@
+"""Benchmark a controller on a suite of pipes: one deterministic episode per pipe, beside the heuristic.
+
+The episodes of the paper's controllers (heuristic, CACLA, SARSA policies) run in one compiled
+call over all pipes, their points concatenated into one array with offsets; other controllers
+(anything with ``act(obs, explore)``) run through the Gymnasium environment. Both give the same
+numbers (tested). The summary has bootstrap confidence intervals (:mod:`pipefollow.stats`).
+
+Definitions:
+
+* ``pipe_in_view``: share of decisions that end with the pipe in view; an episode is a
+  *success* when it is ≥ :data:`SUCCESS_IN_VIEW` (95 %).
+* ``rms_e_dist``: root mean square of ``e_dist`` over the decisions that end with the pipe in
+  view (per episode; pooled over all episodes for the summary); ``None`` without such decisions.
+* ``progress_m``: arc length reached along the pipe.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from pipefollow import cacla as cacla_mod
+from pipefollow import sarsa as sarsa_mod
+from pipefollow import simulation as sim
+from pipefollow.heuristic import Heuristic, heuristic_action
+from pipefollow.pipeline import Pipeline
+from pipefollow.rbf import STATE_GRID, grid_features
+from pipefollow.stats import bootstrap_ci, iqm, paired_difference
+from pipefollow.suites import Suite, min_length_for
+
+SUCCESS_IN_VIEW = 0.95
+HEURISTIC, CACLA, SARSA = 0, 1, 2  # controller kinds of the compiled episodes
+
+# Columns of the per-episode results.
+RET, IN_VIEW, PROGRESS, SUM_E2, N_SEEN = 0, 1, 2, 3, 4
+
+# Built-in controllers by name: a factory of an agent with ``act``/``begin_episode``. A controller
+# without a compiled kind (see :func:`_compiled_kind`) runs through the environment.
+CONTROLLERS: dict[str, Callable[[], object]] = {
+    "heuristic": Heuristic,
+}
+
+
+def load_controller(spec: str, seed: int = 0):
+    """A built-in controller name (:data:`CONTROLLERS`) or a policy file → an agent."""
+    if spec in CONTROLLERS:
+        return CONTROLLERS[spec]()
+    from pipefollow.policy import load_policy
+
+    return load_policy(spec, seed=seed)
+
+
+@njit(cache=True)
+def _suite_episodes(
+    kind,
+    w,
+    hp,
+    search_actions,
+    search_psi,
+    points_all,
+    cum_all,
+    offsets,
+    simp,
+    n_decisions,
+    centres,
+    grid_offsets,
+    widths,
+    normalized,
+    out,
+    poses,
+):
+    ps = sim.unpack_params(simp)
+    p = cacla_mod.unpack(hp)
+    s = np.empty(sim.STATE_SIZE)
+    phi = np.empty(w.shape[1])
+    for e in range(offsets.shape[0] - 1):
+        pts = points_all[offsets[e] : offsets[e + 1]]
+        cum = cum_all[offsets[e] : offsets[e + 1]]
+        psi0 = math.atan2(pts[1, 1] - pts[0, 1], pts[1, 0] - pts[0, 0])
+        sim.init_state(s, pts, cum, pts[0, 0], pts[0, 1], psi0, ps)
+        poses[e, 0, 0], poses[e, 0, 1], poses[e, 0, 2] = s[sim.X], s[sim.Y], s[sim.PSI]
+        total = 0.0
+        seen = 0
+        sum_e2 = 0.0
+        for t in range(n_decisions):
+            a = 0.0
+            if s[sim.IN_VIEW] != 0.0:
+                if kind == HEURISTIC:
+                    a = heuristic_action(s[sim.X1], s[sim.Y1])
+                else:
+                    grid_features(s[:4], centres, grid_offsets, widths, normalized, phi)
+                    if kind == CACLA:
+                        a_sup = heuristic_action(s[sim.X1], s[sim.Y1]) if p.supervised else 0.0
+                        a, _ = cacla_mod.act(w, phi, 0.0, 0.0, 0.0, a_sup, p)
+                    else:
+                        a = sarsa_mod.choose(w, phi, search_actions, search_psi, 0.0, 0.0)
+            total += sim.decide(s, a, pts, cum, ps)
+            if s[sim.IN_VIEW] != 0.0:
+                seen += 1
+                sum_e2 += s[sim.E_DIST] * s[sim.E_DIST]
+            poses[e, t + 1, 0], poses[e, t + 1, 1], poses[e, t + 1, 2] = s[sim.X], s[sim.Y], s[sim.PSI]
+        out[e, RET] = total
+        out[e, IN_VIEW] = seen / n_decisions
+        out[e, PROGRESS] = s[sim.PROGRESS_MAX]
+        out[e, SUM_E2] = sum_e2
+        out[e, N_SEEN] = seen
+
+
+def _compiled_kind(agent):
+    """``(kind, weights, packed params, search actions, search ψ)`` for the compiled episodes, or None."""
+    empty = np.zeros((1, 1))
+    if isinstance(agent, Heuristic):
+        return HEURISTIC, np.zeros((4, 1)), cacla_mod.pack(cacla_mod.PAPER_CACLA), np.zeros(1), empty
+    if isinstance(agent, cacla_mod.Cacla) and agent.default_supervisor:
+        return CACLA, agent.weights, cacla_mod.pack(agent.params), np.zeros(1), empty
+    if isinstance(agent, sarsa_mod.Sarsa):
+        return (
+            SARSA,
+            agent.weights,
+            cacla_mod.pack(cacla_mod.PAPER_CACLA),
+            agent.search_actions,
+            agent.search_psi,
+        )
+    return None
+
+
+def concatenate(pipes: Sequence[Pipeline]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points and arc lengths of all pipes in two arrays, pipe ``i`` at ``offsets[i]:offsets[i + 1]``."""
+    offsets = np.zeros(len(pipes) + 1, dtype=np.int64)
+    offsets[1:] = np.cumsum([len(p.points) for p in pipes])
+    points = np.ascontiguousarray(np.concatenate([p.points for p in pipes]))
+    cum = np.ascontiguousarray(np.concatenate([p.cumulative for p in pipes]))
+    return points, cum, offsets
+
+
+def run_episodes(
+    agent, pipes: Sequence[Pipeline], seconds: float, params: sim.SimParams = sim.PAPER_SIM
+) -> tuple[np.ndarray, np.ndarray]:
+    """One deterministic episode (σ = 0) of ``agent`` per pipe.
+
+    Returns ``(results, poses)``: (pipes, 5) columns return, pipe_in_view, progress_m, Σ e_dist²
+    and number of decisions in view; (pipes, decisions + 1, 3) poses (x, y, ψ).
+    """
+    n_decisions = int(round(seconds / (params.dt * params.substeps)))
+    out = np.zeros((len(pipes), 5))
+    poses = np.zeros((len(pipes), n_decisions + 1, 3))
+    compiled = _compiled_kind(agent)
+    if compiled is None:
+        _env_episodes(agent, pipes, seconds, params, out, poses)
+        return out, poses
+    kind, w, hp, sa, spsi = compiled
+    grid = STATE_GRID if kind == HEURISTIC else agent.grid  # the heuristic computes no features
+    grid_arrays, normalized = grid.packed, grid.form == "normalized"
+    points, cum, offsets = concatenate(pipes)
+    _suite_episodes(
+        kind, w, hp, sa, spsi, points, cum, offsets, sim.pack_params(params), n_decisions,
+        *grid_arrays, normalized, out, poses,
+    )  # fmt: skip
+    return out, poses
+
+
+def _env_episodes(agent, pipes, seconds, params, out, poses) -> None:
+    """:func:`run_episodes` through the Gymnasium environment, for controllers without a compiled kind."""
+    from pipefollow.env import PipelineFollowingEnv
+
+    for i, pipe in enumerate(pipes):
+        env = PipelineFollowingEnv(pipe, seconds, params=params)
+        agent.begin_episode(0.0)
+        obs, info = env.reset()
+        done = False
+        seen, total, sum_e2 = 0, 0.0, 0.0
+        while not done:
+            a = agent.act(obs, explore=False) if info["pipe_in_view"] else 0.0
+            obs, r, terminated, truncated, info = env.step([a])
+            total += r
+            if info["pipe_in_view"]:
+                seen += 1
+                sum_e2 += info["e_dist"] ** 2
+            done = terminated or truncated
+        out[i] = (total, seen / env.max_decisions, info["progress_m"], sum_e2, seen)
+        poses[i] = np.array(env.trail)
+
+
+@dataclass(frozen=True)
+class BenchmarkRun:
+    """A benchmark's summary (:meth:`to_dict`, the JSON) and the data behind its plot."""
+
+    summary: dict
+    pipes: list[Pipeline]
+    returns: np.ndarray
+    heuristic_returns: np.ndarray
+    poses: np.ndarray
+    heuristic_poses: np.ndarray
+
+
+def _rms(sum_e2: float, n: float) -> float | None:
+    return math.sqrt(sum_e2 / n) if n > 0 else None
+
+
+def benchmark(
+    agent,
+    suite: Suite,
+    *,
+    controller: str,
+    seconds: float = 60.0,
+    params: sim.SimParams = sim.PAPER_SIM,
+    n_pipes: int | None = None,
+    seed: int = 0,
+) -> BenchmarkRun:
+    """Run ``agent`` and the heuristic on the suite's pipes and summarize (module docstring).
+
+    Args:
+        agent: the controller (an agent with ``act``).
+        controller: its label in the summary.
+        suite: the pipes: all of a held-out suite, or the first ``n_pipes`` of a training family.
+        seconds: episode length.
+        params: the simulated system, disturbances included, for every episode.
+        n_pipes: number of pipes (default: the whole held-out suite; 100 of a training family).
+        seed: seed of the bootstrap resampling.
+    """
+    n = n_pipes if n_pipes is not None else (suite.count or 100)
+    pipes = suite.pipes(n, min_length_for(seconds))
+    res, poses = run_episodes(agent, pipes, seconds, params)
+    is_heuristic = isinstance(agent, Heuristic)
+    if is_heuristic:
+        h_res, h_poses = res, poses
+    else:
+        h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params)
+    ret = res[:, RET]
+    lo, hi = bootstrap_ci(ret, seed)
+    summary = {
+        "controller": controller,
+        "suite": suite.name,
+        "n_episodes": len(pipes),
+        "mean_return": float(ret.mean()),
+        "ci95_return": [lo, hi],
+        "iqm_return": iqm(ret),
+        "success_rate": float(np.mean(res[:, IN_VIEW] >= SUCCESS_IN_VIEW)),
+        "mean_pipe_in_view": float(res[:, IN_VIEW].mean()),
+        "rms_e_dist": _rms(float(res[:, SUM_E2].sum()), float(res[:, N_SEEN].sum())),
+        "mean_progress_m": float(res[:, PROGRESS].mean()),
+    }
+    if not is_heuristic:
+        summary["vs_heuristic"] = paired_difference(ret, h_res[:, RET], seed)
+    summary["episodes"] = [
+        {
+            "name": pipe.name,
+            "return": float(row[RET]),
+            "pipe_in_view": float(row[IN_VIEW]),
+            "progress_m": float(row[PROGRESS]),
+            "rms_e_dist": _rms(row[SUM_E2], row[N_SEEN]),
+        }
+        for pipe, row in zip(pipes, res, strict=True)
+    ]
+    return BenchmarkRun(summary, pipes, ret, h_res[:, RET].copy(), poses, h_poses)
+
+
+def format_summary(r: dict, seconds: float) -> str:
+    """A benchmark summary as a few lines of text."""
+    lo, hi = r["ci95_return"]
+    rms = "—" if r["rms_e_dist"] is None else f"{r['rms_e_dist']:.3f} m"
+    lines = [
+        f"{r['controller']} on '{r['suite']}': {r['n_episodes']} pipes, {seconds:g} s each, σ = 0",
+        f"  mean return    {r['mean_return']:9.2f}  (95 % CI {lo:.2f} to {hi:.2f}; "
+        f"IQM {r['iqm_return']:.2f})",
+        f"  success rate   {r['success_rate']:9.1%}  (pipe in view ≥ 95 % of the decisions)",
+        f"  pipe in view   {r['mean_pipe_in_view']:9.1%}",
+        f"  rms e_dist     {rms:>9}",
+        f"  progress       {r['mean_progress_m']:7.2f} m",
+    ]
+    if "vs_heuristic" in r:
+        v = r["vs_heuristic"]
+        dlo, dhi = v["ci95_diff"]
+        lines.append(
+            f"  vs heuristic   {v['mean_diff']:+9.2f}  (95 % CI {dlo:+.2f} to {dhi:+.2f}; "
+            f"better on {v['win_rate']:.0%} of the pipes)"
+        )
+    return "\n".join(lines)

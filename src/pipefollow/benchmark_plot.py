@@ -1,0 +1,62 @@
+"""The picture of a benchmark: per-pipe return differences to the heuristic, and a few trajectories."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from pipefollow.benchmark import BenchmarkRun
+from pipefollow.render import PIPE_COLOR, _figure, save_figure
+
+
+def plot_benchmark(run: BenchmarkRun, path: str | os.PathLike) -> None:
+    """Draw a benchmark's figure and write it atomically as PNG.
+
+    Left: the paired per-pipe differences (controller − heuristic), sorted, with the mean and its
+    CI (for the heuristic itself: its sorted returns, mean and CI). Right: the worst, median and
+    best pipe of the controller, with its trajectory and the heuristic's.
+    """
+    s = run.summary
+    is_heuristic = "vs_heuristic" not in s
+    fig = _figure((12.0, 4.8))
+    grid = fig.add_gridspec(1, 4, width_ratios=[1.6, 1, 1, 1])
+    ax = fig.add_subplot(grid[0, 0])
+    if is_heuristic:
+        values, mean, (lo, hi) = run.returns, s["mean_return"], s["ci95_return"]
+        ylabel = "return per pipe"
+    else:
+        v = s["vs_heuristic"]
+        values, mean, (lo, hi) = run.returns - run.heuristic_returns, v["mean_diff"], v["ci95_diff"]
+        ylabel = "return − heuristic's return, per pipe"
+        ax.axhline(0.0, color="k", lw=0.8)
+    order = np.sort(values)
+    ax.bar(np.arange(len(order)), order, width=1.0, color=np.where(order >= 0, "tab:blue", "tab:orange"))
+    ax.axhspan(lo, hi, color="tab:green", alpha=0.25, label=f"95 % CI of the mean [{lo:.1f}, {hi:.1f}]")
+    ax.axhline(mean, color="tab:green", lw=1.5, label=f"mean {mean:.2f}")
+    ax.set_xlabel("pipes, sorted")
+    ax.set_ylabel(ylabel)
+    name = Path(s["controller"]).stem if s["controller"].endswith(".npz") else s["controller"]
+    ax.set_title(f"{name} on '{s['suite']}' ({s['n_episodes']} pipes)", fontsize=9)
+    ax.legend(fontsize=8, loc="upper left")
+    ranked = np.argsort(run.returns, kind="stable")
+    picks = [("worst", ranked[0]), ("median", ranked[len(ranked) // 2]), ("best", ranked[-1])]
+    for j, (label, i) in enumerate(picks):
+        axt = fig.add_subplot(grid[0, j + 1])
+        pipe = run.pipes[i]
+        axt.plot(pipe.points[:, 1], pipe.points[:, 0], color=PIPE_COLOR, lw=3, alpha=0.6)
+        axt.plot(run.heuristic_poses[i][:, 1], run.heuristic_poses[i][:, 0], color="tab:gray", lw=1.2,
+                 label=f"heuristic {run.heuristic_returns[i]:.1f}")  # fmt: skip
+        if not is_heuristic:
+            axt.plot(run.poses[i][:, 1], run.poses[i][:, 0], color="tab:blue", lw=1.2,
+                     label=f"controller {run.returns[i]:.1f}")  # fmt: skip
+        axt.plot(pipe.points[0, 1], pipe.points[0, 0], "ko", ms=4)
+        axt.set_aspect("equal", adjustable="datalim")
+        axt.set_title(f"{label}: {pipe.name}", fontsize=9)
+        axt.legend(fontsize=7, loc="best")
+        axt.set_xlabel("east (m)")
+        if j == 0:
+            axt.set_ylabel("north (m)")
+    fig.tight_layout()
+    save_figure(fig, path)

@@ -1,0 +1,262 @@
+"""Pipeline suites: named, seeded families of random pipes, for training and for held-out tests.
+
+A pipe of a suite is a polyline that alternates straight runs with bends. A bend turns the pipe
+by an angle drawn from the difficulty's range, either at a sharp corner or along a circular arc
+(discretized into pieces of at most :data:`ARC_STEP_DEG`). The side of each bend is random, but
+a bend that would take the pipe's heading more than :data:`MAX_HEADING_DEG` away from its start
+heading turns the other way, so no pipe doubles back over itself.
+
+Difficulty levels (:data:`LEVELS`):
+
+============  ===========  ===============  ==========  =================
+level         turns (deg)  straights (m)    arc share   arc radius (m)
+============  ===========  ===============  ==========  =================
+``easy``      10 – 30      6 – 12           50 %        3 – 6
+``medium``    30 – 60      4 – 8            50 %        2 – 4
+``hard``      45 – 90      2 – 4            25 %        1 – 2
+============  ===========  ===============  ==========  =================
+
+Every pipe is a pure function of its seed: pipe ``k`` of stream ``S`` and family ``F`` comes from
+``SeedSequence([SUITE_ROOT, S, F, k])``. Two streams exist: :data:`TRAIN_STREAM` for the
+infinite training families (``easy``, ``medium``, ``hard``, ``mixed``) and :data:`HELDOUT_STREAM`
+for the fixed held-out suites. A training pipe and a held-out pipe never share a seed, since their
+entropy differs in the stream word; that is what makes the held-out suites unseen by
+construction. A pipe is generated until it is at least ``min_length`` long; a longer request
+extends the same pipe (the shorter pipe's straights and bends are a prefix of the longer one's).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipefollow.pipeline import Pipeline, PipelineError
+
+SUITE_ROOT = 2010_0009  # first entropy word of every suite seed
+TRAIN_STREAM, HELDOUT_STREAM = 0, 1
+ARC_STEP_DEG = 10.0  # largest turn of one piece of a discretized arc
+MAX_HEADING_DEG = 100.0  # bends keep the heading within ± this of the start heading
+MIN_LENGTH_M = 46.0  # default pipe length: 60 s at 0.6 m/s (cruise is 0.48 m/s) plus 10 m
+CRUISE_MARGIN = 0.6  # m/s used to size pipes for long episodes (above the 0.48 m/s cruise speed)
+RANDOM_PREFIX = "random"
+
+
+class SuiteError(PipelineError):
+    """An unknown suite or family name; the message names it and lists the choices."""
+
+
+@dataclass(frozen=True)
+class Level:
+    """A difficulty level: the ranges its bends and straights are drawn from."""
+
+    name: str
+    turn_deg: tuple[float, float]
+    straight_m: tuple[float, float]
+    arc_share: float
+    radius_m: tuple[float, float]
+
+
+LEVELS = {
+    "easy": Level("easy", (10.0, 30.0), (6.0, 12.0), 0.5, (3.0, 6.0)),
+    "medium": Level("medium", (30.0, 60.0), (4.0, 8.0), 0.5, (2.0, 4.0)),
+    "hard": Level("hard", (45.0, 90.0), (2.0, 4.0), 0.25, (1.0, 2.0)),
+}
+FAMILY_IDS = {"easy": 1, "medium": 2, "hard": 3, "mixed": 4}  # entropy word of each family
+_LEVEL_ORDER = ("easy", "medium", "hard")
+
+
+@dataclass(frozen=True)
+class Suite:
+    """A named set of pipes.
+
+    Attributes:
+        name: the suite's name.
+        family: ``easy``, ``medium``, ``hard`` or ``mixed`` (each pipe a level in turn / at random).
+        stream: :data:`TRAIN_STREAM` (an infinite family) or :data:`HELDOUT_STREAM` (fixed pipes).
+        count: number of pipes; ``None`` for an infinite training family.
+        description: one line for ``pipefollow suites``.
+    """
+
+    name: str
+    family: str
+    stream: int
+    count: int | None
+    description: str
+
+    @property
+    def is_training(self) -> bool:
+        """True for an infinite training family."""
+        return self.stream == TRAIN_STREAM
+
+    def levels(self) -> tuple[str, ...]:
+        """The difficulty levels its pipes come from."""
+        return _LEVEL_ORDER if self.family == "mixed" else (self.family,)
+
+    def pipe(self, k: int, min_length: float = MIN_LENGTH_M) -> Pipeline:
+        """Pipe ``k`` (``0 ≤ k < count`` for a held-out suite, any ``k ≥ 0`` for a training family)."""
+        if k < 0 or (self.count is not None and k >= self.count):
+            raise IndexError(f"suite '{self.name}' has pipes 0 to {(self.count or 0) - 1}, not {k}")
+        return suite_pipe(self.family, self.stream, k, min_length, name=f"{self.name}-{k:03d}")
+
+    def pipes(self, n: int | None = None, min_length: float = MIN_LENGTH_M) -> list[Pipeline]:
+        """The first ``n`` pipes (all of a held-out suite by default)."""
+        if n is None:
+            if self.count is None:
+                raise ValueError(f"suite '{self.name}' is an infinite training family: give n")
+            n = self.count
+        return [self.pipe(k, min_length) for k in range(n)]
+
+    def draw(self, rng: np.random.Generator, min_length: float = MIN_LENGTH_M) -> Pipeline:
+        """A training pipe chosen by ``rng``: pipe ``k`` of the family with ``k`` drawn from ``rng``."""
+        return self.pipe(draw_index(rng), min_length)
+
+    def summary(self) -> dict:
+        """Name, count and ranges, for listings."""
+        levels = [LEVELS[n] for n in self.levels()]
+        return {
+            "name": self.name,
+            "kind": "train" if self.is_training else "heldout",
+            "count": self.count,
+            "difficulty": self.family,
+            "turn_deg": [min(lv.turn_deg[0] for lv in levels), max(lv.turn_deg[1] for lv in levels)],
+            "straight_m": [min(lv.straight_m[0] for lv in levels), max(lv.straight_m[1] for lv in levels)],
+            "arc_radius_m": [min(lv.radius_m[0] for lv in levels), max(lv.radius_m[1] for lv in levels)],
+            "description": self.description,
+        }
+
+
+HELDOUT_COUNT = 100
+
+SUITES = {
+    s.name: s
+    for s in (
+        Suite("easy", "easy", TRAIN_STREAM, None, "training family: gentle bends, long straights"),
+        Suite("medium", "medium", TRAIN_STREAM, None, "training family: bends up to 60°"),
+        Suite("hard", "hard", TRAIN_STREAM, None, "training family: bends up to 90°, short straights"),
+        Suite("mixed", "mixed", TRAIN_STREAM, None, "training family: each pipe easy, medium or hard"),
+        Suite(
+            "heldout",
+            "mixed",
+            HELDOUT_STREAM,
+            HELDOUT_COUNT,
+            "held-out test: pipes easy, medium, hard in turn",
+        ),
+        Suite("heldout-easy", "easy", HELDOUT_STREAM, HELDOUT_COUNT, "held-out test, easy pipes"),
+        Suite("heldout-medium", "medium", HELDOUT_STREAM, HELDOUT_COUNT, "held-out test, medium pipes"),
+        Suite("heldout-hard", "hard", HELDOUT_STREAM, HELDOUT_COUNT, "held-out test, hard pipes"),
+    )
+}
+DEFAULT_TRAIN_FAMILY = "mixed"
+
+
+def get_suite(name: str) -> Suite:
+    """The suite called ``name``; raises :class:`SuiteError` listing the suites otherwise."""
+    try:
+        return SUITES[name]
+    except (KeyError, TypeError):
+        raise SuiteError(f"suite '{name}': unknown (choose from {', '.join(SUITES)})") from None
+
+
+def draw_index(rng: np.random.Generator) -> int:
+    """A pipe index of a training family, drawn from ``rng`` (uniform on [0, 2**62))."""
+    return int(rng.integers(0, 2**62))
+
+
+def seed_sequence(family: str, stream: int, k: int) -> np.random.SeedSequence:
+    """The seed of pipe ``k`` of ``family`` in ``stream``: ``SeedSequence([SUITE_ROOT, stream, id, k])``."""
+    return np.random.SeedSequence([SUITE_ROOT, stream, FAMILY_IDS[family], k])
+
+
+def min_length_for(seconds: float) -> float:
+    """Pipe length that an episode of ``seconds`` cannot run off (the suite default at least)."""
+    return max(MIN_LENGTH_M, CRUISE_MARGIN * seconds + 10.0)
+
+
+def _draws(rng: np.random.Generator, n: int) -> Iterator[tuple[float, ...]]:
+    """Uniform numbers for straights and bends, in batches of ``n`` (so any prefix is reproducible)."""
+    while True:
+        batch = rng.random((n, 6))
+        yield from (tuple(row) for row in batch)
+
+
+def suite_pipe(
+    family: str, stream: int, k: int, min_length: float = MIN_LENGTH_M, name: str = ""
+) -> Pipeline:
+    """Pipe ``k`` of ``family`` in ``stream`` (see the module docstring), at least ``min_length`` long."""
+    rng = np.random.default_rng(seed_sequence(family, stream, k))
+    if family == "mixed":
+        level_name = _LEVEL_ORDER[k % 3] if stream == HELDOUT_STREAM else _LEVEL_ORDER[int(rng.integers(3))]
+    else:
+        level_name = family
+    lv = LEVELS[level_name]
+    x = y = heading = 0.0
+    pts = [(0.0, 0.0)]
+    length = 0.0
+    max_heading = math.radians(MAX_HEADING_DEG)
+    step = math.radians(ARC_STEP_DEG)
+    for u_len, u_turn, u_side, u_arc, u_rad, _ in _draws(rng, 16):
+        straight = lv.straight_m[0] + u_len * (lv.straight_m[1] - lv.straight_m[0])
+        x, y = x + straight * math.cos(heading), y + straight * math.sin(heading)
+        pts.append((x, y))
+        length += straight
+        if length >= min_length:
+            break
+        turn = math.radians(lv.turn_deg[0] + u_turn * (lv.turn_deg[1] - lv.turn_deg[0]))
+        turn = turn if u_side < 0.5 else -turn
+        if abs(heading + turn) > max_heading:
+            turn = -turn
+        if u_arc < lv.arc_share:
+            radius = lv.radius_m[0] + u_rad * (lv.radius_m[1] - lv.radius_m[0])
+            pieces = max(1, math.ceil(abs(turn) / step - 1e-9))
+            d = turn / pieces
+            chord = 2.0 * radius * math.sin(0.5 * abs(d))
+            for _ in range(pieces):  # chords of the arc, each at the mean heading of its piece
+                heading += 0.5 * d
+                x, y = x + chord * math.cos(heading), y + chord * math.sin(heading)
+                heading += 0.5 * d
+                pts.append((x, y))
+                length += chord
+        else:
+            heading += turn
+    return Pipeline(np.array(pts), name or f"{family}-{stream}-{k}")
+
+
+def parse_random_spec(spec) -> Suite | None:
+    """The training family of ``random`` / ``random:NAME``, or ``None`` if ``spec`` is something else.
+
+    ``random`` alone means the ``mixed`` family. A held-out suite is refused: training on it would
+    spoil the test.
+    """
+    if not isinstance(spec, str) or not (spec == RANDOM_PREFIX or spec.startswith(RANDOM_PREFIX + ":")):
+        return None
+    name = spec.partition(":")[2] or DEFAULT_TRAIN_FAMILY
+    suite = get_suite(name)
+    if not suite.is_training:
+        families = ", ".join(n for n, s in SUITES.items() if s.is_training)
+        raise SuiteError(f"pipeline '{spec}': '{name}' is a held-out suite; train on one of {families}")
+    return suite
+
+
+def resolve_training(spec) -> Pipeline | Suite:
+    """A fixed pipeline (built-in name, JSON file) or a training family (``random[:NAME]``)."""
+    from pipefollow.pipeline import resolve
+
+    family = parse_random_spec(spec)
+    return family if family is not None else resolve(spec)
+
+
+def export_suite(suite: Suite, folder, n: int | None = None, min_length: float = MIN_LENGTH_M) -> list:
+    """Write pipes of ``suite`` as pipeline JSON files ``NAME-KKK.json`` into ``folder`` (atomically each)."""
+    from pathlib import Path
+
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for pipe in suite.pipes(n, min_length):
+        path = out / f"{pipe.name}.json"
+        pipe.save(path)
+        paths.append(path)
+    return paths

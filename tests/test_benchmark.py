@@ -1,0 +1,140 @@
+"""The benchmark: compiled episodes equal the environment's; its statistics match independent computation."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from scipy import stats as sps
+
+from pipefollow.agents import make_agent
+from pipefollow.benchmark import _env_episodes, _rms, benchmark, run_episodes
+from pipefollow.cli import main
+from pipefollow.env import PipelineFollowingEnv
+from pipefollow.heuristic import Heuristic
+from pipefollow.policy import save_policy
+from pipefollow.stats import N_RESAMPLES, bootstrap_ci
+from pipefollow.suites import get_suite
+from pipefollow.training import run_episode
+
+KEYS = {
+    "controller", "suite", "n_episodes", "mean_return", "ci95_return", "iqm_return", "success_rate",
+    "mean_pipe_in_view", "rms_e_dist", "mean_progress_m", "episodes",
+}  # fmt: skip
+
+
+def _random_agent(kind, seed=1):
+    rng = np.random.default_rng(seed)
+    if kind == "heuristic":
+        return Heuristic()
+    if kind == "sarsa":
+        agent = make_agent("sarsa", rng=rng)
+    else:
+        agent = make_agent("cacla", supervised=kind == "supervised", rng=rng)
+    agent.weights[...] = rng.normal(0.0, 0.5, agent.weights.shape)
+    return agent
+
+
+@pytest.mark.parametrize("kind", ["heuristic", "cacla", "supervised", "sarsa"])
+def test_compiled_episodes_equal_the_environment(kind):
+    agent = _random_agent(kind)
+    pipes = get_suite("heldout").pipes(4)
+    res, poses = run_episodes(agent, pipes, 30.0)
+    env_res, env_poses = np.zeros_like(res), np.zeros_like(poses)
+    _env_episodes(agent, pipes, 30.0, PipelineFollowingEnv().params, env_res, env_poses)
+    np.testing.assert_allclose(res, env_res, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(poses, env_poses, rtol=0, atol=1e-9)
+    for i, pipe in enumerate(pipes):  # and the project's own episode runner
+        ep = run_episode(PipelineFollowingEnv(pipe, 30.0), agent)
+        np.testing.assert_allclose([ep.ret, ep.pipe_in_view, ep.progress_m], res[i, :3], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(ep.poses, poses[i], rtol=0, atol=1e-9)
+
+
+def test_summary_matches_an_independent_computation():
+    agent = _random_agent("supervised", seed=4)
+    agent.weights[3] = 0.6  # trust the learned actor partly: differs from the heuristic
+    run = benchmark(agent, get_suite("heldout"), controller="x", seconds=40.0, n_pipes=30, seed=3)
+    s = run.summary
+    assert set(s) == KEYS | {"vs_heuristic"}
+    eps = s["episodes"]
+    ret = np.array([e["return"] for e in eps])
+    view = np.array([e["pipe_in_view"] for e in eps])
+    assert s["n_episodes"] == 30 and [e["name"] for e in eps][:2] == ["heldout-000", "heldout-001"]
+    assert s["mean_return"] == pytest.approx(ret.mean(), abs=1e-12)
+    assert s["iqm_return"] == pytest.approx(sps.trim_mean(ret, 0.25), abs=1e-12)
+    assert s["iqm_return"] == pytest.approx(np.sort(ret)[7:23].mean(), abs=1e-12)  # the middle 16 of 30
+    assert s["success_rate"] == np.mean(view >= 0.95)
+    assert s["mean_pipe_in_view"] == pytest.approx(view.mean())
+    n_seen = view * 40
+    rms = np.array([e["rms_e_dist"] for e in eps], dtype=float)
+    pooled = math.sqrt(np.nansum(rms**2 * n_seen) / n_seen.sum())
+    assert s["rms_e_dist"] == pytest.approx(pooled, rel=1e-12)
+    ci = sps.bootstrap((ret,), np.mean, n_resamples=N_RESAMPLES, method="BCa", rng=np.random.default_rng(3))
+    assert s["ci95_return"] == [ci.confidence_interval.low, ci.confidence_interval.high]
+    assert s["ci95_return"][0] < s["mean_return"] < s["ci95_return"][1]
+    diff = ret - run.heuristic_returns
+    h = benchmark(Heuristic(), get_suite("heldout"), controller="heuristic", seconds=40.0, n_pipes=30)
+    np.testing.assert_array_equal(run.heuristic_returns, [e["return"] for e in h.summary["episodes"]])
+    v = s["vs_heuristic"]
+    assert v["mean_diff"] == pytest.approx(diff.mean(), abs=1e-12)
+    assert v["win_rate"] == np.mean(diff > 0)
+    assert 0.0 < v["win_rate"] < 1.0
+    cid = sps.bootstrap((diff,), np.mean, n_resamples=N_RESAMPLES, method="BCa", rng=np.random.default_rng(3))
+    assert v["ci95_diff"] == [cid.confidence_interval.low, cid.confidence_interval.high]
+
+
+def test_ci_contains_the_mean_and_shrinks_with_more_pipes():
+    widths = []
+    for n in (10, 100):
+        s = benchmark(Heuristic(), get_suite("heldout"), controller="heuristic", n_pipes=n).summary
+        lo, hi = s["ci95_return"]
+        assert lo < s["mean_return"] < hi
+        widths.append(hi - lo)
+    assert widths[1] < 0.6 * widths[0]
+
+
+def test_a_controller_acting_as_the_heuristic_has_a_paired_difference_of_exactly_zero():
+    agent = make_agent("cacla", supervised=True, rng=np.random.default_rng(0))  # k(s) = 0: the supervisor
+    s = benchmark(agent, get_suite("heldout-hard"), controller="x", n_pipes=20).summary
+    assert s["vs_heuristic"] == {"mean_diff": 0.0, "ci95_diff": [0.0, 0.0], "win_rate": 0.0}
+    assert bootstrap_ci([2.5] * 7) == (2.5, 2.5)
+
+
+def test_rms_e_dist_is_none_without_a_decision_in_view():
+    assert _rms(0.0, 0.0) is None
+    assert _rms(8.0, 2.0) == 2.0
+
+
+def test_cli_benchmark_json_and_plot(tmp_path):
+    agent = _random_agent("cacla", seed=2)
+    policy = save_policy(agent, tmp_path / "p.npz")
+    plot = tmp_path / "b.png"
+    args = ["benchmark", "--controller", str(policy), "--suite", "heldout-easy", "--pipes", "5"]
+    res = CliRunner().invoke(main, [*args, "--seconds", "20", "--json", "--plot", str(plot)])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert set(out) == KEYS | {"vs_heuristic"}
+    assert set(out["vs_heuristic"]) == {"mean_diff", "ci95_diff", "win_rate"}
+    assert set(out["episodes"][0]) == {"name", "return", "pipe_in_view", "progress_m", "rms_e_dist"}
+    assert out["controller"] == str(policy) and out["suite"] == "heldout-easy" and out["n_episodes"] == 5
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    res = CliRunner().invoke(main, ["benchmark", "--pipes", "3", "--json"])
+    assert res.exit_code == 0 and set(json.loads(res.stdout)) == KEYS
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--suite", "nope"],
+        ["--controller", "missing.npz"],
+        ["--suite", "heldout", "--pipes", "101"],
+        ["--seconds", "nan"],
+    ],
+)
+def test_cli_benchmark_bad_input(tmp_path, args):
+    plot = tmp_path / "b.png"
+    res = CliRunner().invoke(main, ["benchmark", *args, "--plot", str(plot)])
+    assert res.exit_code == 2, res.output
+    assert res.stderr.startswith("pipefollow: error: ") and res.stderr.count("\n") == 1
+    assert not plot.exists()
