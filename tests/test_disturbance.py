@@ -1,6 +1,7 @@
 """Disturbances and faults: ocean current, camera noise, missed detections, buried stretches."""
 
 import hashlib
+import json
 import math
 
 import numpy as np
@@ -325,3 +326,62 @@ def test_env_refuses_a_bad_record_and_compiled_training_needs_a_generator():
     params = sim.PAPER_SIM._replace(disturbance=Disturbance(camera_noise=0.1))
     with pytest.raises(ValueError, match="env_rng"):
         train_compiled(agent, builtin("paper-left"), 1, params=params)
+
+
+# ---------------------------------------------------------------------------------------------
+# Command line
+
+
+def test_cli_evaluate_with_disturbances_is_seeded():
+    from click.testing import CliRunner
+
+    from pipefollow.cli import main
+
+    runner = CliRunner()
+    args = ["evaluate", "--current", "0.1,90", "--camera-noise", "0.05", "--miss-prob", "0.1", "--json"]
+    first = json.loads(runner.invoke(main, args).stdout)
+    again = json.loads(runner.invoke(main, args).stdout)
+    plain = json.loads(runner.invoke(main, ["evaluate", "--json"]).stdout)
+    assert first == again
+    assert first["mean_return"] != plain["mean_return"]
+    assert first["disturbance"]["current_direction_deg"] == pytest.approx(90.0)
+    assert "disturbance" not in plain
+
+
+@pytest.mark.parametrize(
+    ("option", "value"),
+    [
+        ("--current", "-0.1,0"),
+        ("--current", "nan,0"),
+        ("--current", "0.1"),
+        ("--current", "0.1;40"),
+        ("--camera-noise", "-0.01"),
+        ("--camera-noise", "inf"),
+        ("--miss-prob", "1.01"),
+        ("--miss-prob", "-0.5"),
+    ],
+)
+@pytest.mark.parametrize("command", ["evaluate", "train"])
+def test_cli_rejects_bad_disturbances(tmp_path, command, option, value):
+    from click.testing import CliRunner
+
+    from pipefollow.cli import main
+
+    out = tmp_path / "out"
+    extra = ["--algorithm", "cacla", "--episodes", "1", "--out", str(out)] if command == "train" else []
+    res = CliRunner().invoke(main, [command, *extra, f"{option}={value}"])
+    assert res.exit_code == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and option in lines[0]
+    assert not out.exists()
+
+
+def test_cli_train_with_disturbances(tmp_path):
+    from click.testing import CliRunner
+
+    from pipefollow.cli import main
+
+    args = ["train", "--algorithm", "cacla", "--episodes", "5", "--current", "0.1,45", "--camera-noise"]
+    res = [CliRunner().invoke(main, [*args, "0.05", "--out", str(tmp_path / k), "--json"]) for k in "ab"]
+    assert res[0].exit_code == 0, res[0].output
+    assert json.loads(res[0].stdout)["returns"] == json.loads(res[1].stdout)["returns"]  # seeded

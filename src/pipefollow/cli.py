@@ -9,12 +9,20 @@ from pathlib import Path
 import click
 import numpy as np
 
+from pipefollow import disturbance as _disturbance
+from pipefollow.disturbance import DisturbanceError
 from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS, ConfigError
 from pipefollow.experiments.store import StoreError
 from pipefollow.pipeline import PipelineError
 from pipefollow.policy import PolicyError
 
-USER_ERRORS: tuple[type[Exception], ...] = (PipelineError, PolicyError, ConfigError, StoreError)
+USER_ERRORS: tuple[type[Exception], ...] = (
+    PipelineError,
+    PolicyError,
+    ConfigError,
+    StoreError,
+    DisturbanceError,
+)
 
 
 class UserError(click.ClickException):
@@ -114,12 +122,18 @@ def _default_seconds(pipeline: str, seconds: float | None) -> float:
     return 60.0 if pipeline == "paper-validation" else 20.0
 
 
-def load_controller(spec: str, seed: int):
-    """``heuristic`` or a policy file → an agent."""
+def load_controller(spec: str, seed: int, lookahead: float | None = None):
+    """``heuristic``, ``los`` (lookahead Δ in m) or a policy file → an agent."""
+    if lookahead is not None and spec != "los":
+        raise UserError("--lookahead applies to --controller los only")
     if spec == "heuristic":
         from pipefollow.heuristic import Heuristic
 
         return Heuristic()
+    if spec == "los":
+        from pipefollow.los import DEFAULT_LOOKAHEAD, LOS
+
+        return LOS(DEFAULT_LOOKAHEAD if lookahead is None else lookahead)
     from pipefollow.policy import load_policy
 
     return load_policy(spec, seed=seed)
@@ -148,7 +162,14 @@ def _summary(stats) -> dict:
     "--controller",
     default="heuristic",
     show_default=True,
-    help="'heuristic' or a policy file (.npz) written by 'pipefollow train'.",
+    help="'heuristic', 'los' (line-of-sight guidance) or a policy file (.npz) written by 'pipefollow train'.",
+)
+@click.option(
+    "--lookahead",
+    type=click.FloatRange(min=0.0, min_open=True),
+    callback=_finite,
+    default=None,
+    help="Lookahead distance Δ (m) of --controller los [default: 1.5].",
 )
 @click.option(
     "--pipeline",
@@ -189,16 +210,31 @@ def _summary(stats) -> dict:
     help="Save a trajectory plot (PNG) of the first episode.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@_disturbance.click_options
 @_guard
-def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading_noise, plot_path, as_json):
+def evaluate(
+    controller,
+    lookahead,
+    pipeline,
+    episodes,
+    seconds,
+    seed,
+    start_noise,
+    heading_noise,
+    plot_path,
+    as_json,
+    disturbance,
+):
     """Evaluate a controller deterministically (σ = 0) on a pipeline."""
     from pipefollow.env import PipelineFollowingEnv
     from pipefollow.pipeline import resolve
     from pipefollow.training import run_episode
 
     pipe = resolve(pipeline)
-    agent = load_controller(controller, seed)
-    env = PipelineFollowingEnv(pipe, _default_seconds(pipeline, seconds), start_noise, heading_noise)
+    agent = load_controller(controller, seed, lookahead)
+    env = PipelineFollowingEnv(
+        pipe, _default_seconds(pipeline, seconds), start_noise, heading_noise, disturbance=disturbance
+    )
     stats = []
     for e in range(episodes):
         stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
@@ -208,6 +244,8 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
         "seconds": env.episode_seconds,
         **_summary(stats),
     }
+    if disturbance != _disturbance.NO_DISTURBANCE:
+        result["disturbance"] = _disturbance.to_dict(disturbance)
     if plot_path:
         from pipefollow.render import plot_trajectories
 
@@ -275,6 +313,7 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
     help="Continue training from this policy file (e.g. left turns, then right turns).",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
+@_disturbance.click_options
 @_guard
 def train(
     algorithm,
@@ -288,11 +327,13 @@ def train(
     out_dir,
     init_policy,
     as_json,
+    disturbance,
 ):
     """Train a learner; writes the policy and its learning curve."""
     from pipefollow.agents import make_agent
     from pipefollow.exploration import skew_step_to_gamma
     from pipefollow.pipeline import resolve
+    from pipefollow.simulation import PAPER_SIM
     from pipefollow.training import STAT_NAMES, train_compiled
 
     if algorithm == "sarsa" and (skew or supervised or skew_centred):
@@ -331,7 +372,15 @@ def train(
             bar.update(n - done[0])
             done[0] = n
 
-        stats = train_compiled(agent, pipe, episodes, episode_seconds=seconds, progress=progress)
+        stats = train_compiled(
+            agent,
+            pipe,
+            episodes,
+            episode_seconds=seconds,
+            progress=progress,
+            params=PAPER_SIM._replace(disturbance=disturbance),
+            env_rng=np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0]),
+        )
     from pipefollow.policy import save_policy
     from pipefollow.results import write_learning_curve
 
