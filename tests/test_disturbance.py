@@ -384,4 +384,6 @@ def test_cli_train_with_disturbances(tmp_path):
     args = ["train", "--algorithm", "cacla", "--episodes", "5", "--current", "0.1,45", "--camera-noise"]
     res = [CliRunner().invoke(main, [*args, "0.05", "--out", str(tmp_path / k), "--json"]) for k in "ab"]
     assert res[0].exit_code == 0, res[0].output
-    assert json.loads(res[0].stdout)["returns"] == json.loads(res[1].stdout)["returns"]  # seeded
+    first, again = (json.loads(r.stdout) for r in res)
+    assert first["returns"] == again["returns"]  # seeded
+    assert first["disturbance"]["camera_noise"] == 0.05

@@ -393,6 +393,8 @@ def train(
         "returns": stats[:, 0].tolist(),
         **{f"final_mean_{n}": float(stats[-min(50, episodes) :, i].mean()) for i, n in enumerate(STAT_NAMES)},
     }
+    if disturbance != _disturbance.NO_DISTURBANCE:
+        result["disturbance"] = _disturbance.to_dict(disturbance)
     if as_json:
         click.echo(json.dumps(result))
         return
