@@ -387,3 +387,15 @@ def test_cli_train_with_disturbances(tmp_path):
     first, again = (json.loads(r.stdout) for r in res)
     assert first["returns"] == again["returns"]  # seeded
     assert first["disturbance"]["camera_noise"] == 0.05
+
+
+def test_the_documented_toml_table_reads():
+    import tomllib
+
+    import pipefollow.disturbance as mod
+
+    doc = mod.disturbance_from_dict.__doc__
+    table = doc[doc.index("[disturbance]") : doc.index("Raises:")]
+    text = "\n".join(line.strip() for line in table.splitlines())
+    d = disturbance_from_dict(tomllib.loads(text)["disturbance"], "example")
+    assert d == make_disturbance(0.1, 90.0, camera_noise=0.05, miss_prob=0.02, buried=[[6.0, 7.5]])

@@ -1,6 +1,6 @@
 """A line-of-sight (LOS) guidance controller on the visible pipe: a classical baseline.
 
-Fossen's lookahead-based LOS steering (Fossen 2021, §12.4) applied to the straight line through
+Fossen's lookahead-based LOS steering (Fossen 2021, ch. 12) applied to the straight line through
 the visible piece of pipe, in camera coordinates (x lateral, positive to starboard; y forward;
 the AUV at the origin, heading along +y). The piece runs from its near end ``(x2, y_near)`` to
 its far end ``(x1, y1)``, in the pipe's own direction. With

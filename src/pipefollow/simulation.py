@@ -174,7 +174,8 @@ def decide(s, action, points, cum, p, z=None):
     action is recorded as that side (±1) and the reward is the lost penalty.
 
     ``z``: the decision's standard normals for the random disturbances (see
-    :mod:`pipefollow.disturbance`); ``None`` runs them as if every draw were 0 and no miss.
+    :mod:`pipefollow.disturbance`); with ``None`` the current keeps its speed and direction
+    and the camera is exact and never misses.
     """
     overridden = s[IN_VIEW] == 0.0
     if overridden:
