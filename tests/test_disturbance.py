@@ -224,7 +224,8 @@ def test_a_missed_detection_triggers_the_search_and_its_penalty():
 
 
 def test_env_miss_prob_one_loses_the_pipe_every_decision():
-    env = PipelineFollowingEnv("paper-left", 5, disturbance=Disturbance(miss_prob=1.0))
+    env = PipelineFollowingEnv("paper-left", 5, disturbance={"miss_prob": 1.0})
+    assert env.params.disturbance == Disturbance(miss_prob=1.0)
     _, info = env.reset(seed=0)
     assert not info["pipe_in_view"] and info["camera_missed"]
     for _ in range(5):

@@ -11,7 +11,7 @@ import numpy as np
 from gymnasium import spaces
 
 from pipefollow import simulation as sim
-from pipefollow.disturbance import Disturbance, check, noise_count
+from pipefollow.disturbance import Disturbance, check, disturbance_from_dict, noise_count
 from pipefollow.pipeline import Pipeline, resolve
 
 
@@ -76,8 +76,9 @@ class PipelineFollowingEnv(gym.Env):
     * ``render_mode``: ``None`` or ``"rgb_array"`` (the paper's Fig. 2 view).
     * ``params``: a :class:`~pipefollow.simulation.SimParams` (default: the paper's system).
     * ``disturbance``: a :class:`~pipefollow.disturbance.Disturbance` (ocean current, camera
-      noise, missed detections, buried stretches), replacing ``params.disturbance``; none by
-      default. Its random parts draw from the environment's seeded ``np_random``.
+      noise, missed detections, buried stretches) or a dict of its user-unit keys
+      (:func:`~pipefollow.disturbance.disturbance_from_dict`), replacing ``params.disturbance``;
+      none by default. Its random parts draw from the environment's seeded ``np_random``.
 
     ## Info
 
@@ -100,7 +101,7 @@ class PipelineFollowingEnv(gym.Env):
         start_heading_noise_deg: float = 0.0,
         render_mode: str | None = None,
         params: sim.SimParams = sim.PAPER_SIM,
-        disturbance: Disturbance | None = None,
+        disturbance: Disturbance | dict[str, Any] | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
@@ -113,6 +114,8 @@ class PipelineFollowingEnv(gym.Env):
         ):
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"{name} must be a finite number ≥ 0, got {value}")
+        if isinstance(disturbance, dict):
+            disturbance = disturbance_from_dict(disturbance)
         if disturbance is not None:
             params = params._replace(disturbance=disturbance)
         check(params.disturbance)
