@@ -63,3 +63,26 @@ def test_cli_evaluate_los():
         res = runner.invoke(main, ["evaluate", *args])
         assert res.exit_code == 2
         assert "--lookahead" in res.stderr and len(res.stderr.strip().splitlines()) == 1
+
+
+def test_los_runs_inside_compiled_loops():
+    import numpy as np
+    from numba import njit
+
+    from pipefollow import simulation as sim
+    from pipefollow.pipeline import builtin
+
+    @njit
+    def episode(s, points, cum, p, n, lookahead):
+        total = 0.0
+        for _ in range(n):
+            a = los_action(s[sim.X1], s[sim.Y1], s[sim.X2], 0.0, lookahead) if s[sim.IN_VIEW] else 0.0
+            total += sim.decide(s, a, points, cum, p)
+        return total
+
+    pipe = builtin("paper-left")
+    s = np.zeros(sim.STATE_SIZE)
+    sim.init_state(s, pipe.points, pipe.cumulative, 0.0, 0.0, pipe.start_heading, sim.PAPER_SIM)
+    total = episode(s, pipe.points, pipe.cumulative, sim.PAPER_SIM, 20, DEFAULT_LOOKAHEAD)
+    env_path = run_episode(PipelineFollowingEnv("paper-left", 20), LOS(), seed=0).ret
+    assert total == pytest.approx(env_path, abs=1e-12)
