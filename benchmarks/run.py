@@ -63,6 +63,40 @@ def bench_env_step(repeats):
     return median_time(lambda: env.step(action), repeats, inner=2000)
 
 
+NOTES: list[str] = []
+
+
+def bench_env_step_disturbed(repeats):
+    """A current of 0.1 m/s and camera noise of 0.05 m, timed in turns with a plain environment.
+
+    The shared machine's load moves by tens of percent within seconds, so the cost ratio is the
+    median of the per-repeat ratios of the two, measured back to back.
+    """
+    import gymnasium as gym
+
+    import pipefollow  # noqa: F401  (registers the environment)
+    from pipefollow.disturbance import make_disturbance
+
+    dist = make_disturbance(0.1, 45.0, camera_noise=0.05)
+    envs = [
+        gym.make("pipefollow/PipelineFollowing-v0", episode_seconds=1e6, disturbance=d) for d in (None, dist)
+    ]
+    action = np.array([0.1], dtype=np.float32)
+    for env in envs:
+        env.reset(seed=0)
+        env.step(action)
+    plain, disturbed = [], []
+    for _ in range(repeats):
+        plain.append(median_time(lambda: envs[0].step(action), 1, inner=2000))
+        disturbed.append(median_time(lambda: envs[1].step(action), 1, inner=2000))
+    ratio = statistics.median(d / p for d, p in zip(disturbed, plain, strict=True))
+    NOTES.append(
+        f"env.step with current + camera noise / plain, paired: {ratio:.3f} "
+        f"(plain {statistics.median(plain) * 1e6:.2f} µs in the same turns)"
+    )
+    return statistics.median(disturbed)
+
+
 def bench_features(repeats):
     from pipefollow.rbf import STATE_GRID
 
@@ -165,6 +199,7 @@ def bench_random_training(repeats):
 BENCHES = [
     ("RK4 substep (closed loop)", bench_substep, 0.09e-6, None),
     ("env.step (1-s decision)", bench_env_step, 20 * 0.09e-6, 15e-6),
+    ("env.step, current + cam. noise", bench_env_step_disturbed, 20 * 0.09e-6, 15e-6),
     ("RBF features, 1,764", bench_features, None, 5e-6),
     ("CACLA decision (act+update)", bench_cacla_decision, None, 10e-6),
     ("SARSA decision (act+update)", bench_sarsa_decision, None, 40e-6),
@@ -204,6 +239,7 @@ def main(argv=None) -> int:
     ap.add_argument("--no-reproduce", action="store_true", help="skip the full-reproduction benchmark")
     ap.add_argument("--readings", action="store_true", help="also time the readings experiment (minutes)")
     ap.add_argument("--json", help="also write the figures to this JSON file")
+    ap.add_argument("--only", metavar="TEXT", help="run only the benchmarks whose name contains TEXT")
     args = ap.parse_args(argv)
     print(
         f"# {time.strftime('%Y-%m-%d')} · {platform.processor() or platform.machine()} · "
@@ -214,6 +250,8 @@ def main(argv=None) -> int:
     for name, fn, floor, target in BENCHES:
         if (args.no_reproduce and "reproduce" in name) or ("readings" in name and not args.readings):
             continue
+        if args.only and args.only not in name:
+            continue
         t = fn(args.repeats)
         results[name] = {"median_s": t, "floor_s": floor, "target_s": target}
         ratio = f"{t / floor:7.1f}×" if floor else " " * 8
@@ -223,6 +261,8 @@ def main(argv=None) -> int:
             f"{fmt(target) if target else '':>12}  {ok}",
             flush=True,
         )
+    for note in NOTES:
+        print(note)
     if args.json:
         with open(args.json, "w") as f:
             json.dump(results, f, indent=1)

@@ -10,6 +10,7 @@ from scipy.integrate import solve_ivp
 from pipefollow import simulation as sim
 from pipefollow.camera import CameraParams
 from pipefollow.controller import PAPER_CONTROLLER, ControllerParams, pd_force
+from pipefollow.disturbance import Disturbance
 from pipefollow.dynamics import PAPER_AUV, AUVParams, acceleration, kinematics
 from pipefollow.pipeline import Pipeline
 
@@ -197,6 +198,7 @@ def non_default_params():
     auv = AUVParams(*(1.0 + 0.37 * i for i in range(len(AUVParams._fields))))
     ctrl = ControllerParams(*(20.0 + 0.11 * i for i in range(len(ControllerParams._fields))))
     cam = CameraParams(1.7, 4.2)
+    dist = Disturbance(0.2, 1.1, 30.0, 0.05, 0.25, 0.03, 0.1, (1.0, 3.0, 5.0, 7.0), (2.0, 4.0, 6.0, 8.0))
     return sim.SimParams(
         auv,
         ctrl,
@@ -206,6 +208,7 @@ def non_default_params():
         lost_reward=-7.5,
         progress_back=1.25,
         progress_ahead=4.5,
+        disturbance=dist,
         start_speed=0.3,
     )
 
@@ -216,9 +219,12 @@ def test_pack_unpack_round_trip():
     # every field really differs from its default, so a swapped or dropped slot shows
     for group, default in zip(p[:3], defaults[:3], strict=True):
         assert all(a != b for a, b in zip(group, default, strict=True))
-    assert all(a != b for a, b in zip(p[3:], defaults[3:], strict=True))
+    assert all(a != b for a, b in zip(p[3:8], defaults[3:8], strict=True))
+    assert all(a != b for a, b in zip(p.disturbance, defaults.disturbance, strict=True))
+    assert len(set(sim.pack_params(p)[37:52])) == 15  # no two disturbance slots alike
+    assert p.start_speed != defaults.start_speed
     packed = sim.pack_params(p)
-    assert packed.dtype == np.float64 and packed.shape == (38,)
+    assert packed.dtype == np.float64 and packed.shape == (53,)
     back = sim.unpack_params(packed)
     assert back == p
     assert isinstance(back.substeps, int)

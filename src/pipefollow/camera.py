@@ -28,6 +28,7 @@ class CameraParams(NamedTuple):
 
 
 PAPER_CAMERA = CameraParams()
+_NONE4 = (math.inf, math.inf, math.inf, math.inf)  # no buried stretch
 
 
 @njit(cache=True)
@@ -71,14 +72,26 @@ def clip_segment(ax, ay, bx, by, xmin, xmax, ymin, ymax):
 
 
 @njit(cache=True)
-def observe(points, cum, x, y, psi, progress, cam):
+def observe(points, cum, x, y, psi, progress, cam, buried_from=None, buried_to=None):
     """What the camera sees from pose (x, y, ψ).
 
     Returns ``(in_view, x1, y1, x2, y_near, s_near, s_far)``: the far end, the near end's lateral
     and forward position, and the arc lengths of the near and far ends of the chosen piece.
     When nothing is in view, ``in_view`` is False and the other values are zero.
+
+    ``buried_from``/``buried_to`` (optional, sorted and disjoint arc-length intervals, unused
+    slots ``inf``) are stretches the camera cannot see: they are cut out of the visible polyline,
+    so a buried stretch splits a piece in two.
     """
+    if buried_from is None:
+        return _observe(points, cum, x, y, psi, progress, cam, _NONE4, _NONE4)
+    return _observe(points, cum, x, y, psi, progress, cam, buried_from, buried_to)
+
+
+@njit(cache=True)
+def _observe(points, cum, x, y, psi, progress, cam, buried_from, buried_to):
     w, depth = cam.half_width, cam.depth
+    buried = buried_from[0] < math.inf
     # best piece so far: (gap to progress, x1, y1, x2, y_near, s_near, s_far)
     best = (math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     piece = best  # the piece being assembled; piece[0] unused
@@ -89,16 +102,37 @@ def observe(points, cum, x, y, psi, progress, cam):
         bx, by = to_camera(points[i + 1, 0], points[i + 1, 1], x, y, psi)
         t0, t1 = clip_segment(ax, ay, bx, by, -w, w, 0.0, depth)
         seg = cum[i + 1] - cum[i]
-        if t0 <= t1:
-            if not (open_piece and continues and t0 == 0.0):
-                if open_piece:
-                    best = _closer(best, piece, progress)
-                near_x, near_y = ax + t0 * (bx - ax), ay + t0 * (by - ay)
-                piece = (0.0, 0.0, 0.0, near_x, near_y, cum[i] + t0 * seg, 0.0)
-                open_piece = True
-            far_x, far_y = ax + t1 * (bx - ax), ay + t1 * (by - ay)
-            piece = (0.0, far_x, far_y, piece[3], piece[4], piece[5], cum[i] + t1 * seg)
+        if t0 <= t1 and not buried:
+            best, piece = _extend(
+                best, piece, open_piece, continues, progress, ax, ay, bx, by, t0, t1, cum[i], seg
+            )
+            open_piece = True
             continues = t1 == 1.0
+        elif t0 <= t1:
+            # cut the buried intervals out of [t0, t1]
+            ta = t0
+            continues_next = False
+            for k in range(len(buried_from)):
+                lo = (buried_from[k] - cum[i]) / seg
+                hi = (buried_to[k] - cum[i]) / seg
+                if hi <= ta or lo >= t1:
+                    continue
+                if lo > ta:
+                    best, piece = _extend(
+                        best, piece, open_piece, continues, progress, ax, ay, bx, by, ta, lo, cum[i], seg
+                    )
+                    open_piece = True
+                    continues = False
+                ta = max(ta, hi)
+                if ta >= t1:
+                    break
+            if ta < t1 or (ta == t1 and t0 == t1):
+                best, piece = _extend(
+                    best, piece, open_piece, continues, progress, ax, ay, bx, by, ta, t1, cum[i], seg
+                )
+                open_piece = True
+                continues_next = t1 == 1.0
+            continues = continues_next
         elif open_piece:
             best = _closer(best, piece, progress)
             open_piece = False
@@ -106,6 +140,23 @@ def observe(points, cum, x, y, psi, progress, cam):
     if open_piece:
         best = _closer(best, piece, progress)
     return best[0] < math.inf, best[1], best[2], best[3], best[4], best[5], best[6]
+
+
+@njit(cache=True)
+def _extend(best, piece, open_piece, continues, progress, ax, ay, bx, by, ta, tb, s0, seg):
+    """Add the part ``[ta, tb]`` of segment a→b (arc length ``s0`` at a) to the pieces in view.
+
+    It continues the open piece if that reached the end of the previous segment and this part
+    starts at the segment's start; otherwise it closes the open piece and starts a new one.
+    Returns the updated ``(best, piece)``.
+    """
+    if not (open_piece and continues and ta == 0.0):
+        if open_piece:
+            best = _closer(best, piece, progress)
+        near_x, near_y = ax + ta * (bx - ax), ay + ta * (by - ay)
+        piece = (0.0, 0.0, 0.0, near_x, near_y, s0 + ta * seg, 0.0)
+    far_x, far_y = ax + tb * (bx - ax), ay + tb * (by - ay)
+    return best, (0.0, far_x, far_y, piece[3], piece[4], piece[5], s0 + tb * seg)
 
 
 @njit(cache=True)

@@ -9,12 +9,20 @@ from pathlib import Path
 import click
 import numpy as np
 
+from pipefollow import disturbance as _disturbance
+from pipefollow.disturbance import DisturbanceError
 from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS, ConfigError
 from pipefollow.experiments.store import StoreError
 from pipefollow.pipeline import PipelineError
 from pipefollow.policy import PolicyError
 
-USER_ERRORS: tuple[type[Exception], ...] = (PipelineError, PolicyError, ConfigError, StoreError)
+USER_ERRORS: tuple[type[Exception], ...] = (
+    PipelineError,
+    PolicyError,
+    ConfigError,
+    StoreError,
+    DisturbanceError,
+)
 
 
 class UserError(click.ClickException):
@@ -132,12 +140,18 @@ def _default_seconds(pipeline: str, seconds: float | None) -> float:
 _LEARNING_RATES = ("alpha_v", "alpha_pi", "discount", "delta_k", "k_max", "forgetting")  # not train options
 
 
-def load_controller(spec: str, seed: int):
-    """``heuristic`` or a policy file → an agent."""
+def load_controller(spec: str, seed: int, lookahead: float | None = None):
+    """``heuristic``, ``los`` (lookahead Δ in m) or a policy file → an agent."""
+    if lookahead is not None and spec != "los":
+        raise UserError("--lookahead applies to --controller los only")
     if spec == "heuristic":
         from pipefollow.heuristic import Heuristic
 
         return Heuristic()
+    if spec == "los":
+        from pipefollow.los import DEFAULT_LOOKAHEAD, LOS
+
+        return LOS(DEFAULT_LOOKAHEAD if lookahead is None else lookahead)
     from pipefollow.policy import load_policy
 
     return load_policy(spec, seed=seed)
@@ -166,7 +180,14 @@ def _summary(stats) -> dict:
     "--controller",
     default="heuristic",
     show_default=True,
-    help="'heuristic' or a policy file (.npz) written by 'pipefollow train'.",
+    help="'heuristic', 'los' (line-of-sight guidance) or a policy file (.npz) written by 'pipefollow train'.",
+)
+@click.option(
+    "--lookahead",
+    type=click.FloatRange(min=0.0, min_open=True),
+    callback=_finite,
+    default=None,
+    help="Lookahead distance Δ (m) of --controller los [default: 1.5].",
 )
 @click.option(
     "--pipeline",
@@ -208,9 +229,21 @@ def _summary(stats) -> dict:
 )
 @_reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@_disturbance.click_options
 @_guard
 def evaluate(
-    controller, pipeline, episodes, seconds, seed, start_noise, heading_noise, plot_path, readings, as_json
+    controller,
+    lookahead,
+    pipeline,
+    episodes,
+    seconds,
+    seed,
+    start_noise,
+    heading_noise,
+    plot_path,
+    readings,
+    as_json,
+    disturbance,
 ):
     """Evaluate a controller deterministically (σ = 0) on a pipeline."""
     from pipefollow.env import PipelineFollowingEnv
@@ -219,10 +252,14 @@ def evaluate(
     from pipefollow.training import run_episode
 
     pipe = resolve(pipeline)
-    agent = load_controller(controller, seed)
+    agent = load_controller(controller, seed, lookahead)
     reading = _readings(readings, getattr(agent, "readings", "default"))
     env = PipelineFollowingEnv(
-        pipe, _default_seconds(pipeline, seconds), start_noise, heading_noise, params=sim_params(reading)
+        pipe,
+        _default_seconds(pipeline, seconds),
+        start_noise,
+        heading_noise,
+        params=sim_params(reading)._replace(disturbance=disturbance),
     )
     stats = []
     for e in range(episodes):
@@ -234,6 +271,8 @@ def evaluate(
         "readings": reading.id,
         **_summary(stats),
     }
+    if disturbance != _disturbance.NO_DISTURBANCE:
+        result["disturbance"] = _disturbance.to_dict(disturbance)
     if plot_path:
         from pipefollow.render import plot_trajectories
 
@@ -304,6 +343,7 @@ def evaluate(
     "see docs/design.md) [default: the project's readings, or those of --init]."
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
+@_disturbance.click_options
 @_guard
 def train(
     algorithm,
@@ -317,6 +357,7 @@ def train(
     init_policy,
     readings,
     as_json,
+    disturbance,
 ):
     """Train a learner; writes the policy and its learning curve."""
     from pipefollow.agents import make_agent
@@ -364,7 +405,8 @@ def train(
             episode_seconds=seconds,
             sigma_start=scale,
             sigma_end=0.01 * scale,
-            params=sim_params(reading),
+            params=sim_params(reading)._replace(disturbance=disturbance),
+            env_rng=np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0]),
             progress=progress,
         )
         if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the seed's generator
@@ -384,6 +426,8 @@ def train(
         "returns": stats[:, 0].tolist(),
         **{f"final_mean_{n}": float(stats[-min(50, episodes) :, i].mean()) for i, n in enumerate(STAT_NAMES)},
     }
+    if disturbance != _disturbance.NO_DISTURBANCE:
+        result["disturbance"] = _disturbance.to_dict(disturbance)
     if as_json:
         click.echo(json.dumps(result))
         return

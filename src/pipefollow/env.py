@@ -11,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 
 from pipefollow import simulation as sim
+from pipefollow.disturbance import Disturbance, check, disturbance_from_dict, noise_count
 from pipefollow.pipeline import Pipeline, resolve
 from pipefollow.suites import min_length_for, parse_random_spec
 
@@ -43,7 +44,7 @@ class PipelineFollowingEnv(gym.Env):
     | 0     | x1: lateral position of the far end of the pipe in view  | -1 | 1 | m |
     | 1     | y1: forward position of the far end of the pipe in view  | 0  | 3 | m |
     | 2     | x2: lateral position of the near end of the pipe in view | -1 | 1 | m |
-    | 3     | v_x: surge speed                                  | -1 | 1 | m/s |
+    | 3     | v_x: surge speed over ground                      | -1 | 1 | m/s |
 
     While the pipe is out of view, (x1, y1, x2) hold the last sighting; ``info["pipe_in_view"]``
     tells the two apart.
@@ -78,16 +79,23 @@ class PipelineFollowingEnv(gym.Env):
     * ``start_lateral_noise``, ``start_heading_noise_deg``: start perturbation (default 0).
     * ``render_mode``: ``None`` or ``"rgb_array"`` (the paper's Fig. 2 view).
     * ``params``: a :class:`~pipefollow.simulation.SimParams` (default: the paper's system).
+    * ``disturbance``: a :class:`~pipefollow.disturbance.Disturbance` (ocean current, camera
+      noise, missed detections, buried stretches) or a dict of its user-unit keys
+      (:func:`~pipefollow.disturbance.disturbance_from_dict`), replacing ``params.disturbance``;
+      none by default. Its random parts draw from the environment's seeded ``np_random``.
 
     ## Info
 
     ``pipe_in_view``, ``overridden`` (the search behaviour acted), ``e_dist``, ``e_angl``,
     ``progress_m`` (arc length reached along the pipe), ``pose`` (x north, y east, ψ),
-    ``nu`` (u, v, r), ``waypoint``, ``executed_action``, ``time_s``. Like the observation,
-    ``e_dist`` and ``e_angl`` hold the last sighting's values while the pipe is lost. At the
-    episode's last step also its summary: ``episode_pipe_in_view`` (share of decisions ending
-    with the pipe in view), ``episode_progress_m`` and ``episode_rms_e_dist`` (RMS of ``e_dist``
-    over those decisions; NaN if none).
+    ``nu`` (u, v, r) relative to the water (ν_r; equal to ν without a current), ``waypoint``,
+    ``executed_action``, ``time_s``, ``y_near`` (forward position of the near end of the pipe in
+    view, m), ``camera_missed`` (a missed detection hid the pipe), ``current`` (V_c m/s, β_c rad).
+    Like the observation, ``e_dist``, ``e_angl`` and ``y_near`` hold the last sighting's values
+    while the pipe is lost. At the episode's last step also its summary:
+    ``episode_pipe_in_view`` (share of decisions ending with the pipe in view),
+    ``episode_progress_m`` and ``episode_rms_e_dist`` (RMS of ``e_dist`` over those decisions;
+    NaN if none).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
@@ -100,6 +108,7 @@ class PipelineFollowingEnv(gym.Env):
         start_heading_noise_deg: float = 0.0,
         render_mode: str | None = None,
         params: sim.SimParams = sim.PAPER_SIM,
+        disturbance: Disturbance | dict[str, Any] | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
@@ -112,6 +121,11 @@ class PipelineFollowingEnv(gym.Env):
         ):
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"{name} must be a finite number ≥ 0, got {value}")
+        if isinstance(disturbance, dict):
+            disturbance = disturbance_from_dict(disturbance)
+        if disturbance is not None:
+            params = params._replace(disturbance=disturbance)
+        check(params.disturbance)
         self.episode_seconds = float(episode_seconds)
         self._set_pipeline(pipeline)
         self.max_decisions = int(round(self.episode_seconds / decision_seconds))
@@ -120,6 +134,8 @@ class PipelineFollowingEnv(gym.Env):
         self.render_mode = render_mode
         self.params = params
         self._packed = sim.pack_params(params)
+        # standard normals of one camera reading (empty without random disturbances)
+        self._z = np.zeros(noise_count(params.disturbance))
         cam = params.camera
         self.observation_space = spaces.Box(
             low=np.array([-cam.half_width, 0.0, -cam.half_width, -1.0]),
@@ -160,8 +176,11 @@ class PipelineFollowingEnv(gym.Env):
         x = p0[0] - math.sin(h) * float(lateral)
         y = p0[1] + math.cos(h) * float(lateral)
         psi = h + math.radians(float(heading_deg))
+        z = self._z
+        if z.size:
+            self.np_random.standard_normal(out=z)
         sim.init_state_packed(
-            self.state, self.pipeline.points, self.pipeline.cumulative, x, y, psi, self._packed
+            self.state, self.pipeline.points, self.pipeline.cumulative, x, y, psi, self._packed, z
         )
         self._decisions = 0
         self._seen, self._sum_e2 = 0, 0.0
@@ -180,8 +199,10 @@ class PipelineFollowingEnv(gym.Env):
         if math.isnan(a):
             raise ValueError("action is NaN")
         a = min(1.0, max(-1.0, a))
-        s = self.state
-        r = sim.decide_packed(s, a, self.pipeline.points, self.pipeline.cumulative, self._packed)
+        s, z = self.state, self._z
+        if z.size:
+            self.np_random.standard_normal(out=z)
+        r = sim.decide_packed(s, a, self.pipeline.points, self.pipeline.cumulative, self._packed, z)
         self._decisions += 1
         self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
         if s[sim.IN_VIEW] != 0.0:
@@ -208,6 +229,9 @@ class PipelineFollowingEnv(gym.Env):
             "waypoint": s[sim.WP_X : sim.WP_Y + 1].copy(),
             "executed_action": s[sim.A_PREV],
             "time_s": s[sim.TIME],
+            "y_near": s[sim.Y_NEAR],
+            "camera_missed": bool(s[sim.MISSED]),
+            "current": (s[sim.CURRENT_SPEED], s[sim.CURRENT_DIR]),
         }
 
     def render(self):

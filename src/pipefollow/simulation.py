@@ -4,6 +4,12 @@ A decision lasts ``substeps * dt`` seconds (1 s = 20 RK4 steps of 0.05 s). It pl
 waypoint (or, with the pipe lost, runs the search behaviour), integrates controller and vehicle
 with RK4, updates the progress along the pipe, reads the camera and computes the reward.
 
+With an ocean current (:mod:`pipefollow.disturbance`) the RK4 integrates the pose η and the
+velocity relative to the water ν_r (slots ``U, V, R``): eq. 16 in ν_r,
+``M ν̇_r + C(ν_r) ν_r + D(ν_r) ν_r = τ``, and ``η̇ = R(ψ) ν_r + [V_c cos β_c, V_c sin β_c, 0]``.
+The PD controller damps the velocity over ground ν = ν_r + ν_c, and ``v_x`` (observation and
+reward) is the surge speed over ground. Without a current ν = ν_r and nothing changes.
+
 The simulation state is one float64 array with the named slots below, so that the Gymnasium
 environment and the compiled training loop hold exactly the same thing.
 """
@@ -18,6 +24,16 @@ from numba import njit
 
 from pipefollow.camera import PAPER_CAMERA, CameraParams, observe, tracking_errors
 from pipefollow.controller import PAPER_CONTROLLER, ControllerParams, pd_force, place_waypoint
+from pipefollow.disturbance import (
+    NO_DISTURBANCE,
+    PACKED_SIZE,
+    Disturbance,
+    missed,
+    noise_layout,
+    vary_current,
+)
+from pipefollow.disturbance import pack as _pack_disturbance
+from pipefollow.disturbance import unpack as _unpack_disturbance
 from pipefollow.dynamics import PAPER_AUV, AUVParams, acceleration, kinematics
 from pipefollow.pipeline import project
 from pipefollow.reward import LOST_REWARD, reward
@@ -34,7 +50,8 @@ class SimParams(NamedTuple):
     lost_reward: float = LOST_REWARD  # reward per decision while the pipe is lost (paper §4)
     progress_back: float = 1.5  # progress search window behind the last progress (m)
     progress_ahead: float = 1.5  # and ahead of it (m): ≥ 1 s of travel plus a corner cut (√2 × 1 m)
-    start_speed: float = 0.0  # surge speed u at the start (m/s): at rest (docs/design.md, "start")
+    disturbance: Disturbance = NO_DISTURBANCE  # current and camera faults; none by default
+    start_speed: float = 0.0  # surge speed u (through the water) at the start (m/s): at rest (docs/design.md)
 
 
 PAPER_SIM = SimParams()
@@ -45,29 +62,44 @@ E_DIST, E_ANGL, IN_VIEW, Y_NEAR = 4, 5, 6, 7
 X, Y, PSI, U, V, R = 8, 9, 10, 11, 12, 13
 PROGRESS, PROGRESS_MAX, LAST_SIDE, A_PREV = 14, 15, 16, 17
 TIME, WP_X, WP_Y, OVERRIDDEN = 18, 19, 20, 21
-STATE_SIZE = 22
+CURRENT_SPEED, CURRENT_DIR, MISSED = 22, 23, 24  # V_c (m/s), β_c (rad), last reading missed (0/1)
+STATE_SIZE = 25
 
 
 @njit(cache=True)
-def closed_loop_rk4(s, wp_x, wp_y, psi_ref, track_bearing, dt, p):
-    """One RK4 step of controller + vehicle with the waypoint held; updates ``s`` in place."""
-    ap, cp = p.auv, p.controller
+def _rates(x, y, ps, u, v, r, vn, ve, wp_x, wp_y, psi_ref, track_bearing, p):
+    """η̇ and ν̇_r of the closed loop at pose (x, y, ψ), relative velocity ν_r = (u, v, r).
+
+    The current's earth velocity (vn, ve) gives ν_c = R(ψ)ᵀ (vn, ve, 0); the PD law acts on
+    ν = ν_r + ν_c, eq. 16 on ν_r, and η̇ = R(ψ) ν_r + (vn, ve, 0).
+    """
+    cs, sn = math.cos(ps), math.sin(ps)
+    u_g = u + (cs * vn + sn * ve)  # surge over ground (m/s)
+    v_g = v + (cs * ve - sn * vn)  # sway over ground (m/s)
+    tx, ty, tn = pd_force(x, y, ps, u_g, v_g, r, wp_x, wp_y, psi_ref, track_bearing, p.controller)
+    kx, ky, kh = kinematics(ps, u, v, r)
+    ku, kv, kr = acceleration(u, v, r, tx, ty, tn, p.auv)
+    return kx + vn, ky + ve, kh, ku, kv, kr
+
+
+@njit(cache=True)
+def closed_loop_rk4(s, wp_x, wp_y, psi_ref, track_bearing, dt, p, vn=0.0, ve=0.0):
+    """One RK4 step of controller + vehicle with the waypoint held; updates ``s`` in place.
+
+    ``vn, ve`` is the current's earth velocity (m/s, north and east); ``s[U:R+1]`` holds ν_r.
+    """
     x0, y0, h0, u0, v0, r0 = s[X], s[Y], s[PSI], s[U], s[V], s[R]
     # k1
-    tx, ty, tn = pd_force(x0, y0, h0, u0, v0, r0, wp_x, wp_y, psi_ref, track_bearing, cp)
-    k1x, k1y, k1h = kinematics(h0, u0, v0, r0)
-    k1u, k1v, k1r = acceleration(u0, v0, r0, tx, ty, tn, ap)
+    k1x, k1y, k1h, k1u, k1v, k1r = _rates(
+        x0, y0, h0, u0, v0, r0, vn, ve, wp_x, wp_y, psi_ref, track_bearing, p
+    )
     # k2
     h = 0.5 * dt
     x, y, ps, u, v, r = x0 + h * k1x, y0 + h * k1y, h0 + h * k1h, u0 + h * k1u, v0 + h * k1v, r0 + h * k1r
-    tx, ty, tn = pd_force(x, y, ps, u, v, r, wp_x, wp_y, psi_ref, track_bearing, cp)
-    k2x, k2y, k2h = kinematics(ps, u, v, r)
-    k2u, k2v, k2r = acceleration(u, v, r, tx, ty, tn, ap)
+    k2x, k2y, k2h, k2u, k2v, k2r = _rates(x, y, ps, u, v, r, vn, ve, wp_x, wp_y, psi_ref, track_bearing, p)
     # k3
     x, y, ps, u, v, r = x0 + h * k2x, y0 + h * k2y, h0 + h * k2h, u0 + h * k2u, v0 + h * k2v, r0 + h * k2r
-    tx, ty, tn = pd_force(x, y, ps, u, v, r, wp_x, wp_y, psi_ref, track_bearing, cp)
-    k3x, k3y, k3h = kinematics(ps, u, v, r)
-    k3u, k3v, k3r = acceleration(u, v, r, tx, ty, tn, ap)
+    k3x, k3y, k3h, k3u, k3v, k3r = _rates(x, y, ps, u, v, r, vn, ve, wp_x, wp_y, psi_ref, track_bearing, p)
     # k4
     x, y, ps, u, v, r = (
         x0 + dt * k3x,
@@ -77,9 +109,7 @@ def closed_loop_rk4(s, wp_x, wp_y, psi_ref, track_bearing, dt, p):
         v0 + dt * k3v,
         r0 + dt * k3r,
     )
-    tx, ty, tn = pd_force(x, y, ps, u, v, r, wp_x, wp_y, psi_ref, track_bearing, cp)
-    k4x, k4y, k4h = kinematics(ps, u, v, r)
-    k4u, k4v, k4r = acceleration(u, v, r, tx, ty, tn, ap)
+    k4x, k4y, k4h, k4u, k4v, k4r = _rates(x, y, ps, u, v, r, vn, ve, wp_x, wp_y, psi_ref, track_bearing, p)
     w = dt / 6.0
     s[X] = x0 + w * (k1x + 2.0 * k2x + 2.0 * k3x + k4x)
     s[Y] = y0 + w * (k1y + 2.0 * k2y + 2.0 * k3y + k4y)
@@ -90,13 +120,33 @@ def closed_loop_rk4(s, wp_x, wp_y, psi_ref, track_bearing, dt, p):
 
 
 @njit(cache=True)
-def read_camera(s, points, cum, p):
-    """Update the observation slots of ``s`` from the camera at the current pose."""
-    seen, x1, y1, x2, y_near, _, _ = observe(points, cum, s[X], s[Y], s[PSI], s[PROGRESS], p.camera)
-    s[VX] = s[U]
+def read_camera(s, points, cum, p, z=None):
+    """Update the observation slots of ``s`` from the camera at the current pose.
+
+    ``z`` holds the reading's standard normals (see :mod:`pipefollow.disturbance`); without it
+    (``None``) the camera is exact and never misses.
+    """
+    d = p.disturbance
+    seen, x1, y1, x2, y_near, _, _ = observe(
+        points, cum, s[X], s[Y], s[PSI], s[PROGRESS], p.camera, d.buried_from, d.buried_to
+    )
+    # v_x: surge speed over ground, u = u_r + u_c (the camera looks at the seabed)
+    psi, vc, bc = s[PSI], s[CURRENT_SPEED], s[CURRENT_DIR]
+    s[VX] = s[U] + (math.cos(psi) * (vc * math.cos(bc)) + math.sin(psi) * (vc * math.sin(bc)))
+    s[MISSED] = 0.0
+    if z is not None:
+        i_cam, i_miss, n = noise_layout(d)
+        if seen and i_miss > i_cam:
+            sd = d.camera_noise
+            x1, y1 = x1 + sd * z[i_cam], y1 + sd * z[i_cam + 1]
+            x2, y_near = x2 + sd * z[i_cam + 2], y_near + sd * z[i_cam + 3]
+        if n > i_miss and missed(d, z[i_miss]):
+            s[MISSED] = 1.0
+            seen = False
     s[IN_VIEW] = 1.0 if seen else 0.0
     if seen:
-        # Clipping puts the ends on the footprint's edges; clamp away floating-point dust there.
+        # Clipping puts the ends on the footprint's edges; clamp away floating-point dust there
+        # (and noise beyond them).
         w, depth = p.camera.half_width, p.camera.depth
         x1, x2 = min(max(x1, -w), w), min(max(x2, -w), w)
         y1, y_near = min(max(y1, 0.0), depth), min(max(y_near, 0.0), depth)
@@ -107,8 +157,11 @@ def read_camera(s, points, cum, p):
 
 
 @njit(cache=True)
-def init_state(s, points, cum, x, y, psi, p):
-    """Fill ``s`` for an AUV at pose (x, y, ψ) next to the pipeline, surging at ``p.start_speed``."""
+def init_state(s, points, cum, x, y, psi, p, z=None):
+    """Fill ``s`` for an AUV at pose (x, y, ψ) next to the pipeline, surging at ``p.start_speed``.
+
+    ``z``: the first camera reading's standard normals (see :func:`read_camera`).
+    """
     s[:] = 0.0
     s[X], s[Y], s[PSI] = x, y, psi
     s[U] = p.start_speed
@@ -116,17 +169,22 @@ def init_state(s, points, cum, x, y, psi, p):
     s[PROGRESS_MAX] = s[PROGRESS]
     s[LAST_SIDE] = 1.0
     s[WP_X], s[WP_Y] = x, y
-    read_camera(s, points, cum, p)
+    s[CURRENT_SPEED], s[CURRENT_DIR] = p.disturbance.current_speed, p.disturbance.current_direction
+    read_camera(s, points, cum, p, z)
 
 
 @njit(cache=True)
-def decide(s, action, points, cum, p):
+def decide(s, action, points, cum, p, z=None):
     """Run one decision from state ``s`` (updated in place) and return its reward.
 
     With the pipe in view, ``action`` in [-1, 1] places the waypoint at bearing ψ + a·90°. With
     the pipe lost, the search behaviour overrides it: the waypoint is held at the current
     position and the AUV turns towards the side where the pipe was last seen; the executed
     action is recorded as that side (±1) and the reward is the lost penalty.
+
+    ``z``: the decision's standard normals for the random disturbances (see
+    :mod:`pipefollow.disturbance`); with ``None`` the current keeps its speed and direction
+    and the camera is exact and never misses.
     """
     overridden = s[IN_VIEW] == 0.0
     if overridden:
@@ -139,23 +197,36 @@ def decide(s, action, points, cum, p):
         wp_x, wp_y = place_waypoint(s[X], s[Y], s[PSI], action, p.controller)
         psi_ref = 0.0
         track = True
+    d = p.disturbance
+    seconds = p.dt * p.substeps
+    if z is not None:
+        if noise_layout(d)[0] == 2:
+            s[CURRENT_SPEED], s[CURRENT_DIR] = vary_current(
+                s[CURRENT_SPEED], s[CURRENT_DIR], d, seconds, z[0], z[1]
+            )
+    vn = s[CURRENT_SPEED] * math.cos(s[CURRENT_DIR])  # current, north (m/s)
+    ve = s[CURRENT_SPEED] * math.sin(s[CURRENT_DIR])  # current, east (m/s)
     for _ in range(p.substeps):
-        closed_loop_rk4(s, wp_x, wp_y, psi_ref, track, p.dt, p)
+        closed_loop_rk4(s, wp_x, wp_y, psi_ref, track, p.dt, p, vn, ve)
     s[PSI] = (s[PSI] + math.pi) % (2.0 * math.pi) - math.pi
-    s[TIME] += p.dt * p.substeps
+    s[TIME] += seconds
     s[WP_X], s[WP_Y] = wp_x, wp_y
     s[OVERRIDDEN] = 1.0 if overridden else 0.0
     s[PROGRESS] = project(
         points, cum, s[X], s[Y], s[PROGRESS] - p.progress_back, s[PROGRESS] + p.progress_ahead
     )
     s[PROGRESS_MAX] = max(s[PROGRESS_MAX], s[PROGRESS])
-    read_camera(s, points, cum, p)
+    read_camera(s, points, cum, p, z)
     if overridden or s[IN_VIEW] == 0.0:
         r = p.lost_reward
     else:
         r = reward(s[VX], s[E_DIST], s[E_ANGL], executed, s[A_PREV])
     s[A_PREV] = executed
     return r
+
+
+_DIST = 37  # where the packed Disturbance starts in pack_params' array (disturbance.PACKED_SIZE floats)
+_START_SPEED = _DIST + PACKED_SIZE  # and the start speed after it
 
 
 def pack_params(p: SimParams) -> np.ndarray:
@@ -175,6 +246,7 @@ def pack_params(p: SimParams) -> np.ndarray:
             p.lost_reward,
             p.progress_back,
             p.progress_ahead,
+            *_pack_disturbance(p.disturbance),
             p.start_speed,
         ],
         dtype=np.float64,
@@ -210,16 +282,24 @@ def unpack_params(a):
     )
     ctrl = ControllerParams(a[22], a[23], a[24], a[25], a[26], a[27], a[28], a[29])
     cam = CameraParams(a[30], a[31])
-    return SimParams(auv, ctrl, cam, a[32], int(a[33]), a[34], a[35], a[36], a[37])
+    dist = _unpack_disturbance(a, _DIST)
+    return SimParams(auv, ctrl, cam, a[32], int(a[33]), a[34], a[35], a[36], dist, a[_START_SPEED])
 
 
 @njit(cache=True)
-def decide_packed(s, action, points, cum, packed):
+def decide_packed(s, action, points, cum, packed, z=None):
     """:func:`decide` with packed parameters: the entry point for Python callers."""
-    return decide(s, action, points, cum, unpack_params(packed))
+    return decide(s, action, points, cum, unpack_params(packed), z)
 
 
 @njit(cache=True)
-def init_state_packed(s, points, cum, x, y, psi, packed):
+def init_state_packed(s, points, cum, x, y, psi, packed, z=None):
     """:func:`init_state` with packed parameters."""
-    init_state(s, points, cum, x, y, psi, unpack_params(packed))
+    init_state(s, points, cum, x, y, psi, unpack_params(packed), z)
+
+
+@njit(cache=True)
+def draw_normals(rng, z):
+    """Fill ``z`` with standard normals from ``rng``, as ``rng.standard_normal(out=z)`` does."""
+    for i in range(z.shape[0]):
+        z[i] = rng.standard_normal()

@@ -12,7 +12,10 @@ Both paths follow the same protocol (docs/design.md):
 
 The compiled path (:func:`train_compiled`) composes the same compiled stage and update
 functions as the environment and agent classes, consumes the same random numbers in the same
-order, and so gives the same trajectory, returns and weights (tested to 1e-9).
+order, and so gives the same trajectory, returns and weights (tested to 1e-9). The agent's
+generator drives exploration; a second generator, ``env_rng``, plays the environment's
+``np_random``: per episode two uniforms (the start perturbation the environment draws at every
+reset) and one block of standard normals per camera reading for the random disturbances.
 """
 
 from __future__ import annotations
@@ -130,8 +133,29 @@ def train(
 
 
 @njit(cache=True)
+def _reset_draws(env_rng, z):
+    """What the environment's reset draws without start noise: the first camera reading's ``z``."""
+    sim.draw_normals(env_rng, z)
+
+
+@njit(cache=True)
 def _cacla_episodes(
-    w, hp, points, cum, start, simp, sigmas, n_decisions, centres, offsets, widths, normalized, rng, stats
+    w,
+    hp,
+    points,
+    cum,
+    start,
+    simp,
+    sigmas,
+    n_decisions,
+    centres,
+    offsets,
+    widths,
+    normalized,
+    rng,
+    stats,
+    env_rng,
+    dz,
 ):
     p = cacla_mod.unpack(hp)
     ps = sim.unpack_params(simp)
@@ -144,7 +168,8 @@ def _cacla_episodes(
     skewed = p.skew > 0.0
     for e in range(sigmas.shape[0]):
         sigma = sigmas[e]
-        sim.init_state(s, points, cum, start[0], start[1], start[2], ps)
+        _reset_draws(env_rng, dz)
+        sim.init_state(s, points, cum, start[0], start[1], start[2], ps, dz)
         pending = False
         have_phi = False  # phi already holds φ(s) of the current state (computed for the last update)
         a_rl_p = a_sup_p = acc = disc = 0.0
@@ -163,7 +188,8 @@ def _cacla_episodes(
                 a_sup = heuristic_action(s[sim.X1], s[sim.Y1]) if p.supervised else 0.0
                 a, a_rl = cacla_mod.act(w, phi, sigma, z0, z1, a_sup, p)
             have_phi = False
-            r = sim.decide(s, a, points, cum, ps)
+            sim.draw_normals(env_rng, dz)
+            r = sim.decide(s, a, points, cum, ps, dz)
             total += r
             now_visible = s[sim.IN_VIEW] != 0.0
             seen += 1 if now_visible else 0
@@ -208,6 +234,8 @@ def _sarsa_episodes(
     normalized,
     rng,
     stats,
+    env_rng,
+    dz,
 ):
     ps = sim.unpack_params(simp)
     decision_s = ps.dt * ps.substeps
@@ -220,7 +248,8 @@ def _sarsa_episodes(
     psi_next = np.empty(a_centres.shape[0])
     for e in range(sigmas.shape[0]):
         sigma = sigmas[e]
-        sim.init_state(s, points, cum, start[0], start[1], start[2], ps)
+        _reset_draws(env_rng, dz)
+        sim.init_state(s, points, cum, start[0], start[1], start[2], ps, dz)
         has_next = False  # an on-policy action chosen by the last update for the current state
         a_next = 0.0
         pending = False
@@ -239,7 +268,8 @@ def _sarsa_episodes(
                     grid_features(s[:4], centres, offsets, widths, normalized, phi)
                     z = rng.standard_normal() if sigma > 0.0 else 0.0
                     a = sarsa_mod.choose(W, phi, search_actions, search_psi, sigma, z)
-            r = sim.decide(s, a, points, cum, ps)
+            sim.draw_normals(env_rng, dz)
+            r = sim.decide(s, a, points, cum, ps, dz)
             total += r
             now_visible = s[sim.IN_VIEW] != 0.0
             seen += 1 if now_visible else 0
@@ -276,13 +306,24 @@ def train_compiled(
     params: sim.SimParams = sim.PAPER_SIM,
     progress: Callable[[int], None] | None = None,
     chunk: int = 50,
+    env_rng: np.random.Generator | None = None,
 ) -> np.ndarray:
     """Train a :class:`~pipefollow.cacla.Cacla` or :class:`~pipefollow.sarsa.Sarsa` agent in compiled code.
 
-    It gives the same numbers as :func:`train` on ``PipelineFollowingEnv(pipeline, episode_seconds)``
-    with the same agent state and generator. Runs ``chunk`` episodes per compiled call and reports
-    the episodes done to ``progress``. Returns (episodes, 4) statistics.
+    It gives the same numbers as :func:`train` on ``PipelineFollowingEnv(pipeline, episode_seconds,
+    params=params)`` with the same agent state and generator, and with ``env_rng`` in the state of
+    the environment's ``np_random``. ``env_rng`` is required when ``params.disturbance`` has random
+    parts (camera noise, misses, a varying current). Runs ``chunk`` episodes per compiled call
+    and reports the episodes done to ``progress``. Returns (episodes, 4) statistics.
     """
+    from pipefollow.disturbance import check, noise_count
+
+    check(params.disturbance)
+    dz = np.zeros(noise_count(params.disturbance))
+    if env_rng is None:
+        if dz.size:
+            raise ValueError("params.disturbance has random parts: pass a seeded env_rng")
+        env_rng = np.random.default_rng(0)  # not drawn from: no random parts
     sigmas = np.array([linear_sigma(e, episodes, sigma_start, sigma_end) for e in range(episodes)])
     n_decisions = int(round(episode_seconds / (params.dt * params.substeps)))
     start = np.array([pipeline.points[0, 0], pipeline.points[0, 1], pipeline.start_heading])
@@ -314,6 +355,8 @@ def train_compiled(
                 normalized,
                 agent.rng,
                 out,
+                env_rng,
+                dz,
             )
         elif isinstance(agent, sarsa_mod.Sarsa):
             ac, _, aw = agent.action_grid.packed
@@ -338,6 +381,8 @@ def train_compiled(
                 normalized,
                 agent.rng,
                 out,
+                env_rng,
+                dz,
             )
         else:
             raise TypeError(f"no compiled training loop for {type(agent).__name__}")
@@ -354,13 +399,13 @@ def train_compiled(
 @njit(cache=True)
 def _cacla_random_episodes(
     w, hp, points_all, cum_all, offsets, starts, simp, sigmas, n_decisions, centres, grid_offsets, widths,
-    normalized, rng, stats,
+    normalized, rng, stats, env_rng, dz,
 ):  # fmt: skip
     for e in range(sigmas.shape[0]):
         a, b = offsets[e], offsets[e + 1]
         _cacla_episodes(
             w, hp, points_all[a:b], cum_all[a:b], starts[e], simp, sigmas[e : e + 1], n_decisions, centres,
-            grid_offsets, widths, normalized, rng, stats[e : e + 1],
+            grid_offsets, widths, normalized, rng, stats[e : e + 1], env_rng, dz,
         )  # fmt: skip
 
 
@@ -368,13 +413,14 @@ def _cacla_random_episodes(
 def _sarsa_random_episodes(
     W, alpha, discount, search_actions, search_psi, a_centres, a_width, a_normalized, points_all, cum_all,
     offsets, starts, simp, sigmas, n_decisions, centres, grid_offsets, widths, normalized, rng, stats,
+    env_rng, dz,
 ):  # fmt: skip
     for e in range(sigmas.shape[0]):
         a, b = offsets[e], offsets[e + 1]
         _sarsa_episodes(
             W, alpha, discount, search_actions, search_psi, a_centres, a_width, a_normalized, points_all[a:b],
             cum_all[a:b], starts[e], simp, sigmas[e : e + 1], n_decisions, centres, grid_offsets, widths,
-            normalized, rng, stats[e : e + 1],
+            normalized, rng, stats[e : e + 1], env_rng, dz,
         )  # fmt: skip
 
 
@@ -390,15 +436,26 @@ def train_random_compiled(
     params: sim.SimParams = sim.PAPER_SIM,
     progress: Callable[[int], None] | None = None,
     chunk: int = 50,
+    env_rng: np.random.Generator | None = None,
 ) -> np.ndarray:
     """:func:`train_compiled` on a new pipe of the training family ``suite`` every episode.
 
     Episode ``e``'s pipe is ``suite.draw(pipe_rng, ...)``, drawn in episode order; each chunk's
-    pipes are generated before its compiled call and concatenated into one array. The numbers
-    equal :func:`train` on ``PipelineFollowingEnv("random:NAME", episode_seconds)`` whose
-    generator ``np_random`` is ``pipe_rng`` (tested). Returns (episodes, 4) statistics.
+    pipes are generated before its compiled call and concatenated into one array. Without random
+    disturbances the numbers equal :func:`train` on ``PipelineFollowingEnv("random:NAME",
+    episode_seconds)`` whose generator ``np_random`` is ``pipe_rng`` (tested). Random disturbances
+    (required ``env_rng``) draw from ``env_rng``, a stream of their own, where the environment
+    draws them from ``np_random`` between its pipes. Returns (episodes, 4) statistics.
     """
+    from pipefollow.disturbance import check, noise_count
     from pipefollow.suites import min_length_for
+
+    check(params.disturbance)
+    dz = np.zeros(noise_count(params.disturbance))
+    if env_rng is None:
+        if dz.size:
+            raise ValueError("params.disturbance has random parts: pass a seeded env_rng")
+        env_rng = np.random.default_rng(0)  # not drawn from: no random parts
 
     sigmas = np.array([linear_sigma(e, episodes, sigma_start, sigma_end) for e in range(episodes)])
     n_decisions = int(round(episode_seconds / (params.dt * params.substeps)))
@@ -425,7 +482,7 @@ def train_random_compiled(
         if isinstance(agent, cacla_mod.Cacla):
             _cacla_random_episodes(
                 agent.weights, cacla_mod.pack(agent.params), pts, cum, pipe_offsets, starts, simp, sig,
-                n_decisions, centres, offsets, widths, normalized, agent.rng, out,
+                n_decisions, centres, offsets, widths, normalized, agent.rng, out, env_rng, dz,
             )  # fmt: skip
         else:
             ac, _, aw = agent.action_grid.packed
@@ -433,7 +490,7 @@ def train_random_compiled(
                 agent.weights, agent.params.alpha, agent.params.discount, agent.search_actions,
                 agent.search_psi, ac, float(aw[0]), agent.action_grid.form == "normalized", pts, cum,
                 pipe_offsets, starts, simp, sig, n_decisions, centres, offsets, widths, normalized,
-                agent.rng, out,
+                agent.rng, out, env_rng, dz,
             )  # fmt: skip
         if progress is not None:
             progress(hi)

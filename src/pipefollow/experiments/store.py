@@ -86,6 +86,7 @@ RESULT_MODULES = (
     "cacla.py",
     "camera.py",
     "controller.py",
+    "disturbance.py",
     "dynamics.py",
     "env.py",
     "exploration.py",
