@@ -114,13 +114,57 @@ def test_cli_benchmark_json_and_plot(tmp_path):
     res = CliRunner().invoke(main, [*args, "--seconds", "20", "--json", "--plot", str(plot)])
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
-    assert set(out) == KEYS | {"vs_heuristic"}
+    assert set(out) == KEYS | {"vs_heuristic", "readings"} and out["readings"] == "default"
     assert set(out["vs_heuristic"]) == {"mean_diff", "ci95_diff", "win_rate"}
     assert set(out["episodes"][0]) == {"name", "return", "pipe_in_view", "progress_m", "rms_e_dist"}
     assert out["controller"] == str(policy) and out["suite"] == "heldout-easy" and out["n_episodes"] == 5
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     res = CliRunner().invoke(main, ["benchmark", "--pipes", "3", "--json"])
-    assert res.exit_code == 0 and set(json.loads(res.stdout)) == KEYS
+    assert res.exit_code == 0 and set(json.loads(res.stdout)) == KEYS | {"readings"}
+
+
+def test_cli_benchmark_with_a_current_camera_noise_and_los():
+    args = [
+        "benchmark",
+        "--controller",
+        "los",
+        "--lookahead",
+        "1.2",
+        "--suite",
+        "heldout-easy",
+        "--pipes",
+        "4",
+    ]
+    args += ["--seconds", "20", "--current", "0.1,45", "--camera-noise", "0.05", "--miss-prob", "0.02"]
+    res = CliRunner().invoke(main, [*args, "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["disturbance"]["camera_noise"] == 0.05 and out["n_episodes"] == 4
+    assert out == json.loads(CliRunner().invoke(main, [*args, "--json"]).stdout)  # seeded
+    other = json.loads(CliRunner().invoke(main, [*args, "--json", "--seed", "1"]).stdout)
+    assert other["mean_return"] != out["mean_return"]  # the noise follows --seed
+    bad = CliRunner().invoke(main, ["benchmark", "--lookahead", "1.0", "--pipes", "2"])
+    assert bad.exit_code == 2 and "--lookahead applies to --controller los only" in bad.stderr
+
+
+@pytest.mark.parametrize("kind", ["heuristic", "los", "cacla", "sarsa"])
+def test_compiled_episodes_equal_the_environment_under_random_disturbances(kind):
+    from pipefollow import simulation as sim
+    from pipefollow.disturbance import make_disturbance
+    from pipefollow.los import LOS
+
+    agent = LOS(1.3) if kind == "los" else _random_agent(kind)
+    params = sim.PAPER_SIM._replace(
+        disturbance=make_disturbance(0.1, 120.0, camera_noise=0.05, miss_prob=0.03)
+    )
+    pipes = get_suite("heldout").pipes(3)
+    res, poses = run_episodes(agent, pipes, 30.0, params, seed=7)
+    env_res, env_poses = np.zeros_like(res), np.zeros_like(poses)
+    _env_episodes(agent, pipes, 30.0, params, env_res, env_poses, seed=7)
+    np.testing.assert_allclose(res, env_res, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(poses, env_poses, rtol=0, atol=1e-9)
+    clean, _ = run_episodes(agent, pipes, 30.0, seed=7)
+    assert not np.allclose(clean, res)  # the disturbances changed the episodes
 
 
 @pytest.mark.parametrize(

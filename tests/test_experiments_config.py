@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -222,3 +223,27 @@ def test_trial_entries_that_are_not_tables(tmp_path):
     path.write_text('trial = [1, 2]\n[experiment]\nname = "x"\n')
     with pytest.raises(ConfigError, match=r"\[\[trial\]\] #1 must be a table"):
         load_experiment(path)
+
+
+def test_a_disturbance_table_trains_and_evaluates_under_it(tmp_path):
+    import dataclasses
+    import math
+
+    from pipefollow.experiments.trial import run_trial
+
+    text = MINIMAL + (
+        "phases = [{ pipeline = 'paper-left', episodes = 3 }]\n"
+        "disturbance = { current_speed = 0.1, current_direction_deg = 90, camera_noise = 0.05 }\n"
+    )
+    t = load_experiment(write_toml(tmp_path, text)).trials[0]
+    assert t.disturbance == {"current_speed": 0.1, "current_direction_deg": 90, "camera_noise": 0.05}
+    a, b = run_trial(t, 3), run_trial(t, 3)
+    np.testing.assert_array_equal(a.stats, b.stats)  # seeded: the same noise
+    assert a.evaluation == b.evaluation
+    calm = run_trial(dataclasses.replace(t, disturbance=None), 3)
+    assert not np.array_equal(calm.stats, a.stats)
+    assert all(math.isfinite(v) for v in a.evaluation["learned"])
+    with pytest.raises(ConfigError, match=r"key .disturbance.: camera_noise must be ≥ 0, got -1"):
+        load_experiment(write_toml(tmp_path, MINIMAL + "disturbance = { camera_noise = -1 }\n"))
+    with pytest.raises(ConfigError, match=r"unknown key 'wind'"):
+        load_experiment(write_toml(tmp_path, MINIMAL + "disturbance = { wind = 3 }\n"))

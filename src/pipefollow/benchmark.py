@@ -1,9 +1,12 @@
 """Benchmark a controller on a suite of pipes: one deterministic episode per pipe, beside the heuristic.
 
-The episodes of the paper's controllers (heuristic, CACLA, SARSA policies) run in one compiled
-call over all pipes, their points concatenated into one array with offsets; other controllers
-(anything with ``act(obs, explore)``) run through the Gymnasium environment. Both give the same
-numbers (tested). The summary has bootstrap confidence intervals (:mod:`pipefollow.stats`).
+The episodes of the built-in controllers (heuristic, LOS) and of CACLA and SARSA policies run in
+one compiled call over all pipes, their points concatenated into one array with offsets; other
+controllers (anything with ``act(obs, explore)``) run through the Gymnasium environment. Both give
+the same numbers (tested). Random disturbances (camera noise, misses, a varying current) draw
+pipe ``i``'s standard normals from ``numpy.random.default_rng([seed, i])``, so every controller
+meets the same noise on the same pipe (common random numbers for the paired comparison). The
+summary has bootstrap confidence intervals (:mod:`pipefollow.stats`).
 
 Definitions:
 
@@ -26,14 +29,16 @@ from numba import njit
 from pipefollow import cacla as cacla_mod
 from pipefollow import sarsa as sarsa_mod
 from pipefollow import simulation as sim
+from pipefollow.disturbance import noise_count
 from pipefollow.heuristic import Heuristic, heuristic_action
+from pipefollow.los import LOS, los_action
 from pipefollow.pipeline import Pipeline
 from pipefollow.rbf import STATE_GRID, grid_features
 from pipefollow.stats import bootstrap_ci, iqm, paired_difference
 from pipefollow.suites import Suite, min_length_for
 
 SUCCESS_IN_VIEW = 0.95
-HEURISTIC, CACLA, SARSA = 0, 1, 2  # controller kinds of the compiled episodes
+HEURISTIC, CACLA, SARSA, LOS_KIND = 0, 1, 2, 3  # controller kinds of the compiled episodes
 
 # Columns of the per-episode results.
 RET, IN_VIEW, PROGRESS, SUM_E2, N_SEEN = 0, 1, 2, 3, 4
@@ -42,11 +47,22 @@ RET, IN_VIEW, PROGRESS, SUM_E2, N_SEEN = 0, 1, 2, 3, 4
 # without a compiled kind (see :func:`_compiled_kind`) runs through the environment.
 CONTROLLERS: dict[str, Callable[[], object]] = {
     "heuristic": Heuristic,
+    "los": LOS,
 }
 
 
-def load_controller(spec: str, seed: int = 0):
-    """A built-in controller name (:data:`CONTROLLERS`) or a policy file → an agent."""
+def load_controller(spec: str, seed: int = 0, lookahead: float | None = None):
+    """A built-in controller name (:data:`CONTROLLERS`) or a policy file → an agent.
+
+    ``lookahead`` (m) sets the LOS controller's Δ (its default when None).
+
+    Raises:
+        ValueError: ``lookahead`` given for another controller than ``los``.
+    """
+    if lookahead is not None:
+        if spec != "los":
+            raise ValueError("--lookahead applies to --controller los only")
+        return LOS(lookahead)
     if spec in CONTROLLERS:
         return CONTROLLERS[spec]()
     from pipefollow.policy import load_policy
@@ -72,6 +88,8 @@ def _suite_episodes(
     normalized,
     out,
     poses,
+    lookahead,
+    z_all,
 ):
     ps = sim.unpack_params(simp)
     p = cacla_mod.unpack(hp)
@@ -81,7 +99,7 @@ def _suite_episodes(
         pts = points_all[offsets[e] : offsets[e + 1]]
         cum = cum_all[offsets[e] : offsets[e + 1]]
         psi0 = math.atan2(pts[1, 1] - pts[0, 1], pts[1, 0] - pts[0, 0])
-        sim.init_state(s, pts, cum, pts[0, 0], pts[0, 1], psi0, ps)
+        sim.init_state(s, pts, cum, pts[0, 0], pts[0, 1], psi0, ps, z_all[e, 0])
         poses[e, 0, 0], poses[e, 0, 1], poses[e, 0, 2] = s[sim.X], s[sim.Y], s[sim.PSI]
         total = 0.0
         seen = 0
@@ -91,6 +109,8 @@ def _suite_episodes(
             if s[sim.IN_VIEW] != 0.0:
                 if kind == HEURISTIC:
                     a = heuristic_action(s[sim.X1], s[sim.Y1])
+                elif kind == LOS_KIND:  # from the observation alone, as the LOS agent (y_near = 0)
+                    a = los_action(s[sim.X1], s[sim.Y1], s[sim.X2], 0.0, lookahead)
                 else:
                     grid_features(s[:4], centres, grid_offsets, widths, normalized, phi)
                     if kind == CACLA:
@@ -98,7 +118,7 @@ def _suite_episodes(
                         a, _ = cacla_mod.act(w, phi, 0.0, 0.0, 0.0, a_sup, p)
                     else:
                         a = sarsa_mod.choose(w, phi, search_actions, search_psi, 0.0, 0.0)
-            total += sim.decide(s, a, pts, cum, ps)
+            total += sim.decide(s, a, pts, cum, ps, z_all[e, t + 1])
             if s[sim.IN_VIEW] != 0.0:
                 seen += 1
                 sum_e2 += s[sim.E_DIST] * s[sim.E_DIST]
@@ -115,6 +135,8 @@ def _compiled_kind(agent):
     empty = np.zeros((1, 1))
     if isinstance(agent, Heuristic):
         return HEURISTIC, np.zeros((4, 1)), cacla_mod.pack(cacla_mod.PAPER_CACLA), np.zeros(1), empty
+    if isinstance(agent, LOS):
+        return LOS_KIND, np.zeros((4, 1)), cacla_mod.pack(cacla_mod.PAPER_CACLA), np.zeros(1), empty
     if isinstance(agent, cacla_mod.Cacla) and agent.default_supervisor:
         return CACLA, agent.weights, cacla_mod.pack(agent.params), np.zeros(1), empty
     if isinstance(agent, sarsa_mod.Sarsa):
@@ -137,11 +159,17 @@ def concatenate(pipes: Sequence[Pipeline]) -> tuple[np.ndarray, np.ndarray, np.n
     return points, cum, offsets
 
 
+def noise_generator(seed: int, i: int) -> np.random.Generator:
+    """The generator of pipe ``i``'s random disturbances in a benchmark with ``seed``."""
+    return np.random.default_rng([seed, i])
+
+
 def run_episodes(
-    agent, pipes: Sequence[Pipeline], seconds: float, params: sim.SimParams = sim.PAPER_SIM
+    agent, pipes: Sequence[Pipeline], seconds: float, params: sim.SimParams = sim.PAPER_SIM, seed: int = 0
 ) -> tuple[np.ndarray, np.ndarray]:
     """One deterministic episode (σ = 0) of ``agent`` per pipe.
 
+    Random disturbances of ``params`` draw from :func:`noise_generator` (``seed``, pipe index).
     Returns ``(results, poses)``: (pipes, 5) columns return, pipe_in_view, progress_m, Σ e_dist²
     and number of decisions in view; (pipes, decisions + 1, 3) poses (x, y, ψ).
     """
@@ -150,25 +178,31 @@ def run_episodes(
     poses = np.zeros((len(pipes), n_decisions + 1, 3))
     compiled = _compiled_kind(agent)
     if compiled is None:
-        _env_episodes(agent, pipes, seconds, params, out, poses)
+        _env_episodes(agent, pipes, seconds, params, out, poses, seed)
         return out, poses
+    k = noise_count(params.disturbance)
+    z_all = np.zeros((len(pipes), n_decisions + 1, k))
+    if k:  # the readings' normals in the order the environment draws them: reset, then each step
+        for i in range(len(pipes)):
+            z_all[i] = noise_generator(seed, i).standard_normal((n_decisions + 1, k))
     kind, w, hp, sa, spsi = compiled
-    grid = STATE_GRID if kind == HEURISTIC else agent.grid  # the heuristic computes no features
+    grid = STATE_GRID if kind in (HEURISTIC, LOS_KIND) else agent.grid  # these compute no features
     grid_arrays, normalized = grid.packed, grid.form == "normalized"
     points, cum, offsets = concatenate(pipes)
     _suite_episodes(
         kind, w, hp, sa, spsi, points, cum, offsets, sim.pack_params(params), n_decisions,
-        *grid_arrays, normalized, out, poses,
+        *grid_arrays, normalized, out, poses, getattr(agent, "lookahead", 0.0), z_all,
     )  # fmt: skip
     return out, poses
 
 
-def _env_episodes(agent, pipes, seconds, params, out, poses) -> None:
+def _env_episodes(agent, pipes, seconds, params, out, poses, seed=0) -> None:
     """:func:`run_episodes` through the Gymnasium environment, for controllers without a compiled kind."""
     from pipefollow.env import PipelineFollowingEnv
 
     for i, pipe in enumerate(pipes):
         env = PipelineFollowingEnv(pipe, seconds, params=params)
+        env.np_random = noise_generator(seed, i)
         agent.begin_episode(0.0)
         obs, info = env.reset()
         done = False
@@ -220,16 +254,16 @@ def benchmark(
         seconds: episode length.
         params: the simulated system, disturbances included, for every episode.
         n_pipes: number of pipes (default: the whole held-out suite; 100 of a training family).
-        seed: seed of the bootstrap resampling.
+        seed: seed of the bootstrap resampling and of the random disturbances.
     """
     n = n_pipes if n_pipes is not None else (suite.count or 100)
     pipes = suite.pipes(n, min_length_for(seconds))
-    res, poses = run_episodes(agent, pipes, seconds, params)
+    res, poses = run_episodes(agent, pipes, seconds, params, seed)
     is_heuristic = isinstance(agent, Heuristic)
     if is_heuristic:
         h_res, h_poses = res, poses
     else:
-        h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params)
+        h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params, seed)
     ret = res[:, RET]
     lo, hi = bootstrap_ci(ret, seed)
     summary = {

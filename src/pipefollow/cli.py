@@ -142,19 +142,14 @@ _LEARNING_RATES = ("alpha_v", "alpha_pi", "discount", "delta_k", "k_max", "forge
 
 def load_controller(spec: str, seed: int, lookahead: float | None = None):
     """``heuristic``, ``los`` (lookahead Δ in m) or a policy file → an agent."""
-    if lookahead is not None and spec != "los":
-        raise UserError("--lookahead applies to --controller los only")
-    if spec == "heuristic":
-        from pipefollow.heuristic import Heuristic
+    from pipefollow.benchmark import load_controller as load
 
-        return Heuristic()
-    if spec == "los":
-        from pipefollow.los import DEFAULT_LOOKAHEAD, LOS
-
-        return LOS(DEFAULT_LOOKAHEAD if lookahead is None else lookahead)
-    from pipefollow.policy import load_policy
-
-    return load_policy(spec, seed=seed)
+    try:
+        return load(spec, seed, lookahead)
+    except ValueError as e:
+        if isinstance(e, USER_ERRORS):
+            raise
+        raise UserError(str(e)) from None
 
 
 def _summary(stats) -> dict:
@@ -693,23 +688,19 @@ def suites_export(name, out_dir, pipes, seconds, as_json):
     click.echo(f"wrote {len(paths)} pipes of '{name}' to {out}")
 
 
-def _benchmark_params():
-    """The simulated system of a benchmark's episodes.
-
-    Disturbance options of ``benchmark`` (current, camera noise, missed detections) are turned
-    into fields of the returned :class:`~pipefollow.simulation.SimParams` here.
-    """
-    from pipefollow.simulation import PAPER_SIM
-
-    return PAPER_SIM
-
-
 @main.command()
 @click.option(
     "--controller",
     default="heuristic",
     show_default=True,
-    help="'heuristic' or a policy file (.npz) written by 'pipefollow train'.",
+    help="'heuristic', 'los' (line-of-sight guidance) or a policy file (.npz) written by 'pipefollow train'.",
+)
+@click.option(
+    "--lookahead",
+    type=click.FloatRange(min=0.0, min_open=True),
+    callback=_finite,
+    default=None,
+    help="LOS lookahead distance Δ in metres [default: 1.5].",
 )
 @click.option(
     "--suite", "suite_name", default="heldout", show_default=True, help="Suite (see 'pipefollow suites')."
@@ -728,7 +719,13 @@ def _benchmark_params():
     default=None,
     help="Number of pipes [default: all of a held-out suite, 100 of a training family].",
 )
-@click.option("--seed", default=0, show_default=True, type=int, help="Seed of the bootstrap resampling.")
+@click.option(
+    "--seed",
+    default=0,
+    show_default=True,
+    type=int,
+    help="Seed of the bootstrap resampling and of the random disturbances.",
+)
 @click.option(
     "--plot",
     "plot_path",
@@ -736,9 +733,13 @@ def _benchmark_params():
     default=None,
     help="Save a PNG: per-pipe return differences to the heuristic and a few trajectories.",
 )
+@_reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@_disturbance.click_options
 @_guard
-def benchmark(controller, suite_name, seconds, pipes, seed, plot_path, as_json):
+def benchmark(
+    controller, lookahead, suite_name, seconds, pipes, seed, plot_path, readings, as_json, disturbance
+):
     """Run a controller deterministically on every pipe of a suite, beside the heuristic.
 
     Reports the mean return with a bootstrap 95 % confidence interval, the interquartile mean,
@@ -747,22 +748,26 @@ def benchmark(controller, suite_name, seconds, pipes, seed, plot_path, as_json):
     """
     from pipefollow.benchmark import benchmark as run_benchmark
     from pipefollow.benchmark import format_summary
-    from pipefollow.benchmark import load_controller as load_benchmark_controller
+    from pipefollow.readings import sim_params
     from pipefollow.suites import get_suite
 
     suite = get_suite(suite_name)
     if suite.count is not None and pipes is not None and pipes > suite.count:
         raise UserError(f"--pipes {pipes}: suite '{suite_name}' has {suite.count} pipes")
-    agent = load_benchmark_controller(controller, seed)
+    agent = load_controller(controller, seed, lookahead)
+    reading = _readings(readings, getattr(agent, "readings", "default"))
     run = run_benchmark(
         agent,
         suite,
         controller=controller,
         seconds=seconds,
-        params=_benchmark_params(),
+        params=sim_params(reading)._replace(disturbance=disturbance),
         n_pipes=pipes,
         seed=seed,
     )
+    run.summary["readings"] = reading.id
+    if disturbance != _disturbance.NO_DISTURBANCE:
+        run.summary["disturbance"] = _disturbance.to_dict(disturbance)
     if plot_path:
         from pipefollow.benchmark_plot import plot_benchmark
 

@@ -65,6 +65,11 @@ class TrialConfig:
     readings: tuple[str, ...] = _f(
         (), "readings of the paper's open points, as key=value ids (docs/design.md); later ones win"
     )
+    disturbance: dict | None = _f(
+        None,
+        "ocean current and camera faults in training and evaluation: a table of "
+        "pipefollow.disturbance.TOML_KEYS (m/s, degrees, m); none by default",
+    )
     evaluate_on: str = _f("", "after training, evaluate deterministically on this pipeline ('' = none)")
     evaluate_seconds: float = _f(60.0, "length of the evaluation episode (s) (paper §4.2)")
     figures: tuple[str, ...] = _f((), "figures/tables of the report that use this trial (fig5, fig6, ...)")
@@ -140,6 +145,10 @@ def _coerce(cls, data: dict, where: str):
         if f.name == "trials":
             kwargs[f.name] = value
             continue
+        if f.name == "disturbance":
+            _check_disturbance(value, key)
+            kwargs[f.name] = dict(value)
+            continue
         if f.name in ("figures", "readings", "compare_readings"):
             if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
                 raise ConfigError(f"{key} must be a list of strings")
@@ -168,6 +177,15 @@ def _coerce(cls, data: dict, where: str):
 
 
 NAME_PATTERN = r"[A-Za-z0-9_.@=,+-]+"  # trial names are file names; '@' joins a name and a reading id
+
+
+def _check_disturbance(table, where: str) -> None:
+    from pipefollow.disturbance import DisturbanceError, disturbance_from_dict
+
+    try:
+        disturbance_from_dict(table, where)
+    except DisturbanceError as e:
+        raise ConfigError(str(e)) from None
 
 
 def _check_readings(ids, where: str) -> None:

@@ -9,6 +9,7 @@ import numpy as np
 
 from pipefollow.agents import make_agent
 from pipefollow.cacla import Cacla
+from pipefollow.disturbance import disturbance_from_dict
 from pipefollow.env import PipelineFollowingEnv
 from pipefollow.experiments.config import TrialConfig
 from pipefollow.exploration import linear_sigma
@@ -87,6 +88,10 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
     rng = np.random.default_rng(seed)
     agent = build_agent(config, rng)
     params = sim_params(config.reading)
+    if config.disturbance:
+        params = params._replace(disturbance=disturbance_from_dict(config.disturbance))
+    # random disturbances draw from a stream of their own, as `pipefollow train` does
+    env_rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
     scale = sigma_scale(config.reading)  # σ in normalized action units
     sigma_start, sigma_end = config.sigma_start * scale, config.sigma_end * scale
     stats, phase, sigma = [], [], []
@@ -98,6 +103,7 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
             sigma_start=sigma_start,
             sigma_end=sigma_end,
             params=params,
+            env_rng=env_rng,
         )
         if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the trial's generator
             pipe_rng = pipe_rng if pipe_rng is not None else rng.spawn(1)[0]
@@ -116,8 +122,8 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
     if config.algorithm == "cacla" and config.supervised:
         controllers["actor"] = ActorOnly(agent)
     evaluation, poses = {}, {}
-    for name, controller in controllers.items():
-        ep = run_episode(env, controller)
+    for name, controller in controllers.items():  # the same seed: the same disturbances, if any
+        ep = run_episode(env, controller, seed=seed)
         evaluation[name] = ep.as_row()
         poses[name] = ep.poses
     return TrialResult(
