@@ -139,7 +139,7 @@ def read_config(run_dir: str | os.PathLike) -> ExperimentConfig:
     if not run_dir.is_dir():
         raise StoreError(f"run folder '{run_dir}': no such folder")
     try:
-        data = json.loads(path.read_text())
+        data = json.loads(path.read_text(encoding="utf-8"))
         return from_dict(data)
     except FileNotFoundError:
         msg = f"'{run_dir}' is not a run folder (no {CONFIG_FILE}; 'pipefollow reproduce' writes one)"
@@ -162,7 +162,7 @@ def prepare(run_dir: str | os.PathLike, exp: ExperimentConfig) -> Path:
     path = run_dir / CONFIG_FILE
     if path.exists():
         try:
-            stored = json.loads(path.read_text())
+            stored = json.loads(path.read_text(encoding="utf-8"))
             same = from_dict(stored) == exp
         except (OSError, ValueError, KeyError, TypeError) as e:
             raise StoreError(f"run folder '{run_dir}': unreadable {CONFIG_FILE} ({e})") from None
