@@ -347,3 +347,15 @@ def test_result_modules_exist_and_cover_the_compiled_learning_code():
     assert {"simulation.py", "cacla.py", "sarsa.py", "training.py", "experiments/trial.py"} <= set(
         store.RESULT_MODULES
     )
+
+
+def test_the_lock_file_goes_when_the_run_ends(tmp_path):
+    with store.locked(tmp_path / "run") as run_dir:
+        assert (run_dir / store.LOCK_FILE).exists()
+        with pytest.raises(ConfigError, match="in use by another pipefollow run"):
+            with store.locked(run_dir):
+                pass
+        assert (run_dir / store.LOCK_FILE).exists()  # the refused second run leaves the lock alone
+    assert not (run_dir / store.LOCK_FILE).exists()
+    with store.locked(run_dir):  # and the folder can be locked again
+        pass

@@ -43,8 +43,11 @@ def atomic_file(path: str | os.PathLike, mode: str = "wb") -> Iterator[IO]:
             f.flush()
             os.fsync(f.fileno())  # the rename must not overtake the data (power loss, not just kill)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError) and e.errno is not None and e.filename is None:
+            # a failed write (a full disk) names no file: name the one the caller asked for
+            raise type(e)(e.errno, e.strerror, str(path)) from None
         raise
 
 

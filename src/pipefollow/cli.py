@@ -11,10 +11,14 @@ import numpy as np
 
 from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS, ConfigError
 from pipefollow.experiments.store import StoreError
+from pipefollow.outputs import OutputError
 from pipefollow.pipeline import PipelineError
 from pipefollow.policy import PolicyError
 
-USER_ERRORS: tuple[type[Exception], ...] = (PipelineError, PolicyError, ConfigError, StoreError)
+USER_ERRORS: tuple[type[Exception], ...] = (PipelineError, PolicyError, ConfigError, StoreError, OutputError)
+
+# Seeds: what NumPy's SeedSequence takes, any non-negative integer (no upper bound).
+SEED = click.IntRange(min=0)
 
 
 class UserError(click.ClickException):
@@ -54,6 +58,10 @@ def _guard(fn):
     return wrapper
 
 
+# click ≥ 8.2 raises this for a bare group; older versions print the help and exit 0 themselves
+_NO_ARGS_IS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())
+
+
 class _OneLineErrors(click.Group):
     """Click's own usage errors (a bad option value, a missing option) on one line, exit 2."""
 
@@ -62,9 +70,12 @@ class _OneLineErrors(click.Group):
             return super().main(args, prog_name, complete_var, standalone_mode, **extra)
         try:
             rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
-        except click.exceptions.Abort:
-            click.echo("pipefollow: aborted", err=True)
-            sys.exit(1)
+        except click.exceptions.Abort:  # Ctrl-C: the shell's convention, 128 + SIGINT
+            click.echo("pipefollow: interrupted", err=True)
+            sys.exit(130)
+        except _NO_ARGS_IS_HELP as e:  # the bare command asks for help; it is not an error
+            click.echo(e.ctx.get_help() if e.ctx else self.get_help(click.Context(self)))
+            sys.exit(0)
         except click.ClickException as e:
             if isinstance(e, UserError):
                 e.show()
@@ -164,7 +175,7 @@ def _summary(stats) -> dict:
     default=None,
     help="Episode length in seconds [default: 60 on paper-validation, else 20].",
 )
-@click.option("--seed", default=0, show_default=True, type=int, help="Seed of the start perturbation.")
+@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the start perturbation.")
 @click.option(
     "--start-noise",
     default=0.0,
@@ -186,7 +197,7 @@ def _summary(stats) -> dict:
     "plot_path",
     type=click.Path(dir_okay=False),
     default=None,
-    help="Save a trajectory plot (PNG) of the first episode.",
+    help="Save a trajectory plot of the first episode (.png, .svg, .pdf, .jpg, ...).",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @_guard
@@ -196,6 +207,10 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
     from pipefollow.pipeline import resolve
     from pipefollow.training import run_episode
 
+    if plot_path:
+        from pipefollow.outputs import check_output_file, image_formats
+
+        check_output_file(plot_path, "--plot", tuple(image_formats()))
     pipe = resolve(pipeline)
     agent = load_controller(controller, seed)
     env = PipelineFollowingEnv(pipe, _default_seconds(pipeline, seconds), start_noise, heading_noise)
@@ -259,7 +274,7 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
     callback=_finite,
     help="Episode length in seconds.",
 )
-@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--seed", default=0, show_default=True, type=SEED)
 @click.option(
     "--out",
     "out_dir",
@@ -274,6 +289,7 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
     default=None,
     help="Continue training from this policy file (e.g. left turns, then right turns).",
 )
+@click.option("--force", is_flag=True, help="Replace the policy and learning curve already in --out.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
 @_guard
 def train(
@@ -287,9 +303,14 @@ def train(
     seed,
     out_dir,
     init_policy,
+    force,
     as_json,
 ):
-    """Train a learner; writes the policy and its learning curve."""
+    """Train a learner; writes the policy and its learning curve.
+
+    An --out folder that already holds them is refused unless --force is given. Ctrl-C stops
+    without writing anything (exit status 130).
+    """
     from pipefollow.agents import make_agent
     from pipefollow.exploration import skew_step_to_gamma
     from pipefollow.pipeline import resolve
@@ -320,23 +341,35 @@ def train(
     else:
         extra = {"skew_centred": True} if skew_centred else {}
         agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng, **extra)
+    from pipefollow.results import TRAINING_OUTPUTS, write_training_outputs
+
+    existing = [name for name in TRAINING_OUTPUTS if (Path(out_dir) / name).exists()]
+    if existing and not force:
+        raise UserError(f"--out '{out_dir}' already holds {existing[0]}; use --force to replace it")
+    made = not Path(out_dir).exists()
     out = _writable_folder(out_dir, "--out")  # before training, after the checks of --init
     show = not as_json and sys.stderr.isatty()
-    with click.progressbar(
-        length=episodes, label=f"training {agent.name}", file=sys.stderr, hidden=not show
-    ) as bar:
-        done = [0]
+    try:
+        with click.progressbar(
+            length=episodes, label=f"training {agent.name}", file=sys.stderr, hidden=not show
+        ) as bar:
+            done = [0]
 
-        def progress(n):
-            bar.update(n - done[0])
-            done[0] = n
+            def progress(n):
+                bar.update(n - done[0])
+                done[0] = n
 
-        stats = train_compiled(agent, pipe, episodes, episode_seconds=seconds, progress=progress)
-    from pipefollow.policy import save_policy
-    from pipefollow.results import write_learning_curve
-
-    policy_path = save_policy(agent, out / "policy.npz", pipeline=pipe.name, episodes=episodes, seed=seed)
-    curve_path = write_learning_curve(out / "learning_curve.csv", stats, episodes)
+            stats = train_compiled(agent, pipe, episodes, episode_seconds=seconds, progress=progress)
+        policy_path, curve_path = write_training_outputs(
+            out, agent, stats, episodes, pipeline=pipe.name, seed=seed
+        )
+    except BaseException as e:
+        if made and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()  # an interrupted or failed run leaves no empty --out behind
+        if isinstance(e, KeyboardInterrupt):
+            click.echo(f"pipefollow: interrupted; nothing written to '{out_dir}'", err=True)
+            sys.exit(130)
+        raise
     result = {
         "algorithm": agent.name,
         "policy": str(policy_path),
@@ -409,7 +442,7 @@ def _write_figures(run_dir: Path, required: bool) -> list[Path]:
     help="Episodes of every training phase [default: the experiment's, 500 for the paper].",
 )
 @click.option(
-    "--seed", type=int, default=None, help="Seed of the first repeat [default: 2010 for the paper]."
+    "--seed", type=SEED, default=None, help="Seed of the first repeat [default: 2010 for the paper]."
 )
 @click.option(
     "--experiment",
@@ -471,7 +504,9 @@ def reproduce(
         click.echo(f"pipefollow: {e.message}", err=True)
         sys.exit(130)
     outputs = list(run.tables)
-    if not no_figures:
+    if run.read_only:
+        click.echo(f"note: '{run.run_dir}' is complete and read-only: summarised, nothing written", err=True)
+    elif not no_figures:
         outputs += _write_figures(run.run_dir, required=False)
     per_trial = summary(run.run_dir, exp)
     if as_json:

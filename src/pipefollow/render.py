@@ -138,8 +138,18 @@ def plot_trajectories(
 
 
 def save_figure(fig, path: str | os.PathLike) -> None:
-    """Save a figure as PNG, atomically."""
-    from pipefollow.atomic import atomic_file
+    """Save a figure atomically, in the format its suffix names (PNG without a suffix).
 
+    Raises:
+        ValueError: a suffix that is not an image format Matplotlib writes.
+    """
+    from pathlib import Path
+
+    from pipefollow.atomic import atomic_file
+    from pipefollow.outputs import image_formats
+
+    fmt = Path(path).suffix.lower().lstrip(".") or "png"
+    if fmt not in image_formats():
+        raise ValueError(f"'{path}': '.{fmt}' is not an image format Matplotlib writes")
     with atomic_file(path) as f:
-        fig.savefig(f, format="png", dpi=110)
+        fig.savefig(f, format=fmt, dpi=110)

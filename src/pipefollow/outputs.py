@@ -1,0 +1,39 @@
+"""Checks of output file names given on the command line, made before any long work."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+
+class OutputError(ValueError):
+    """An output file that cannot be written as asked; the message names the option and the file."""
+
+
+def image_formats() -> dict[str, str]:
+    """File suffix (without the dot) → description of the image formats Matplotlib writes."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    return dict(FigureCanvasBase.get_supported_filetypes())
+
+
+def check_output_file(path: str | os.PathLike, option: str, suffixes: tuple[str, ...]) -> str:
+    """Check that ``path`` has one of ``suffixes`` and that its folder can exist; returns the suffix.
+
+    Raises:
+        OutputError: an unknown suffix, the path is a folder, or a parent is a file.
+    """
+    p = Path(path)
+    suffix = p.suffix.lower().lstrip(".")
+    if suffix not in suffixes:
+        got = f"'.{suffix}'" if suffix else "no suffix"
+        known = ", ".join(f".{x}" for x in suffixes)
+        raise OutputError(f"{option} '{p}': {got} is not a known file type; use one of {known}")
+    if p.is_dir():
+        raise OutputError(f"{option} '{p}': is a folder")
+    for parent in p.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise OutputError(f"{option} '{p}': '{parent}' is a file, not a folder")
+            break
+    return suffix
