@@ -13,6 +13,9 @@ from gymnasium import spaces
 from pipefollow import simulation as sim
 from pipefollow.pipeline import Pipeline, resolve
 
+# The longest episode the environment runs (a day of 1-s decisions): the registered
+# ``max_episode_steps``, which must not cut any episode shorter than its ``episode_seconds``.
+MAX_EPISODE_SECONDS = 86_400.0
 
 class PipelineFollowingEnv(gym.Env):
     """An AUV following a subsea pipeline with a downward camera (Fjerdingen et al., 2010).
@@ -31,7 +34,8 @@ class PipelineFollowingEnv(gym.Env):
 
     ``Box(-1, 1, (1,), float32)``: the waypoint bearing relative to the heading in units of 90°;
     positive turns to starboard, negative to port. Actions outside [-1, 1] are clipped; a NaN
-    action raises ``ValueError``. While the pipe is lost the action is ignored.
+    action or one of another shape than ``(1,)`` (a plain number is accepted too) raises
+    ``ValueError``. While the pipe is lost the action is ignored.
 
     ## Observation Space
 
@@ -63,7 +67,9 @@ class PipelineFollowingEnv(gym.Env):
     ## Episode End
 
     The episode is truncated after ``episode_seconds`` (one decision per second; 20 in the
-    paper's training). There is no terminal state: agents should bootstrap from the last state.
+    paper's training), at most :data:`MAX_EPISODE_SECONDS`. There is no terminal state: agents
+    should bootstrap from the last state. The registered spec's ``max_episode_steps`` is that
+    upper bound, so the ``TimeLimit`` wrapper of ``gym.make`` never ends an episode early.
 
     ## Arguments
 
@@ -97,8 +103,12 @@ class PipelineFollowingEnv(gym.Env):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         decision_seconds = params.dt * params.substeps
-        if not (math.isfinite(episode_seconds) and episode_seconds >= decision_seconds):
-            raise ValueError(f"episode_seconds must be at least {decision_seconds:g}, got {episode_seconds}")
+        longest = MAX_EPISODE_SECONDS
+        if not (math.isfinite(episode_seconds) and decision_seconds <= episode_seconds <= longest):
+            raise ValueError(
+                f"episode_seconds must be from {decision_seconds:g} to {MAX_EPISODE_SECONDS:g}, "
+                f"got {episode_seconds}"
+            )
         for name, value in (
             ("start_lateral_noise", start_lateral_noise),
             ("start_heading_noise_deg", start_heading_noise_deg),
@@ -156,7 +166,10 @@ class PipelineFollowingEnv(gym.Env):
 
     def step(self, action):
         """One 1-s decision; see the class docstring."""
-        a = float(np.asarray(action, dtype=np.float64).reshape(-1)[0])
+        arr = np.asarray(action, dtype=np.float64)
+        if arr.shape not in ((1,), ()):  # a wrong shape is a caller's bug, not an action
+            raise ValueError(f"action must have shape (1,) (or be a number), got shape {arr.shape}")
+        a = float(arr.reshape(-1)[0])
         if math.isnan(a):
             raise ValueError("action is NaN")
         a = min(1.0, max(-1.0, a))
