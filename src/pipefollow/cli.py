@@ -560,5 +560,45 @@ def plot(run_dir, as_json):
         click.echo(f"wrote {p}")
 
 
+@main.command()
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
+def pipelines(as_json):
+    """List the named pipelines --pipeline accepts, with their segments and length."""
+    from pipefollow.listings import pipeline_rows, table
+    from pipefollow.listings import pipelines as entries
+
+    rows = pipeline_rows(entries())
+    if as_json:
+        click.echo(json.dumps(rows, ensure_ascii=False))
+        return
+    columns = [("name", "name"), ("group", "group"), ("segments", "segments"), ("length_m", "length (m)")]
+    click.echo(table(rows, [*columns, ("description", "description")]))
+
+
+@main.command()
+@click.option(
+    "--experiment",
+    default="paper",
+    show_default=True,
+    help="'paper' (the shipped paper.toml) or an experiment TOML file.",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
+@_guard
+def trials(experiment, as_json):
+    """List the trials of an experiment: names for --trial, labels, learners and episodes."""
+    from pipefollow.experiments.config import load_experiment
+    from pipefollow.listings import table
+    from pipefollow.listings import trials as rows_of
+
+    exp = load_experiment(experiment)
+    rows = rows_of(exp)
+    if as_json:
+        click.echo(json.dumps(rows, ensure_ascii=False))
+        return
+    click.echo(f"{exp.name}: {len(rows)} trials, {exp.repeats} repeats each (seeds from {exp.seed})")
+    columns = [("name", "name"), ("label", "label"), ("algorithm", "algorithm"), ("options", "options")]
+    click.echo(table(rows, [*columns, ("episodes", "episodes"), ("phases", "phases")]))
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()
