@@ -1,6 +1,6 @@
 """Benchmarks: medians of the hot paths, each beside its floor and target, in one run.
 
-Usage: ``python benchmarks/run.py [--repeats N] [--no-reproduce] [--json FILE]``
+Usage: ``python benchmarks/run.py [--repeats N] [--no-reproduce] [--only TEXT] [--json FILE]``
 
 The floors are estimates of what compiled C would need (issue "Speed near the physical limit"):
 an RK4 substep ≈ 0.09 µs; a 500-episode trial is 200,000 substeps plus 10,000 learning updates,
@@ -114,6 +114,20 @@ def _trial_bench(algorithm, repeats, **kw):
     return median_time(one, max(3, repeats // 3))
 
 
+def bench_render_frame(repeats):
+    """One ``env.render()`` in rgb_array mode (the Fig. 2 view), mid-episode, with its trail."""
+    from pipefollow.env import PipelineFollowingEnv
+    from pipefollow.heuristic import Heuristic
+
+    env = PipelineFollowingEnv("paper-validation", episode_seconds=60, render_mode="rgb_array")
+    obs, _ = env.reset(seed=0)
+    agent = Heuristic()
+    for _ in range(30):  # half-way: a trail of 30 decisions
+        obs, *_ = env.step([agent.act(obs)])
+    env.render()  # the first frame builds the figure
+    return median_time(env.render, repeats, inner=5)
+
+
 def bench_reproduce(repeats):
     exe = os.path.join(os.path.dirname(sys.executable), "pipefollow")
     times = []
@@ -145,6 +159,7 @@ BENCHES = [
         0.1,
     ),
     ("SARSA trial, 500 episodes", lambda r: _trial_bench("sarsa", r), 0.1, 0.3),
+    ("render one frame (rgb_array)", bench_render_frame, None, 30e-3),
     ("pipefollow reproduce (warm)", bench_reproduce, 1.5, 8.0),
 ]
 
@@ -163,6 +178,7 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=15, help="repeats per benchmark (median)")
     ap.add_argument("--no-reproduce", action="store_true", help="skip the full-reproduction benchmark")
     ap.add_argument("--json", help="also write the figures to this JSON file")
+    ap.add_argument("--only", help="run only the benchmarks whose name contains this text")
     args = ap.parse_args(argv)
     print(
         f"# {time.strftime('%Y-%m-%d')} · {platform.processor() or platform.machine()} · "
@@ -172,6 +188,8 @@ def main(argv=None) -> int:
     results = {}
     for name, fn, floor, target in BENCHES:
         if args.no_reproduce and "reproduce" in name:
+            continue
+        if args.only and args.only not in name:
             continue
         t = fn(args.repeats)
         results[name] = {"median_s": t, "floor_s": floor, "target_s": target}
