@@ -336,3 +336,32 @@ def test_bad_plot_paths_are_refused_before_the_episodes(runner, tmp_path, monkey
     monkeypatch.chdir(tmp_path)
     res = runner.invoke(main, ["evaluate", "--plot", name])
     _one_line_error(res, f"--plot '{name}'", fragment)
+
+
+def test_evaluate_animates_the_first_episode(runner, tmp_path):
+    path = tmp_path / "sub" / "ep.gif"
+    args = ["evaluate", "--seconds", "4", "--episodes", "2", "--start-noise", "0.3", "--json"]
+    res = runner.invoke(main, [*args, "--animate", str(path)])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["animation"] == str(path) and path.read_bytes()[:4] == b"GIF8"
+    plain = json.loads(runner.invoke(main, args).stdout)  # recording changes nothing
+    assert plain["episodes"] == out["episodes"]
+
+
+@pytest.mark.parametrize(
+    "name, fragment",
+    [("ep.avi", "'.avi' is not a known file type"), ("afile/ep.gif", "is a file, not a folder")],
+)
+def test_bad_animation_paths_are_refused(runner, tmp_path, monkeypatch, name, fragment):
+    (tmp_path / "afile").write_text("")
+    monkeypatch.chdir(tmp_path)
+    res = runner.invoke(main, ["evaluate", "--animate", name])
+    _one_line_error(res, f"--animate '{name}'", fragment)
+
+
+def test_mp4_without_ffmpeg_is_a_one_line_error(runner, tmp_path, monkeypatch):
+    monkeypatch.setenv("PATH", str(tmp_path))  # no ffmpeg here
+    res = runner.invoke(main, ["evaluate", "--animate", str(tmp_path / "ep.mp4")])
+    _one_line_error(res, "--animate", "needs ffmpeg")
+    assert not (tmp_path / "ep.mp4").exists()

@@ -89,7 +89,7 @@ def test_bad_constructor_arguments():
     with pytest.raises(ValueError, match="episode_seconds"):
         PipelineFollowingEnv(episode_seconds=0.5)
     with pytest.raises(ValueError, match="render_mode"):
-        PipelineFollowingEnv(render_mode="human")
+        PipelineFollowingEnv(render_mode="ansi")
 
 
 def test_render_draws_an_image():

@@ -199,9 +199,27 @@ def _summary(stats) -> dict:
     default=None,
     help="Save a trajectory plot of the first episode (.png, .svg, .pdf, .jpg, ...).",
 )
+@click.option(
+    "--animate",
+    "animate_path",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Save an animation of the first episode in the Fig. 2 view (.gif, or .mp4 with ffmpeg).",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @_guard
-def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading_noise, plot_path, as_json):
+def evaluate(
+    controller,
+    pipeline,
+    episodes,
+    seconds,
+    seed,
+    start_noise,
+    heading_noise,
+    plot_path,
+    animate_path,
+    as_json,
+):
     """Evaluate a controller deterministically (σ = 0) on a pipeline."""
     from pipefollow.env import PipelineFollowingEnv
     from pipefollow.pipeline import resolve
@@ -211,12 +229,23 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
         from pipefollow.outputs import check_output_file, image_formats
 
         check_output_file(plot_path, "--plot", tuple(image_formats()))
+    if animate_path:
+        from pipefollow.animation import check_animation_path
+
+        check_animation_path(animate_path, "--animate")
     pipe = resolve(pipeline)
     agent = load_controller(controller, seed)
     env = PipelineFollowingEnv(pipe, _default_seconds(pipeline, seconds), start_noise, heading_noise)
-    stats = []
+    stats, frames = [], []
     for e in range(episodes):
-        stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
+        if e == 0 and animate_path:
+            from pipefollow.animation import Recorder
+
+            recorder = Recorder(env)  # the same episode, with its states kept for the animation
+            stats.append(run_episode(recorder, agent, seed=seed))
+            frames = recorder.frames
+        else:
+            stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
     result = {
         "controller": controller,
         "pipeline": pipeline,
@@ -231,6 +260,11 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
             pipe, {name: stats[0].poses}, plot_path, title=f"{name} on {pipe.name}: return {stats[0].ret:.2f}"
         )
         result["plot"] = str(plot_path)
+    if animate_path:
+        from pipefollow.animation import write_animation
+
+        write_animation(pipe, frames, animate_path, env.params)
+        result["animation"] = str(animate_path)
     if as_json:
         click.echo(json.dumps(result))
         return
@@ -244,6 +278,8 @@ def evaluate(controller, pipeline, episodes, seconds, seed, start_noise, heading
     )
     if plot_path:
         click.echo(f"plot: {plot_path}")
+    if animate_path:
+        click.echo(f"animation: {animate_path}")
 
 
 @main.command()

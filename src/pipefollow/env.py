@@ -89,7 +89,7 @@ class PipelineFollowingEnv(gym.Env):
     ``e_dist`` and ``e_angl`` hold the last sighting's values while the pipe is lost.
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 2}
 
     def __init__(
         self,
@@ -101,7 +101,7 @@ class PipelineFollowingEnv(gym.Env):
         params: sim.SimParams = sim.PAPER_SIM,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+            raise ValueError(f"render_mode must be None, 'human' or 'rgb_array', got {render_mode!r}")
         decision_seconds = params.dt * params.substeps
         longest = MAX_EPISODE_SECONDS
         if not (math.isfinite(episode_seconds) and decision_seconds <= episode_seconds <= longest):
@@ -133,6 +133,9 @@ class PipelineFollowingEnv(gym.Env):
         self.state = np.zeros(sim.STATE_SIZE)
         self._decisions = 0
         self.trail: list[tuple[float, float, float]] = []
+        self.last_reward: float | None = None  # shown by render()
+        self.episode_return = 0.0
+        self._scene = None  # the rendering's figure, made on the first render() and reused
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         """Start an episode; see the class docstring for the options."""
@@ -162,6 +165,9 @@ class PipelineFollowingEnv(gym.Env):
         )
         self._decisions = 0
         self.trail = [(x, y, psi)]
+        self.last_reward, self.episode_return = None, 0.0
+        if self.render_mode == "human":
+            self.render()
         return self.state[:4].copy(), self._info()
 
     def step(self, action):
@@ -178,6 +184,10 @@ class PipelineFollowingEnv(gym.Env):
         self._decisions += 1
         self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
         truncated = self._decisions >= self.max_decisions
+        self.last_reward = r
+        self.episode_return += r
+        if self.render_mode == "human":
+            self.render()
         return s[:4].copy(), r, False, truncated, self._info()
 
     def _info(self) -> dict[str, Any]:
@@ -196,10 +206,29 @@ class PipelineFollowingEnv(gym.Env):
         }
 
     def render(self):
-        """The paper's Fig. 2 view as an RGB array (``render_mode="rgb_array"``)."""
+        """The paper's Fig. 2 view: an RGB array (``"rgb_array"``) or a Matplotlib window (``"human"``).
+
+        One figure is made on the first call and updated after that; in ``"human"`` mode
+        ``reset`` and ``step`` render by themselves, and :meth:`close` closes the window.
+        """
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
             return None
-        from pipefollow.render import draw_scene
+        from pipefollow.render import Scene
 
-        return draw_scene(self.pipeline, self.state, np.array(self.trail), self.params)
+        if self._scene is None or self._scene.pipeline is not self.pipeline:
+            self.close()
+            self._scene = Scene(self.pipeline, self.params, pyplot=self.render_mode == "human")
+            if self.render_mode == "human":
+                self._scene.open_window()
+        self._scene.update(self.state, np.array(self.trail), self.last_reward, self.episode_return)
+        if self.render_mode == "human":
+            self._scene.show(pause=1.0 / self.metadata["render_fps"])
+            return None
+        return self._scene.rgb()
+
+    def close(self):
+        """Close the rendering's figure (and its window)."""
+        if self._scene is not None:
+            self._scene.close()
+            self._scene = None
