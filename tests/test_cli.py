@@ -365,3 +365,12 @@ def test_mp4_without_ffmpeg_is_a_one_line_error(runner, tmp_path, monkeypatch):
     res = runner.invoke(main, ["evaluate", "--animate", str(tmp_path / "ep.mp4")])
     _one_line_error(res, "--animate", "needs ffmpeg")
     assert not (tmp_path / "ep.mp4").exists()
+
+
+def test_shell_completion_scripts_come_from_click(runner):
+    for shell, marker in [("bash", "_pipefollow_completion()"), ("zsh", "#compdef pipefollow")]:
+        res = runner.invoke(main, [], prog_name="pipefollow", env={"_PIPEFOLLOW_COMPLETE": f"{shell}_source"})
+        assert res.exit_code == 0 and marker in res.stdout
+    env = {"_PIPEFOLLOW_COMPLETE": "bash_complete", "COMP_WORDS": "pipefollow pip", "COMP_CWORD": "1"}
+    res = runner.invoke(main, [], prog_name="pipefollow", env=env)
+    assert res.stdout.split() == ["plain,pipelines"]
