@@ -441,3 +441,27 @@ def test_a_complete_run_on_read_only_media_is_summarised(serial_run, tmp_path, m
     with pytest.raises(OSError) as e:
         run_experiment(TINY, copy, backend="serial", show_progress=False)
     assert str(copy) in e.value.filename
+
+
+def test_cli_summarises_a_complete_run_on_read_only_media(tmp_path, monkeypatch):
+    from click.testing import CliRunner
+
+    from pipefollow.cli import main
+
+    out = tmp_path / "run"
+    args = ["reproduce", "--out", str(out), "--backend", "serial", "--trial", "sarsa", "--repeats", "1"]
+    args += ["--episodes", "3"]
+    runner = CliRunner()
+    first = runner.invoke(main, args)
+    assert first.exit_code == 0, first.output
+    _read_only(monkeypatch, out)
+    res = runner.invoke(main, args)
+    assert res.exit_code == 0, res.output
+    assert f"note: '{out}' is complete and read-only: summarised, nothing written" in res.stderr
+    assert "1 trials (0 computed, 1 reused)" in res.stdout and "wrote" not in res.stdout
+    summary_rows = [line for line in first.stdout.splitlines() if line.startswith("SARSA")]
+    assert summary_rows and summary_rows[0] in res.stdout  # the same summary as when it ran
+    redraw = runner.invoke(main, ["plot", str(out)])  # redrawing needs to write: a clear refusal
+    assert redraw.exit_code == 2
+    lines = redraw.stderr.strip().splitlines()
+    assert len(lines) == 1 and str(out) in lines[0] and "Read-only file system" in lines[0], lines
