@@ -1,6 +1,6 @@
 """Benchmarks: medians of the hot paths, each beside its floor and target, in one run.
 
-Usage: ``python benchmarks/run.py [--repeats N] [--no-reproduce] [--only TEXT] [--json FILE]``
+Usage: ``python benchmarks/run.py [--repeats N] [--no-reproduce] [--json FILE]``
 
 The floors are estimates of what compiled C would need (issue "Speed near the physical limit"):
 an RK4 substep ≈ 0.09 µs; a 500-episode trial is 200,000 substeps plus 10,000 learning updates,
@@ -178,7 +178,7 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=15, help="repeats per benchmark (median)")
     ap.add_argument("--no-reproduce", action="store_true", help="skip the full-reproduction benchmark")
     ap.add_argument("--json", help="also write the figures to this JSON file")
-    ap.add_argument("--only", help="run only the benchmarks whose name contains this text")
+    ap.add_argument("--only", metavar="TEXT", help="run only the benchmarks whose name contains TEXT")
     args = ap.parse_args(argv)
     print(
         f"# {time.strftime('%Y-%m-%d')} · {platform.processor() or platform.machine()} · "
