@@ -30,7 +30,7 @@ from pathlib import Path
 
 import click
 
-from pipefollow.experiments import store
+from pipefollow.experiments import folder, store
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig
 from pipefollow.experiments.trial import TrialResult, run_trial
 
@@ -323,19 +323,19 @@ def run_experiment(
     check_inputs(exp)
     total = len(exp.trials) * exp.repeats
     run_dir = Path(out_dir)
-    if run_dir.is_dir() and not store.writable(run_dir) and store.is_complete(run_dir, exp):
+    if run_dir.is_dir() and not folder.writable(run_dir) and folder.is_complete(run_dir, exp):
         # A finished run on read-only media (a DVD, a read-only share): nothing to compute or write.
         return RunSummary(run_dir, backend, 1, total, 0, total, time.perf_counter() - t0, read_only=True)
     created = not (run_dir / store.CONFIG_FILE).exists()
     folder_existed = run_dir.exists()
     hidden = not (show_progress and sys.stderr.isatty())
     try:
-        with store.locked(out_dir) as run_dir:
+        with folder.locked(out_dir) as run_dir:
             try:
                 store.prepare(run_dir, exp)
                 done = store.finished(run_dir, exp)
             except Exception:
-                store.discard_unfinished(run_dir, exp, created)
+                folder.discard_unfinished(run_dir, exp, created)
                 raise
             work = [(t, seed) for t in exp.trials for seed in exp.seeds() if (t.name, seed) not in done]
             n_workers = 1
@@ -367,7 +367,7 @@ def run_experiment(
                 raise RunInterrupted(run_dir, len(done) + computed, total) from None
             except Exception as e:
                 # nothing half-made stays: a policy without its trial, empty folders, a config alone
-                store.discard_unfinished(run_dir, exp, created)
+                folder.discard_unfinished(run_dir, exp, created)
                 saved = len(done) + computed
                 if saved:
                     e.add_note(f"{saved} of {total} trials are saved in '{run_dir}'; running again resumes")
