@@ -273,11 +273,11 @@ def test_ctrl_c_during_train_exits_130_and_leaves_nothing(runner, tmp_path, monk
         raise KeyboardInterrupt
 
     monkeypatch.setattr(pipefollow.training, "train_compiled", interrupted)
-    out = tmp_path / "run"
+    out = tmp_path / "new" / "runs" / "run"
     res = runner.invoke(main, [*TRAIN, "--out", str(out)])
     assert res.exit_code == 130, res.output
     assert res.stderr.strip().splitlines() == [f"pipefollow: interrupted; nothing written to '{out}'"]
-    assert not out.exists()
+    assert list(tmp_path.iterdir()) == []  # nor the folders made for --out
 
 
 def test_full_disk_during_train_names_the_file_and_leaves_nothing(runner, tmp_path, monkeypatch):

@@ -348,11 +348,11 @@ def _no_space(*args, **kwargs):
 
 
 def test_a_full_disk_before_any_trial_is_saved_leaves_no_run_folder(tmp_path, monkeypatch):
-    out = tmp_path / "run"
+    out = tmp_path / "runs" / "run"
     monkeypatch.setattr(store, "_write_npz_atomic", _no_space)  # the trial file, after its policy
     with pytest.raises(OSError, match="No space left"):
         run_experiment(TINY, out, backend="serial", show_progress=False)
-    assert not out.exists()
+    assert list(tmp_path.iterdir()) == []  # nor the folder made for it
 
 
 def test_a_full_disk_later_keeps_finished_trials_only(tmp_path, monkeypatch):

@@ -382,7 +382,9 @@ def train(
     existing = [name for name in TRAINING_OUTPUTS if (Path(out_dir) / name).exists()]
     if existing and not force:
         raise UserError(f"--out '{out_dir}' already holds {existing[0]}; use --force to replace it")
-    made = not Path(out_dir).exists()
+    from pipefollow.outputs import first_missing, remove_empty_folders
+
+    made = first_missing(out_dir)
     out = _writable_folder(out_dir, "--out")  # before training, after the checks of --init
     show = not as_json and sys.stderr.isatty()
     try:
@@ -400,8 +402,7 @@ def train(
             out, agent, stats, episodes, pipeline=pipe.name, seed=seed
         )
     except BaseException as e:
-        if made and out.is_dir() and not any(out.iterdir()):
-            out.rmdir()  # an interrupted or failed run leaves no empty --out behind
+        remove_empty_folders(out, made)  # an interrupted or failed run leaves no empty --out behind
         if isinstance(e, KeyboardInterrupt):
             click.echo(f"pipefollow: interrupted; nothing written to '{out_dir}'", err=True)
             sys.exit(130)

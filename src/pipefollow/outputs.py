@@ -37,3 +37,32 @@ def check_output_file(path: str | os.PathLike, option: str, suffixes: tuple[str,
                 raise OutputError(f"{option} '{p}': '{parent}' is a file, not a folder")
             break
     return suffix
+
+
+def first_missing(path: str | os.PathLike) -> Path | None:
+    """The outermost folder of ``path`` (itself included) that does not exist yet, or None."""
+    p = Path(path)
+    missing = None
+    for candidate in [p, *p.parents]:
+        if candidate.exists():
+            break
+        missing = candidate
+    return missing
+
+
+def remove_empty_folders(path: str | os.PathLike, up_to: Path | None) -> None:
+    """Remove ``path`` and its parents up to ``up_to`` (included) while they are empty folders.
+
+    Undoes the folders a command made (``up_to`` is what :func:`first_missing` said before it
+    made them) when the command fails before writing anything into them.
+    """
+    if up_to is None:
+        return
+    p = Path(path)
+    for folder in [p, *p.parents]:
+        try:
+            folder.rmdir()  # only an empty folder goes
+        except OSError:
+            return
+        if folder == up_to:
+            return

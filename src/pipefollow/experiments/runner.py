@@ -33,6 +33,7 @@ import click
 from pipefollow.experiments import folder, store
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig
 from pipefollow.experiments.trial import TrialResult, run_trial
+from pipefollow.outputs import first_missing, remove_empty_folders
 
 BACKENDS = ("serial", "process", "ray")
 
@@ -327,7 +328,7 @@ def run_experiment(
         # A finished run on read-only media (a DVD, a read-only share): nothing to compute or write.
         return RunSummary(run_dir, backend, 1, total, 0, total, time.perf_counter() - t0, read_only=True)
     created = not (run_dir / store.CONFIG_FILE).exists()
-    folder_existed = run_dir.exists()
+    made = first_missing(run_dir)
     hidden = not (show_progress and sys.stderr.isatty())
     try:
         with folder.locked(out_dir) as run_dir:
@@ -377,9 +378,7 @@ def run_experiment(
             store.ensure_policies(run_dir, exp)
             tables = store.write_tables(run_dir, exp)
     except Exception:
-        # the lock file is gone now; a folder this run made and left empty goes too
-        if not folder_existed and run_dir.is_dir() and not any(run_dir.iterdir()):
-            run_dir.rmdir()
+        remove_empty_folders(run_dir, made)  # the lock file is gone now; so go empty folders made here
         raise
     return RunSummary(
         run_dir=Path(run_dir),
