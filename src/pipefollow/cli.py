@@ -600,7 +600,10 @@ def plot(run_dir, as_json):
 @main.command()
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
 def pipelines(as_json):
-    """List the named pipelines --pipeline accepts, with their segments and length."""
+    """List the named pipelines.
+
+    The names --pipeline and experiment files accept, with segment count and length.
+    """
     from pipefollow.listings import pipeline_rows, table
     from pipefollow.listings import pipelines as entries
 
@@ -622,7 +625,10 @@ def pipelines(as_json):
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
 @_guard
 def trials(experiment, as_json):
-    """List the trials of an experiment: names for --trial, labels, learners and episodes."""
+    """List the trials of an experiment.
+
+    Their names (for --trial), labels, learners, options and episodes.
+    """
     from pipefollow.experiments.config import load_experiment
     from pipefollow.listings import table
     from pipefollow.listings import trials as rows_of
