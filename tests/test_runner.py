@@ -465,3 +465,15 @@ def test_cli_summarises_a_complete_run_on_read_only_media(tmp_path, monkeypatch)
     assert redraw.exit_code == 2
     lines = redraw.stderr.strip().splitlines()
     assert len(lines) == 1 and str(out) in lines[0] and "Read-only file system" in lines[0], lines
+
+
+def test_a_refused_folder_is_left_as_it_is(serial_run, tmp_path):
+    import shutil
+
+    copy = tmp_path / "copy"
+    shutil.copytree(serial_run, copy)
+    (copy / "trials" / "sarsa" / "seed-2011.npz").unlink()  # its policy now has no trial file
+    before = sorted(p.relative_to(copy).as_posix() for p in copy.rglob("*"))
+    with pytest.raises(ConfigError, match="different configuration"):
+        run_experiment(with_overrides(TINY, repeats=3), copy, backend="serial", show_progress=False)
+    assert sorted(p.relative_to(copy).as_posix() for p in copy.rglob("*")) == before

@@ -334,10 +334,11 @@ def run_experiment(
         with folder.locked(out_dir) as run_dir:
             try:
                 store.prepare(run_dir, exp)
-                done = store.finished(run_dir, exp)
             except Exception:
-                folder.discard_unfinished(run_dir, exp, created)
+                if created:  # a folder holding another run (or none) is left as it is
+                    folder.discard_unfinished(run_dir, exp, created)
                 raise
+            done = store.finished(run_dir, exp)
             work = [(t, seed) for t in exp.trials for seed in exp.seeds() if (t.name, seed) not in done]
             n_workers = 1
             if backend == "process":
