@@ -78,7 +78,8 @@ class PipelineFollowingEnv(gym.Env):
       ``reset(options={"pipeline": ...})`` switches it.
     * ``episode_seconds``: episode length in seconds (default 20).
     * ``start_lateral_noise``, ``start_heading_noise_deg``: start perturbation (default 0).
-    * ``render_mode``: ``None`` or ``"rgb_array"`` (the paper's Fig. 2 view).
+    * ``render_mode``: ``None``, ``"rgb_array"`` (the paper's Fig. 2 view as an image) or
+      ``"human"`` (the same view in a Matplotlib window, updated at every step).
     * ``params``: a :class:`~pipefollow.simulation.SimParams` (default: the paper's system).
 
     ## Info
