@@ -148,6 +148,20 @@ def _trial_bench(algorithm, repeats, **kw):
     return median_time(one, max(3, repeats // 3))
 
 
+def bench_render_frame(repeats):
+    """One ``env.render()`` in rgb_array mode (the Fig. 2 view), mid-episode, with its trail."""
+    from pipefollow.env import PipelineFollowingEnv
+    from pipefollow.heuristic import Heuristic
+
+    env = PipelineFollowingEnv("paper-validation", episode_seconds=60, render_mode="rgb_array")
+    obs, _ = env.reset(seed=0)
+    agent = Heuristic()
+    for _ in range(30):  # half-way: a trail of 30 decisions
+        obs, *_ = env.step([agent.act(obs)])
+    env.render()  # the first frame builds the figure
+    return median_time(env.render, repeats, inner=5)
+
+
 def bench_reproduce(repeats, extra=(), runs=None):
     exe = os.path.join(os.path.dirname(sys.executable), "pipefollow")
     times = []
@@ -213,6 +227,7 @@ BENCHES = [
     ("SARSA trial, 500 episodes", lambda r: _trial_bench("sarsa", r), 0.1, 0.3),
     ("benchmark, 100 pipes × 60 s", bench_suite_benchmark, None, 1.0),
     ("random-pipe CACLA, 100k dec.", bench_random_training, None, 3.0),
+    ("render one frame (rgb_array)", bench_render_frame, None, 30e-3),
     ("pipefollow reproduce (warm)", bench_reproduce, 1.5, 8.0),
     # 13 training readings × 8 trials × 10 repeats (1,040 trials); opt in with --readings
     (
@@ -249,6 +264,8 @@ def main(argv=None) -> int:
     results = {}
     for name, fn, floor, target in BENCHES:
         if (args.no_reproduce and "reproduce" in name) or ("readings" in name and not args.readings):
+            continue
+        if args.only and args.only not in name:
             continue
         if args.only and args.only not in name:
             continue

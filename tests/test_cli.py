@@ -212,3 +212,167 @@ def test_rejected_init_leaves_no_output_folder(runner, tmp_path):
     )
     _one_line_error(res, "not cacla")
     assert not out.exists()
+
+
+def test_bare_command_prints_help_to_stdout_and_exits_0(runner):
+    res = runner.invoke(main, [])
+    assert res.exit_code == 0, res.output
+    assert res.stdout.startswith("Usage:") and "evaluate" in res.stdout
+    assert "error" not in res.output
+
+
+TRAIN = ["train", "--algorithm", "sarsa", "--episodes", "2"]
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["evaluate", "--seed", "-1"],
+        [*TRAIN, "--seed", "-1"],
+        ["reproduce", "--quick", "--seed", "-1", "--backend", "serial"],
+    ],
+)
+def test_negative_seed_is_a_one_line_error_and_writes_nothing(runner, tmp_path, args):
+    out = tmp_path / "out"
+    res = runner.invoke(main, [*args, *(["--out", str(out)] if args[0] != "evaluate" else [])])
+    _one_line_error(res, "--seed", "-1")
+    assert not out.exists()
+
+
+def test_seeds_beyond_64_bits_work_everywhere(runner, tmp_path):
+    huge = str(2**64)
+    res = runner.invoke(main, ["evaluate", "--seed", huge, "--start-noise", "0.5", "--json"])
+    assert res.exit_code == 0, res.output
+    # the seed reaches the start perturbation: another seed gives another start
+    other = runner.invoke(main, ["evaluate", "--seed", str(2**64 + 1), "--start-noise", "0.5", "--json"])
+    assert json.loads(res.stdout)["mean_return"] != json.loads(other.stdout)["mean_return"]
+    res = runner.invoke(main, [*TRAIN, "--seed", huge, "--out", str(tmp_path / "t"), "--json"])
+    assert res.exit_code == 0, res.output
+    out = tmp_path / "r"
+    args = ["reproduce", "--seed", huge, "--out", str(out), "--backend", "serial", "--no-figures"]
+    res = runner.invoke(main, [*args, "--trial", "sarsa", "--repeats", "1", "--episodes", "2", "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["trials"]["sarsa"]["seeds"] == [2**64]
+    assert (out / "policies" / f"sarsa-seed{huge}.npz").exists()
+
+
+def test_train_refuses_to_replace_a_policy_unless_forced(runner, tmp_path):
+    out = tmp_path / "run"
+    assert runner.invoke(main, [*TRAIN, "--out", str(out)]).exit_code == 0
+    before = (out / "policy.npz").read_bytes()
+    res = runner.invoke(main, [*TRAIN, "--seed", "5", "--out", str(out)])
+    _one_line_error(res, f"--out '{out}' already holds policy.npz", "--force")
+    assert (out / "policy.npz").read_bytes() == before
+    res = runner.invoke(main, [*TRAIN, "--seed", "5", "--out", str(out), "--force"])
+    assert res.exit_code == 0, res.output
+    assert (out / "policy.npz").read_bytes() != before
+
+
+def test_ctrl_c_during_train_exits_130_and_leaves_nothing(runner, tmp_path, monkeypatch):
+    import pipefollow.training
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(pipefollow.training, "train_compiled", interrupted)
+    out = tmp_path / "new" / "runs" / "run"
+    res = runner.invoke(main, [*TRAIN, "--out", str(out)])
+    assert res.exit_code == 130, res.output
+    assert res.stderr.strip().splitlines() == [f"pipefollow: interrupted; nothing written to '{out}'"]
+    assert list(tmp_path.iterdir()) == []  # nor the folders made for --out
+
+
+def test_full_disk_during_train_names_the_file_and_leaves_nothing(runner, tmp_path, monkeypatch):
+    import errno
+
+    import pipefollow.atomic
+
+    def no_space(fd):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(pipefollow.atomic.os, "fsync", no_space)
+    out = tmp_path / "run"
+    res = runner.invoke(main, [*TRAIN, "--out", str(out)])
+    _one_line_error(res, str(out / "policy.npz"), "No space left on device")
+    assert not out.exists()
+
+
+def test_full_disk_on_the_second_training_output_removes_the_first(runner, tmp_path, monkeypatch):
+    import pipefollow.results
+
+    def no_space(path, *args, **kwargs):
+        import errno
+
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(pipefollow.results, "write_learning_curve", no_space)
+    out = tmp_path / "run"
+    out.mkdir()
+    res = runner.invoke(main, [*TRAIN, "--out", str(out)])
+    _one_line_error(res, "learning_curve.csv", "No space left on device")
+    assert list(out.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    "name, magic",
+    [("p.jpg", b"\xff\xd8\xff"), ("p.JPEG", b"\xff\xd8\xff"), ("p.svg", b"<?xml"), ("p.pdf", b"%PDF")],
+)
+def test_plot_is_written_in_the_format_its_suffix_names(runner, tmp_path, name, magic):
+    path = tmp_path / name
+    res = runner.invoke(main, ["evaluate", "--seconds", "3", "--plot", str(path)])
+    assert res.exit_code == 0, res.output
+    assert path.read_bytes().startswith(magic)
+
+
+@pytest.mark.parametrize(
+    "name, fragment",
+    [
+        ("p.xyz", "'.xyz' is not a known file type; use one of"),
+        ("p", "no suffix is not a known file type"),
+        ("afile/p.png", "is a file, not a folder"),
+        ("afile/sub/p.png", "is a file, not a folder"),
+    ],
+)
+def test_bad_plot_paths_are_refused_before_the_episodes(runner, tmp_path, monkeypatch, name, fragment):
+    (tmp_path / "afile").write_text("")
+    monkeypatch.chdir(tmp_path)
+    res = runner.invoke(main, ["evaluate", "--plot", name])
+    _one_line_error(res, f"--plot '{name}'", fragment)
+
+
+def test_evaluate_animates_the_first_episode(runner, tmp_path):
+    path = tmp_path / "sub" / "ep.gif"
+    args = ["evaluate", "--seconds", "4", "--episodes", "2", "--start-noise", "0.3", "--json"]
+    res = runner.invoke(main, [*args, "--animate", str(path)])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["animation"] == str(path) and path.read_bytes()[:4] == b"GIF8"
+    plain = json.loads(runner.invoke(main, args).stdout)  # recording changes nothing
+    assert plain["episodes"] == out["episodes"]
+
+
+@pytest.mark.parametrize(
+    "name, fragment",
+    [("ep.avi", "'.avi' is not a known file type"), ("afile/ep.gif", "is a file, not a folder")],
+)
+def test_bad_animation_paths_are_refused(runner, tmp_path, monkeypatch, name, fragment):
+    (tmp_path / "afile").write_text("")
+    monkeypatch.chdir(tmp_path)
+    res = runner.invoke(main, ["evaluate", "--animate", name])
+    _one_line_error(res, f"--animate '{name}'", fragment)
+
+
+def test_mp4_without_ffmpeg_is_a_one_line_error(runner, tmp_path, monkeypatch):
+    monkeypatch.setenv("PATH", str(tmp_path))  # no ffmpeg here
+    res = runner.invoke(main, ["evaluate", "--animate", str(tmp_path / "ep.mp4")])
+    _one_line_error(res, "--animate", "needs ffmpeg")
+    assert not (tmp_path / "ep.mp4").exists()
+
+
+def test_shell_completion_scripts_come_from_click(runner):
+    for shell, marker in [("bash", "_pipefollow_completion()"), ("zsh", "#compdef pipefollow")]:
+        res = runner.invoke(main, [], prog_name="pipefollow", env={"_PIPEFOLLOW_COMPLETE": f"{shell}_source"})
+        assert res.exit_code == 0 and marker in res.stdout
+    env = {"_PIPEFOLLOW_COMPLETE": "bash_complete", "COMP_WORDS": "pipefollow pip", "COMP_CWORD": "1"}
+    res = runner.invoke(main, [], prog_name="pipefollow", env=env)
+    assert res.stdout.split() == ["plain,pipelines"]

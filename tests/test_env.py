@@ -89,7 +89,7 @@ def test_bad_constructor_arguments():
     with pytest.raises(ValueError, match="episode_seconds"):
         PipelineFollowingEnv(episode_seconds=0.5)
     with pytest.raises(ValueError, match="render_mode"):
-        PipelineFollowingEnv(render_mode="human")
+        PipelineFollowingEnv(render_mode="ansi")
 
 
 def test_render_draws_an_image():
@@ -147,3 +147,41 @@ def test_lost_pipe_triggers_search_and_penalty():
     for r, overridden, seen, _ in history:
         if overridden or not seen:
             assert r == -10.0
+
+
+@pytest.mark.parametrize("action", [[0.1, 0.2], np.zeros((1, 1)), np.zeros(0), [[0.3]]])
+def test_an_action_of_the_wrong_shape_is_refused(action):
+    env = PipelineFollowingEnv()
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"action must have shape \(1,\)"):
+        env.step(action)
+
+
+@pytest.mark.parametrize("action", [[0.25], np.array([0.25], dtype=np.float32), 0.25, np.float64(0.25)])
+def test_actions_of_shape_1_or_plain_numbers_are_the_same_action(action):
+    env = PipelineFollowingEnv()
+    env.reset(seed=0)
+    ref = PipelineFollowingEnv()
+    ref.reset(seed=0)
+    np.testing.assert_array_equal(env.step(action)[0], ref.step([0.25])[0])
+
+
+def test_the_registered_spec_bounds_the_episode_length():
+    from pipefollow.env import MAX_EPISODE_SECONDS
+
+    spec = gym.spec(pipefollow.ENV_ID)
+    assert spec.max_episode_steps == MAX_EPISODE_SECONDS  # one decision per second
+    with pytest.raises(ValueError, match="episode_seconds must be from 1 to 86400"):
+        PipelineFollowingEnv(episode_seconds=MAX_EPISODE_SECONDS + 1)
+
+
+@pytest.mark.parametrize("seconds", [None, 7, 60])
+def test_gym_make_keeps_the_envs_own_episode_length(seconds):
+    kwargs = {} if seconds is None else {"episode_seconds": seconds}
+    made = gym.make(pipefollow.ENV_ID, start_lateral_noise=0.5, **kwargs)
+    assert isinstance(made, gym.wrappers.TimeLimit)
+    check_env(made.unwrapped)
+    direct = PipelineFollowingEnv(start_lateral_noise=0.5, **kwargs)
+    a, b = _episode(made, seed=3), _episode(direct, seed=3)
+    assert len(a) - 1 == (seconds or 20)  # decisions until truncation
+    np.testing.assert_array_equal(np.array(a[1:]), np.array(b[1:]))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -207,7 +208,7 @@ def test_dict_round_trip_survives_json(paper):
 @given(
     repeats=st.integers(1, 9),
     episodes=st.integers(1, 2000),
-    seed=st.integers(-(2**31), 2**31),
+    seed=st.integers(0, 2**70),  # SeedSequence takes any non-negative integer
     subset=st.sets(st.sampled_from(PAPER_TRIALS), min_size=1),
 )
 def test_overridden_configs_round_trip(repeats, episodes, seed, subset):
@@ -247,3 +248,56 @@ def test_a_disturbance_table_trains_and_evaluates_under_it(tmp_path):
         load_experiment(write_toml(tmp_path, MINIMAL + "disturbance = { camera_noise = -1 }\n"))
     with pytest.raises(ConfigError, match=r"unknown key 'wind'"):
         load_experiment(write_toml(tmp_path, MINIMAL + "disturbance = { wind = 3 }\n"))
+
+
+def test_unknown_figure_is_refused_with_the_allowed_names(tmp_path):
+    with pytest.raises(ConfigError, match=r"unknown figure 'fig99'; allowed: fig5, fig6, fig7, table1"):
+        load_experiment(write_toml(tmp_path, MINIMAL + 'figures = ["fig5", "fig99"]\n'))
+
+
+@pytest.mark.parametrize("seed", [-1, -(2**40)])
+def test_negative_seed_is_refused(tmp_path, seed):
+    text = MINIMAL.replace("repeats = 2", f"repeats = 2\nseed = {seed}")
+    with pytest.raises(ConfigError, match=r"'seed' must be an integer ≥ 0"):
+        load_experiment(write_toml(tmp_path, text))
+    with pytest.raises(ConfigError, match="seed"):
+        with_overrides(load_experiment("paper"), seed=seed)
+
+
+def test_huge_seed_is_accepted(tmp_path):
+    text = MINIMAL.replace("repeats = 2", "repeats = 2\nseed = 9223372036854775807")
+    exp = with_overrides(load_experiment(write_toml(tmp_path, text)), seed=2**64)
+    assert exp.seeds() == [2**64, 2**64 + 1]
+
+
+def test_utf8_with_byte_order_mark_is_read(tmp_path):
+    path = tmp_path / "exp.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + MINIMAL.encode())
+    assert load_experiment(path).name == "tiny"
+
+
+@pytest.mark.parametrize("data", [MINIMAL.encode("utf-16"), b"\xff\xfe\x00\x81garbage"])
+def test_file_that_is_not_utf8_gives_a_config_error(tmp_path, data):
+    path = tmp_path / "exp.toml"
+    path.write_bytes(data)
+    with pytest.raises(ConfigError, match=r"exp.toml'?: not UTF-8 text"):
+        load_experiment(path)
+
+
+def test_relative_pipeline_paths_are_relative_to_the_experiment_file(tmp_path, monkeypatch):
+    folder = tmp_path / "study"
+    (folder / "pipes").mkdir(parents=True)
+    (folder / "pipes" / "mine.json").write_text('{"points": [[0, 0], [5, 0]]}')
+    text = MINIMAL + 'phases = [{ pipeline = "pipes/mine.json", episodes = 3 }]\n'
+    text += 'evaluate_on = "paper-validation"\n'
+    (folder / "exp.toml").write_text(text)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    exp = load_experiment("../study/exp.toml")
+    (trial,) = exp.trials
+    assert Path(trial.phases[0].pipeline).resolve() == (folder / "pipes" / "mine.json").resolve()
+    assert trial.evaluate_on == "paper-validation"  # built-in names stay names
+    from pipefollow.pipeline import resolve
+
+    assert resolve(trial.phases[0].pipeline).length == 5.0

@@ -272,3 +272,17 @@ def test_pipeline_constructor_validates():
         Pipeline(np.array([[0.0, 0.0], [np.nan, 0.0]]), "nan")
     with pytest.raises(PipelineError, match="pairs"):
         Pipeline(np.zeros((3, 3)), "triples")
+
+
+def test_utf8_file_with_byte_order_mark_is_read(tmp_path):
+    path = tmp_path / "bom.json"
+    path.write_bytes(b"\xef\xbb\xbf" + b'{"points": [[0, 0], [3, 4]]}')
+    assert load(path).length == 5.0
+
+
+@pytest.mark.parametrize("data", ['{"points": [[0, 0], [3, 4]]}'.encode("utf-16"), b"\x80\x81\xfe"])
+def test_file_that_is_not_utf8_gives_a_pipeline_error(tmp_path, data):
+    path = tmp_path / "p.json"
+    path.write_bytes(data)
+    with pytest.raises(PipelineError, match=r"p.json'?: not UTF-8 text"):
+        load(path)

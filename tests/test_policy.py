@@ -71,3 +71,14 @@ def test_written_files_get_the_usual_permissions(tmp_path):
     mask = os.umask(0)
     os.umask(mask)
     assert stat.S_IMODE(path.stat().st_mode) == 0o666 & ~mask
+
+
+@pytest.mark.parametrize("content", [b"PK\x03\x04 not a zip", b"PK\x05\x06" + b"\x00" * 18, b"\x93NUMPY"])
+def test_a_damaged_policy_file_is_refused_and_closed(tmp_path, content):
+    import gc
+
+    path = tmp_path / "bad.npz"
+    path.write_bytes(content)
+    with pytest.raises(PolicyError, match="bad.npz"):
+        load_policy(path)
+    gc.collect()  # an unclosed file would warn here (ResourceWarning; an error in this suite)

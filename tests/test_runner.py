@@ -77,8 +77,7 @@ def test_serial_run_fills_the_run_folder(serial_run):
     assert store.read_config(serial_run) == TINY
     files = {p.relative_to(serial_run).as_posix() for p in serial_run.rglob("*") if p.is_file()}
     assert files == {
-        "config.json",
-        ".lock",
+        "config.json",  # and no .lock: a finished run folder holds results only
         "results.csv",
         "evaluation.csv",
         *(f"trials/{t}/seed-{s}.npz" for t, s in PAIRS),
@@ -340,3 +339,141 @@ def test_cli_reproduce_json_and_errors(tmp_path):
         result.stderr.strip() == f"pipefollow: error: '{tmp_path}' is not a run folder "
         "(no config.json; 'pipefollow reproduce' writes one)"
     )
+
+
+def _no_space(*args, **kwargs):
+    import errno
+
+    raise OSError(errno.ENOSPC, "No space left on device")  # as a full disk reports it: no file name
+
+
+def test_a_full_disk_before_any_trial_is_saved_leaves_no_run_folder(tmp_path, monkeypatch):
+    out = tmp_path / "runs" / "run"
+    monkeypatch.setattr(store, "_write_npz_atomic", _no_space)  # the trial file, after its policy
+    with pytest.raises(OSError, match="No space left"):
+        run_experiment(TINY, out, backend="serial", show_progress=False)
+    assert list(tmp_path.iterdir()) == []  # nor the folder made for it
+
+
+def test_a_full_disk_later_keeps_finished_trials_only(tmp_path, monkeypatch):
+    out = tmp_path / "run"
+    real = store._write_npz_atomic
+    calls = []
+
+    def second_fails(path, arrays):
+        calls.append(path)
+        if len(calls) == 2:
+            _no_space()
+        real(path, arrays)
+
+    monkeypatch.setattr(store, "_write_npz_atomic", second_fails)
+    with pytest.raises(OSError) as e:
+        run_experiment(TINY, out, backend="serial", show_progress=False)
+    assert f"1 of 4 trials are saved in '{out}'; running again resumes" in "\n".join(e.value.__notes__)
+    files = {p.relative_to(out).as_posix() for p in out.rglob("*")}
+    # no policy of the failed trial, no .lock
+    assert files == {
+        "config.json",
+        "trials",
+        "trials/sarsa",
+        "trials/sarsa/seed-2010.npz",
+        "policies",
+        "policies/sarsa-seed2010.npz",
+    }
+    monkeypatch.setattr(store, "_write_npz_atomic", real)
+    assert run_experiment(TINY, out, backend="serial", show_progress=False).trials_reused == 1
+
+
+def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, monkeypatch):
+    import pipefollow.atomic
+
+    monkeypatch.setattr(pipefollow.atomic.os, "fsync", _no_space)
+    with pytest.raises(OSError) as e:
+        store.write_tables(tmp_path, TINY)
+    assert e.value.filename == str(tmp_path / "results.csv")
+    assert list(tmp_path.iterdir()) == []  # and no temporary file stays
+
+
+def test_compilation_is_its_own_phase_before_the_trials_progress_bar(tmp_path, monkeypatch, capsys):
+    from pipefollow.experiments import runner
+
+    events = []
+    real_bar = runner.click.progressbar
+    monkeypatch.setattr(runner, "warm_up", lambda configs, parallel=False: events.append("compile"))
+    monkeypatch.setattr(
+        runner.click, "progressbar", lambda *a, **k: (events.append("trials bar"), real_bar(*a, **k))[1]
+    )
+    monkeypatch.setattr(runner.sys.stderr, "isatty", lambda: True)
+    run_experiment(with_overrides(TINY, trials=["sarsa"]), tmp_path, backend="serial")
+    # the bar's time estimate starts after compiling: its first estimate is per trial, not per build
+    assert events == ["compile", "trials bar"]
+    assert "compiling" in capsys.readouterr().err
+
+
+def _read_only(monkeypatch, folder: Path) -> None:
+    """Make creating or writing any file under ``folder`` fail as on read-only media (even as root)."""
+    import errno
+
+    real_open = os.open
+    writing = os.O_CREAT | os.O_WRONLY | os.O_RDWR | os.O_TRUNC
+
+    def guarded(path, flags, *args, **kwargs):
+        if flags & writing and Path(os.fsdecode(path)).resolve().is_relative_to(folder.resolve()):
+            raise OSError(errno.EROFS, "Read-only file system", os.fsdecode(path))
+        return real_open(path, flags, *args, **kwargs)
+
+    monkeypatch.setattr(os, "open", guarded)
+
+
+def test_a_complete_run_on_read_only_media_is_summarised(serial_run, tmp_path, monkeypatch):
+    import shutil
+
+    copy = tmp_path / "copy"
+    shutil.copytree(serial_run, copy)
+    before = stamps(copy)
+    _read_only(monkeypatch, copy)
+    summary = run_experiment(TINY, copy, backend="serial", show_progress=False)
+    assert summary.read_only and (summary.trials_computed, summary.trials_reused) == (0, 4)
+    assert stamps(copy) == before
+    assert not (copy / ".lock").exists()
+    # an incomplete one cannot be resumed there: the error names the folder
+    (copy / "trials" / "sarsa" / "seed-2011.npz").unlink()
+    with pytest.raises(OSError) as e:
+        run_experiment(TINY, copy, backend="serial", show_progress=False)
+    assert str(copy) in e.value.filename
+
+
+def test_cli_summarises_a_complete_run_on_read_only_media(tmp_path, monkeypatch):
+    from click.testing import CliRunner
+
+    from pipefollow.cli import main
+
+    out = tmp_path / "run"
+    args = ["reproduce", "--out", str(out), "--backend", "serial", "--trial", "sarsa", "--repeats", "1"]
+    args += ["--episodes", "3"]
+    runner = CliRunner()
+    first = runner.invoke(main, args)
+    assert first.exit_code == 0, first.output
+    _read_only(monkeypatch, out)
+    res = runner.invoke(main, args)
+    assert res.exit_code == 0, res.output
+    assert f"note: '{out}' is complete and read-only: summarised, nothing written" in res.stderr
+    assert "1 trials (0 computed, 1 reused)" in res.stdout and "wrote" not in res.stdout
+    summary_rows = [line for line in first.stdout.splitlines() if line.startswith("SARSA")]
+    assert summary_rows and summary_rows[0] in res.stdout  # the same summary as when it ran
+    redraw = runner.invoke(main, ["plot", str(out)])  # redrawing needs to write: a clear refusal
+    assert redraw.exit_code == 2
+    lines = redraw.stderr.strip().splitlines()
+    assert len(lines) == 1 and str(out) in lines[0] and "Read-only file system" in lines[0], lines
+
+
+def test_a_refused_folder_is_left_as_it_is(serial_run, tmp_path):
+    import shutil
+
+    copy = tmp_path / "copy"
+    shutil.copytree(serial_run, copy)
+    (copy / "trials" / "sarsa" / "seed-2011.npz").unlink()  # its policy now has no trial file
+    before = sorted(p.relative_to(copy).as_posix() for p in copy.rglob("*"))
+    with pytest.raises(ConfigError, match="different configuration"):
+        run_experiment(with_overrides(TINY, repeats=3), copy, backend="serial", show_progress=False)
+    assert sorted(p.relative_to(copy).as_posix() for p in copy.rglob("*")) == before

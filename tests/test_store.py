@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 import pipefollow
-from pipefollow.experiments import store
+from pipefollow.experiments import folder, store
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, Phase, TrialConfig, to_dict
 from pipefollow.experiments.trial import TrialResult, build_agent
 from pipefollow.policy import load_policy
@@ -312,11 +312,11 @@ def test_not_a_run_folder(tmp_path):
 
 
 def test_lock_keeps_a_second_run_out(tmp_path):
-    with store.locked(tmp_path / "run"):
+    with folder.locked(tmp_path / "run"):
         with pytest.raises(ConfigError, match="is in use by another pipefollow run"):
-            with store.locked(tmp_path / "run"):
+            with folder.locked(tmp_path / "run"):
                 pass
-    with store.locked(tmp_path / "run"):  # released
+    with folder.locked(tmp_path / "run"):  # released
         pass
 
 
@@ -347,3 +347,15 @@ def test_result_modules_exist_and_cover_the_compiled_learning_code():
     assert {"simulation.py", "cacla.py", "sarsa.py", "training.py", "experiments/trial.py"} <= set(
         store.RESULT_MODULES
     )
+
+
+def test_the_lock_file_goes_when_the_run_ends(tmp_path):
+    with folder.locked(tmp_path / "run") as run_dir:
+        assert (run_dir / folder.LOCK_FILE).exists()
+        with pytest.raises(ConfigError, match="in use by another pipefollow run"):
+            with folder.locked(run_dir):
+                pass
+        assert (run_dir / folder.LOCK_FILE).exists()  # the refused second run leaves the lock alone
+    assert not (run_dir / folder.LOCK_FILE).exists()
+    with folder.locked(run_dir):  # and the folder can be locked again
+        pass

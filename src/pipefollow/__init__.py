@@ -83,7 +83,13 @@ def register_envs() -> None:
     from gymnasium.envs.registration import register, registry
 
     if ENV_ID not in registry:
-        register(id=ENV_ID, entry_point="pipefollow.env:PipelineFollowingEnv")
+        # The episode length is the env's own (``episode_seconds``); the spec carries its upper
+        # bound, one decision per second, so that gym.make's TimeLimit never truncates earlier.
+        register(
+            id=ENV_ID,
+            entry_point="pipefollow.env:PipelineFollowingEnv",
+            max_episode_steps=86_400,  # pipefollow.env.MAX_EPISODE_SECONDS / 1-s decisions
+        )
 
 
 register_envs()

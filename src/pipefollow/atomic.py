@@ -43,8 +43,11 @@ def atomic_file(path: str | os.PathLike, mode: str = "wb") -> Iterator[IO]:
             f.flush()
             os.fsync(f.fileno())  # the rename must not overtake the data (power loss, not just kill)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError) and e.errno is not None and e.filename is None:
+            # a failed write (a full disk) names no file: name the one the caller asked for
+            raise type(e)(e.errno, e.strerror, str(path)) from None
         raise
 
 
@@ -52,3 +55,30 @@ def write_text_atomic(path: str | os.PathLike, text: str) -> None:
     """Write ``text`` to ``path`` atomically."""
     with atomic_file(path, "w") as f:
         f.write(text)
+
+
+@contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+    """A temporary path beside ``path`` with the same suffix, for writers that take a file name.
+
+    Some writers choose the format by the name's suffix (Matplotlib's animation writers, Pillow)
+    or open the file themselves; on success the file replaces ``path``, on failure it is removed.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        fd, tmp = tempfile.mkstemp(
+            dir=path.parent, prefix=f".{path.name}.", suffix=f"{TMP_SUFFIX}{path.suffix}"
+        )
+    except OSError as e:
+        raise OSError(e.errno, e.strerror, str(path)) from None
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.chmod(tmp, _FILE_MODE)
+        os.replace(tmp, path)
+    except BaseException as e:
+        Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError) and e.errno is not None and e.filename is None:
+            raise type(e)(e.errno, e.strerror, str(path)) from None
+        raise

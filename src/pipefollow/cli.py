@@ -13,6 +13,7 @@ from pipefollow import disturbance as _disturbance
 from pipefollow.disturbance import DisturbanceError
 from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS, ConfigError
 from pipefollow.experiments.store import StoreError
+from pipefollow.outputs import OutputError
 from pipefollow.pipeline import PipelineError
 from pipefollow.policy import PolicyError
 
@@ -22,7 +23,11 @@ USER_ERRORS: tuple[type[Exception], ...] = (
     ConfigError,
     StoreError,
     DisturbanceError,
+    OutputError,
 )
+
+# Seeds: what NumPy's SeedSequence takes, any non-negative integer (no upper bound).
+SEED = click.IntRange(min=0)
 
 
 class UserError(click.ClickException):
@@ -62,6 +67,10 @@ def _guard(fn):
     return wrapper
 
 
+# click ≥ 8.2 raises this for a bare group; older versions print the help and exit 0 themselves
+_NO_ARGS_IS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())
+
+
 class _OneLineErrors(click.Group):
     """Click's own usage errors (a bad option value, a missing option) on one line, exit 2."""
 
@@ -70,9 +79,12 @@ class _OneLineErrors(click.Group):
             return super().main(args, prog_name, complete_var, standalone_mode, **extra)
         try:
             rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
-        except click.exceptions.Abort:
-            click.echo("pipefollow: aborted", err=True)
-            sys.exit(1)
+        except click.exceptions.Abort:  # Ctrl-C: the shell's convention, 128 + SIGINT
+            click.echo("pipefollow: interrupted", err=True)
+            sys.exit(130)
+        except _NO_ARGS_IS_HELP as e:  # the bare command asks for help; it is not an error
+            click.echo(e.ctx.get_help() if e.ctx else self.get_help(click.Context(self)))
+            sys.exit(0)
         except click.ClickException as e:
             if isinstance(e, UserError):
                 e.show()
@@ -198,7 +210,7 @@ def _summary(stats) -> dict:
     default=None,
     help="Episode length in seconds [default: 60 on paper-validation, else 20].",
 )
-@click.option("--seed", default=0, show_default=True, type=int, help="Seed of the start perturbation.")
+@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the start perturbation.")
 @click.option(
     "--start-noise",
     default=0.0,
@@ -220,7 +232,14 @@ def _summary(stats) -> dict:
     "plot_path",
     type=click.Path(dir_okay=False),
     default=None,
-    help="Save a trajectory plot (PNG) of the first episode.",
+    help="Save a trajectory plot of the first episode (.png, .svg, .pdf, .jpg, ...).",
+)
+@click.option(
+    "--animate",
+    "animate_path",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Save an animation of the first episode in the Fig. 2 view (.gif, or .mp4 with ffmpeg).",
 )
 @_reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
@@ -236,6 +255,7 @@ def evaluate(
     start_noise,
     heading_noise,
     plot_path,
+    animate_path,
     readings,
     as_json,
     disturbance,
@@ -246,6 +266,14 @@ def evaluate(
     from pipefollow.readings import sim_params
     from pipefollow.training import run_episode
 
+    if plot_path:
+        from pipefollow.outputs import check_output_file, image_formats
+
+        check_output_file(plot_path, "--plot", tuple(image_formats()))
+    if animate_path:
+        from pipefollow.animation import check_animation_path
+
+        check_animation_path(animate_path, "--animate")
     pipe = resolve(pipeline)
     agent = load_controller(controller, seed, lookahead)
     reading = _readings(readings, getattr(agent, "readings", "default"))
@@ -256,9 +284,16 @@ def evaluate(
         heading_noise,
         params=sim_params(reading)._replace(disturbance=disturbance),
     )
-    stats = []
+    stats, frames = [], []
     for e in range(episodes):
-        stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
+        if e == 0 and animate_path:
+            from pipefollow.animation import Recorder
+
+            recorder = Recorder(env)  # the same episode, with its states kept for the animation
+            stats.append(run_episode(recorder, agent, seed=seed))
+            frames = recorder.frames
+        else:
+            stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
     result = {
         "controller": controller,
         "pipeline": pipeline,
@@ -276,6 +311,11 @@ def evaluate(
             pipe, {name: stats[0].poses}, plot_path, title=f"{name} on {pipe.name}: return {stats[0].ret:.2f}"
         )
         result["plot"] = str(plot_path)
+    if animate_path:
+        from pipefollow.animation import write_animation
+
+        write_animation(pipe, frames, animate_path, env.params)
+        result["animation"] = str(animate_path)
     if as_json:
         click.echo(json.dumps(result))
         return
@@ -289,6 +329,8 @@ def evaluate(
     )
     if plot_path:
         click.echo(f"plot: {plot_path}")
+    if animate_path:
+        click.echo(f"animation: {animate_path}")
 
 
 @main.command()
@@ -318,7 +360,7 @@ def evaluate(
     callback=_finite,
     help="Episode length in seconds.",
 )
-@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--seed", default=0, show_default=True, type=SEED)
 @click.option(
     "--out",
     "out_dir",
@@ -333,6 +375,7 @@ def evaluate(
     default=None,
     help="Continue training from this policy file (e.g. left turns, then right turns).",
 )
+@click.option("--force", is_flag=True, help="Replace the policy and learning curve already in --out.")
 @_reading_option(
     "Reading of an open point, e.g. skew_step=weights or skew_sample=centred (repeatable; "
     "see docs/design.md) [default: the project's readings, or those of --init]."
@@ -350,11 +393,16 @@ def train(
     seed,
     out_dir,
     init_policy,
+    force,
     readings,
     as_json,
     disturbance,
 ):
-    """Train a learner; writes the policy and its learning curve."""
+    """Train a learner; writes the policy and its learning curve.
+
+    An --out folder that already holds them is refused unless --force is given. Ctrl-C stops
+    without writing anything (exit status 130).
+    """
     from pipefollow.agents import make_agent
     from pipefollow.readings import cacla_params, sigma_scale, sim_params
     from pipefollow.suites import Suite, resolve_training
@@ -384,35 +432,48 @@ def train(
     else:
         reading = _readings(readings)
         agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng, readings=reading)
+    from pipefollow.results import TRAINING_OUTPUTS, write_training_outputs
+
+    existing = [name for name in TRAINING_OUTPUTS if (Path(out_dir) / name).exists()]
+    if existing and not force:
+        raise UserError(f"--out '{out_dir}' already holds {existing[0]}; use --force to replace it")
+    from pipefollow.outputs import first_missing, remove_empty_folders
+
+    made = first_missing(out_dir)
     out = _writable_folder(out_dir, "--out")  # before training, after the checks of --init
     show = not as_json and sys.stderr.isatty()
-    with click.progressbar(
-        length=episodes, label=f"training {agent.name}", file=sys.stderr, hidden=not show
-    ) as bar:
-        done = [0]
+    try:
+        with click.progressbar(
+            length=episodes, label=f"training {agent.name}", file=sys.stderr, hidden=not show
+        ) as bar:
+            done = [0]
 
-        def progress(n):
-            bar.update(n - done[0])
-            done[0] = n
+            def progress(n):
+                bar.update(n - done[0])
+                done[0] = n
 
-        scale = sigma_scale(reading)
-        schedule = dict(
-            episode_seconds=seconds,
-            sigma_start=scale,
-            sigma_end=0.01 * scale,
-            params=sim_params(reading)._replace(disturbance=disturbance),
-            env_rng=np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0]),
-            progress=progress,
+            scale = sigma_scale(reading)
+            schedule = dict(
+                episode_seconds=seconds,
+                sigma_start=scale,
+                sigma_end=0.01 * scale,
+                params=sim_params(reading)._replace(disturbance=disturbance),
+                env_rng=np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0]),
+                progress=progress,
+            )
+            if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the seed's generator
+                stats = train_random_compiled(agent, pipe, episodes, pipe_rng=rng.spawn(1)[0], **schedule)
+            else:
+                stats = train_compiled(agent, pipe, episodes, **schedule)
+        policy_path, curve_path = write_training_outputs(
+            out, agent, stats, episodes, pipeline=pipe.name, seed=seed
         )
-        if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the seed's generator
-            stats = train_random_compiled(agent, pipe, episodes, pipe_rng=rng.spawn(1)[0], **schedule)
-        else:
-            stats = train_compiled(agent, pipe, episodes, **schedule)
-    from pipefollow.policy import save_policy
-    from pipefollow.results import write_learning_curve
-
-    policy_path = save_policy(agent, out / "policy.npz", pipeline=pipe.name, episodes=episodes, seed=seed)
-    curve_path = write_learning_curve(out / "learning_curve.csv", stats, episodes)
+    except BaseException as e:
+        remove_empty_folders(out, made)  # an interrupted or failed run leaves no empty --out behind
+        if isinstance(e, KeyboardInterrupt):
+            click.echo(f"pipefollow: interrupted; nothing written to '{out_dir}'", err=True)
+            sys.exit(130)
+        raise
     result = {
         "algorithm": agent.name,
         "readings": reading.id,
@@ -488,7 +549,7 @@ def _write_figures(run_dir: Path, required: bool) -> list[Path]:
     help="Episodes of every training phase [default: the experiment's, 500 for the paper].",
 )
 @click.option(
-    "--seed", type=int, default=None, help="Seed of the first repeat [default: 2010 for the paper]."
+    "--seed", type=SEED, default=None, help="Seed of the first repeat [default: 2010 for the paper]."
 )
 @click.option(
     "--experiment",
@@ -559,7 +620,9 @@ def reproduce(
         click.echo(f"pipefollow: {e.message}", err=True)
         sys.exit(130)
     outputs = list(run.tables)
-    if not no_figures:
+    if run.read_only:
+        click.echo(f"note: '{run.run_dir}' is complete and read-only: summarised, nothing written", err=True)
+    elif not no_figures:
         outputs += _write_figures(run.run_dir, required=False)
     per_trial = summary(run.run_dir, exp)
     if as_json:
@@ -689,6 +752,24 @@ def suites_export(name, out_dir, pipes, seconds, as_json):
 
 
 @main.command()
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
+def pipelines(as_json):
+    """List the named pipelines.
+
+    The names --pipeline and experiment files accept, with segment count and length.
+    """
+    from pipefollow.listings import pipeline_rows, table
+    from pipefollow.listings import pipelines as entries
+
+    rows = pipeline_rows(entries())
+    if as_json:
+        click.echo(json.dumps(rows, ensure_ascii=False))
+        return
+    columns = [("name", "name"), ("group", "group"), ("segments", "segments"), ("length_m", "length (m)")]
+    click.echo(table(rows, [*columns, ("description", "description")]))
+
+
+@main.command()
 @click.option(
     "--controller",
     default="heuristic",
@@ -723,7 +804,7 @@ def suites_export(name, out_dir, pipes, seconds, as_json):
     "--seed",
     default=0,
     show_default=True,
-    type=int,
+    type=SEED,
     help="Seed of the bootstrap resampling and of the random disturbances.",
 )
 @click.option(
@@ -778,6 +859,34 @@ def benchmark(
     click.echo(format_summary(run.summary, seconds))
     if plot_path:
         click.echo(f"plot: {plot_path}")
+
+
+@main.command()
+@click.option(
+    "--experiment",
+    default="paper",
+    show_default=True,
+    help="A shipped experiment ('paper', 'readings') or an experiment TOML file.",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
+@_guard
+def trials(experiment, as_json):
+    """List the trials of an experiment.
+
+    Their names (for --trial), labels, learners, options and episodes.
+    """
+    from pipefollow.experiments.config import load_experiment
+    from pipefollow.listings import table
+    from pipefollow.listings import trials as rows_of
+
+    exp = load_experiment(experiment)
+    rows = rows_of(exp)
+    if as_json:
+        click.echo(json.dumps(rows, ensure_ascii=False))
+        return
+    click.echo(f"{exp.name}: {len(rows)} trials, {exp.repeats} repeats each (seeds from {exp.seed})")
+    columns = [("name", "name"), ("label", "label"), ("algorithm", "algorithm"), ("options", "options")]
+    click.echo(table(rows, [*columns, ("episodes", "episodes"), ("phases", "phases")]))
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -15,6 +15,9 @@ from pipefollow.disturbance import Disturbance, check, disturbance_from_dict, no
 from pipefollow.pipeline import Pipeline, resolve
 from pipefollow.suites import min_length_for, parse_random_spec
 
+# The longest episode the environment runs (a day of 1-s decisions): the registered
+# ``max_episode_steps``, which must not cut any episode shorter than its ``episode_seconds``.
+MAX_EPISODE_SECONDS = 86_400.0
 
 class PipelineFollowingEnv(gym.Env):
     """An AUV following a subsea pipeline with a downward camera (Fjerdingen et al., 2010).
@@ -33,7 +36,8 @@ class PipelineFollowingEnv(gym.Env):
 
     ``Box(-1, 1, (1,), float32)``: the waypoint bearing relative to the heading in units of 90°;
     positive turns to starboard, negative to port. Actions outside [-1, 1] are clipped; a NaN
-    action raises ``ValueError``. While the pipe is lost the action is ignored.
+    action or one of another shape than ``(1,)`` (a plain number is accepted too) raises
+    ``ValueError``. While the pipe is lost the action is ignored.
 
     ## Observation Space
 
@@ -65,7 +69,9 @@ class PipelineFollowingEnv(gym.Env):
     ## Episode End
 
     The episode is truncated after ``episode_seconds`` (one decision per second; 20 in the
-    paper's training). There is no terminal state: agents should bootstrap from the last state.
+    paper's training), at most :data:`MAX_EPISODE_SECONDS`. There is no terminal state: agents
+    should bootstrap from the last state. The registered spec's ``max_episode_steps`` is that
+    upper bound, so the ``TimeLimit`` wrapper of ``gym.make`` never ends an episode early.
 
     ## Arguments
 
@@ -77,7 +83,8 @@ class PipelineFollowingEnv(gym.Env):
       fresh pipe every episode.
     * ``episode_seconds``: episode length in seconds (default 20).
     * ``start_lateral_noise``, ``start_heading_noise_deg``: start perturbation (default 0).
-    * ``render_mode``: ``None`` or ``"rgb_array"`` (the paper's Fig. 2 view).
+    * ``render_mode``: ``None``, ``"rgb_array"`` (the paper's Fig. 2 view as an image) or
+      ``"human"`` (the same view in a Matplotlib window, updated at every step).
     * ``params``: a :class:`~pipefollow.simulation.SimParams` (default: the paper's system).
     * ``disturbance``: a :class:`~pipefollow.disturbance.Disturbance` (ocean current, camera
       noise, missed detections, buried stretches) or a dict of its user-unit keys
@@ -98,7 +105,7 @@ class PipelineFollowingEnv(gym.Env):
     NaN if none).
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 2}
 
     def __init__(
         self,
@@ -111,10 +118,14 @@ class PipelineFollowingEnv(gym.Env):
         disturbance: Disturbance | dict[str, Any] | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+            raise ValueError(f"render_mode must be None, 'human' or 'rgb_array', got {render_mode!r}")
         decision_seconds = params.dt * params.substeps
-        if not (math.isfinite(episode_seconds) and episode_seconds >= decision_seconds):
-            raise ValueError(f"episode_seconds must be at least {decision_seconds:g}, got {episode_seconds}")
+        longest = MAX_EPISODE_SECONDS
+        if not (math.isfinite(episode_seconds) and decision_seconds <= episode_seconds <= longest):
+            raise ValueError(
+                f"episode_seconds must be from {decision_seconds:g} to {MAX_EPISODE_SECONDS:g}, "
+                f"got {episode_seconds}"
+            )
         for name, value in (
             ("start_lateral_noise", start_lateral_noise),
             ("start_heading_noise_deg", start_heading_noise_deg),
@@ -147,6 +158,9 @@ class PipelineFollowingEnv(gym.Env):
         self._decisions = 0
         self._seen, self._sum_e2 = 0, 0.0
         self.trail: list[tuple[float, float, float]] = []
+        self.last_reward: float | None = None  # shown by render()
+        self.episode_return = 0.0
+        self._scene = None  # the rendering's figure, made on the first render() and reused
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         """Start an episode; see the class docstring for the options."""
@@ -185,6 +199,9 @@ class PipelineFollowingEnv(gym.Env):
         self._decisions = 0
         self._seen, self._sum_e2 = 0, 0.0
         self.trail = [(x, y, psi)]
+        self.last_reward, self.episode_return = None, 0.0
+        if self.render_mode == "human":
+            self.render()
         return self.state[:4].copy(), self._info()
 
     def _set_pipeline(self, spec) -> None:
@@ -195,7 +212,10 @@ class PipelineFollowingEnv(gym.Env):
 
     def step(self, action):
         """One 1-s decision; see the class docstring."""
-        a = float(np.asarray(action, dtype=np.float64).reshape(-1)[0])
+        arr = np.asarray(action, dtype=np.float64)
+        if arr.shape not in ((1,), ()):  # a wrong shape is a caller's bug, not an action
+            raise ValueError(f"action must have shape (1,) (or be a number), got shape {arr.shape}")
+        a = float(arr.reshape(-1)[0])
         if math.isnan(a):
             raise ValueError("action is NaN")
         a = min(1.0, max(-1.0, a))
@@ -209,6 +229,10 @@ class PipelineFollowingEnv(gym.Env):
             self._seen += 1
             self._sum_e2 += s[sim.E_DIST] ** 2
         truncated = self._decisions >= self.max_decisions
+        self.last_reward = r
+        self.episode_return += r
+        if self.render_mode == "human":
+            self.render()
         info = self._info()
         if truncated:  # the episode's summary, for clients that log per episode
             info["episode_pipe_in_view"] = self._seen / self._decisions
@@ -235,10 +259,29 @@ class PipelineFollowingEnv(gym.Env):
         }
 
     def render(self):
-        """The paper's Fig. 2 view as an RGB array (``render_mode="rgb_array"``)."""
+        """The paper's Fig. 2 view: an RGB array (``"rgb_array"``) or a Matplotlib window (``"human"``).
+
+        One figure is made on the first call and updated after that; in ``"human"`` mode
+        ``reset`` and ``step`` render by themselves, and :meth:`close` closes the window.
+        """
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
             return None
-        from pipefollow.render import draw_scene
+        from pipefollow.render import Scene
 
-        return draw_scene(self.pipeline, self.state, np.array(self.trail), self.params)
+        if self._scene is None or self._scene.pipeline is not self.pipeline:
+            self.close()
+            self._scene = Scene(self.pipeline, self.params, pyplot=self.render_mode == "human")
+            if self.render_mode == "human":
+                self._scene.open_window()
+        self._scene.update(self.state, np.array(self.trail), self.last_reward, self.episode_return)
+        if self.render_mode == "human":
+            self._scene.show(pause=1.0 / self.metadata["render_fps"])
+            return None
+        return self._scene.rgb()
+
+    def close(self):
+        """Close the rendering's figure (and its window)."""
+        if self._scene is not None:
+            self._scene.close()
+            self._scene = None

@@ -112,11 +112,15 @@ def load(path: str | os.PathLike) -> Pipeline:
     p = Path(path)
     source = f"pipeline file '{p}'"
     try:
-        text = p.read_text()
+        raw = p.read_bytes()
     except FileNotFoundError:
         raise PipelineError(f"{source}: no such file") from None
     except OSError as e:
         raise PipelineError(f"{source}: cannot read ({e.strerror})") from None
+    try:
+        text = raw.decode("utf-8-sig")  # JSON is UTF-8; editors on Windows may add a byte-order mark
+    except UnicodeDecodeError as e:
+        raise PipelineError(f"{source}: not UTF-8 text (byte {e.start})") from None
     try:
         data = json.loads(text)
     except json.JSONDecodeError as e:

@@ -69,7 +69,8 @@ def load_policy(path: str | os.PathLike, seed: int | None = None) -> Cacla | Sar
     path = Path(path)
     src = f"policy file '{path}'"
     try:
-        with np.load(path, allow_pickle=False) as z:
+        # Our own file object: np.load leaks the one it opens when the zip is damaged.
+        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
             data = {k: z[k] for k in z.files}
     except FileNotFoundError:
         raise PolicyError(f"{src}: no such file") from None

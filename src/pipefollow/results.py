@@ -32,3 +32,26 @@ def write_learning_curve(
     rows = ([e, linear_sigma(e, episodes, sigma_start, sigma_end), *stats[e]] for e in range(len(stats)))
     write_text_atomic(path, csv_text(["episode", "sigma", *STAT_NAMES], rows))
     return path
+
+
+TRAINING_OUTPUTS = ("policy.npz", "learning_curve.csv")
+
+
+def write_training_outputs(
+    out: Path, agent, stats: np.ndarray, episodes: int, **metadata
+) -> tuple[Path, Path]:
+    """Write ``policy.npz`` and ``learning_curve.csv`` of a training run into ``out``, as a pair.
+
+    Each file is written atomically; if the second cannot be written (a full disk), the first is
+    removed again, so that ``out`` never holds one without the other from this run.
+    """
+    from pipefollow.policy import save_policy
+
+    policy_name, curve_name = TRAINING_OUTPUTS
+    policy_path = save_policy(agent, Path(out) / policy_name, episodes=episodes, **metadata)
+    try:
+        curve_path = write_learning_curve(Path(out) / curve_name, stats, episodes)
+    except BaseException:
+        policy_path.unlink(missing_ok=True)
+        raise
+    return policy_path, curve_path

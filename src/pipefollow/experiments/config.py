@@ -23,6 +23,9 @@ MAX_EPISODES = 10_000_000
 MAX_SECONDS = 86_400.0
 MAX_REPEATS = 100_000
 
+# Figure and table keys of the report a trial can belong to (``figures = [...]`` in a trial).
+FIGURE_KEYS = ("fig5", "fig6", "fig7", "table1")
+
 
 class ConfigError(ValueError):
     """An experiment configuration that cannot be used."""
@@ -72,7 +75,9 @@ class TrialConfig:
     )
     evaluate_on: str = _f("", "after training, evaluate deterministically on this pipeline ('' = none)")
     evaluate_seconds: float = _f(60.0, "length of the evaluation episode (s) (paper §4.2)")
-    figures: tuple[str, ...] = _f((), "figures/tables of the report that use this trial (fig5, fig6, ...)")
+    figures: tuple[str, ...] = _f(
+        (), "figures/tables of the report that use this trial (fig5, fig6, fig7, table1)", choices=FIGURE_KEYS
+    )
 
     @property
     def title(self) -> str:
@@ -152,6 +157,9 @@ def _coerce(cls, data: dict, where: str):
         if f.name in ("figures", "readings", "compare_readings"):
             if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
                 raise ConfigError(f"{key} must be a list of strings")
+            unknown = [v for v in value if v not in FIGURE_KEYS] if f.name == "figures" else []
+            if unknown:
+                raise ConfigError(f"{key}: unknown figure {unknown[0]!r}; allowed: {', '.join(FIGURE_KEYS)}")
             kwargs[f.name] = tuple(value)
             continue
         if isinstance(default, bool):
@@ -233,6 +241,8 @@ def validate(obj, where: str) -> None:
             _check_readings((rid,), f"{where}: key 'compare_readings'")
         if not 1 <= obj.repeats <= MAX_REPEATS:
             raise bad("repeats", f"from 1 to {MAX_REPEATS:,}", obj.repeats)
+        if obj.seed < 0:  # NumPy's SeedSequence takes non-negative integers only
+            raise bad("seed", "an integer ≥ 0", obj.seed)
         names = [t.name for t in obj.trials]
         dup = {n for n in names if names.count(n) > 1}
         if dup:
@@ -284,25 +294,68 @@ def shipped_experiments() -> list[str]:
     return sorted(p.name[: -len(".toml")] for p in folder.iterdir() if p.name.endswith(".toml"))
 
 
+def read_text_file(path: Path, source: str, error: type[ValueError]) -> str:
+    """The text of a UTF-8 file (a byte-order mark is skipped); problems raise ``error`` naming ``source``."""
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise error(f"{source}: no such file") from None
+    except OSError as e:
+        raise error(f"{source}: cannot read ({e.strerror})") from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise error(f"{source}: not UTF-8 text (byte {e.start})") from None
+
+
 def load_experiment(spec: str | Path = "paper") -> ExperimentConfig:
-    """Read an experiment: a shipped one by name (``paper``, ``readings``) or a path to a TOML file."""
+    """Read an experiment: a shipped one by name (``paper``, ``readings``) or a path to a TOML file.
+
+    Pipeline file names in the file that are relative paths are taken relative to the file's folder.
+    """
     if str(spec) in shipped_experiments():
-        text = resources.files("pipefollow.experiments").joinpath(f"{spec}.toml").read_text()
+        folder_res = resources.files("pipefollow.experiments")
+        text = folder_res.joinpath(f"{spec}.toml").read_text(encoding="utf-8")
         source = f"{spec}.toml"
+        folder = None
     else:
         path = Path(spec)
         source = f"experiment file '{path}'"
-        try:
-            text = path.read_text()
-        except FileNotFoundError:
-            raise ConfigError(f"{source}: no such file") from None
-        except OSError as e:
-            raise ConfigError(f"{source}: cannot read ({e.strerror})") from None
+        text = read_text_file(path, source, ConfigError)
+        folder = path.parent
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise ConfigError(f"{source}: not valid TOML ({e})") from None
-    return parse_experiment(data, source)
+    exp = parse_experiment(data, source)
+    return exp if folder is None else _relative_to(exp, folder)
+
+
+def _relative_to(exp: ExperimentConfig, folder: Path) -> ExperimentConfig:
+    """``exp`` with relative pipeline file paths joined to ``folder`` (built-in names stay)."""
+    import os
+
+    from pipefollow.pipeline import BUILTIN_NAMES
+
+    def rebase(name: str) -> str:
+        if not name or name in BUILTIN_NAMES or Path(name).is_absolute():
+            return name
+        joined = folder / name
+        # Only file names: a name that is neither a .json path nor an existing file stays as
+        # given, so that the pipeline resolver reports it (or knows it by another name).
+        if Path(name).suffix.lower() == ".json" or joined.exists():
+            return os.path.normpath(joined)
+        return name
+
+    trials = tuple(
+        dataclasses.replace(
+            t,
+            phases=tuple(dataclasses.replace(p, pipeline=rebase(p.pipeline)) for p in t.phases),
+            evaluate_on=rebase(t.evaluate_on),
+        )
+        for t in exp.trials
+    )
+    return dataclasses.replace(exp, trials=trials)
 
 
 def with_overrides(

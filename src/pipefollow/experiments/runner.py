@@ -30,9 +30,10 @@ from pathlib import Path
 
 import click
 
-from pipefollow.experiments import store
+from pipefollow.experiments import folder, store
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig
 from pipefollow.experiments.trial import TrialResult, run_trial
+from pipefollow.outputs import first_missing, remove_empty_folders
 
 BACKENDS = ("serial", "process", "ray")
 
@@ -52,7 +53,8 @@ class RunSummary:
         trials_computed: those computed by this call.
         trials_reused: those found finished in the run folder.
         wall_seconds: time this call took.
-        tables: the regenerated ``results.csv`` and ``evaluation.csv``.
+        tables: the regenerated ``results.csv`` and ``evaluation.csv`` (none if ``read_only``).
+        read_only: the run folder was complete and not writable (read-only media): it was only read.
     """
 
     run_dir: Path
@@ -63,6 +65,7 @@ class RunSummary:
     trials_reused: int
     wall_seconds: float
     tables: tuple[Path, ...] = ()
+    read_only: bool = False
 
 
 class RunInterrupted(KeyboardInterrupt):
@@ -162,6 +165,17 @@ def warm_up(configs: list[TrialConfig], parallel: bool = False) -> None:
         tiny = [c for c in tiny if c not in first]  # the rest now loads from the cache
     for c in tiny:
         run_trial(c, 0)
+
+
+def _compile_phase(name: str, configs: list[TrialConfig], parallel: bool, hidden: bool) -> None:
+    """Warm up (:func:`warm_up`) with a line of its own on stderr when progress is shown."""
+    if hidden:
+        warm_up(configs, parallel=parallel)
+        return
+    click.echo(f"{name}: compiling (cached after the first run) ...", file=sys.stderr, nl=False)
+    t0 = time.perf_counter()
+    warm_up(configs, parallel=parallel)
+    click.echo(f" {time.perf_counter() - t0:.1f} s", file=sys.stderr)
 
 
 def _failed(e: BaseException, config: TrialConfig, seed: int) -> BaseException:
@@ -310,46 +324,64 @@ def run_experiment(
         import_ray()
     check_inputs(exp)
     total = len(exp.trials) * exp.repeats
-    with store.locked(out_dir) as run_dir:
-        store.prepare(run_dir, exp)
-        done = store.finished(run_dir, exp)
-        work = [(t, seed) for t in exp.trials for seed in exp.seeds() if (t.name, seed) not in done]
-        n_workers = 1
-        if backend == "process":
-            n_workers = max(1, min(workers or os.cpu_count() or 1, len(work)))
-        ray_info = {"cpus": 0}
-        computed = 0
-        hidden = not (show_progress and sys.stderr.isatty())
-        with click.progressbar(
-            length=total, label=f"{exp.name}: trials", file=sys.stderr, hidden=hidden, show_pos=True
-        ) as bar:
-            bar.update(len(done))
+    run_dir = Path(out_dir)
+    if run_dir.is_dir() and not folder.writable(run_dir) and folder.is_complete(run_dir, exp):
+        # A finished run on read-only media (a DVD, a read-only share): nothing to compute or write.
+        return RunSummary(run_dir, backend, 1, total, 0, total, time.perf_counter() - t0, read_only=True)
+    created = not (run_dir / store.CONFIG_FILE).exists()
+    made = first_missing(run_dir)
+    hidden = not (show_progress and sys.stderr.isatty())
+    try:
+        with folder.locked(out_dir) as run_dir:
             try:
-                if work and backend != "serial":
-                    warm_up([c for c, _ in work], parallel=n_workers > 1)
-                if backend == "serial" or not work:
-                    results = _serial(work, trial_fn)
-                elif backend == "process":
-                    results = _process(work, trial_fn, n_workers)
-                else:
-                    results = _ray(work, trial_fn, workers, ray_address, ray_info)
-                with closing(results):
-                    for config, result in results:
-                        store.save_trial(run_dir, result, config)
-                        computed += 1
-                        bar.update(1)
+                store.prepare(run_dir, exp)
+            except Exception:
+                if created:  # a folder holding another run (or none) is left as it is
+                    folder.discard_unfinished(run_dir, exp, created)
+                raise
+            done = store.finished(run_dir, exp)
+            work = [(t, seed) for t in exp.trials for seed in exp.seeds() if (t.name, seed) not in done]
+            n_workers = 1
+            if backend == "process":
+                n_workers = max(1, min(workers or os.cpu_count() or 1, len(work)))
+            ray_info = {"cpus": 0}
+            computed = 0
+            try:
+                if work and (backend != "serial" or trial_fn is run_trial):
+                    # Compiling (or loading the compiled code) is a phase of its own: inside the
+                    # trials' progress bar it made the first time estimate many times too long.
+                    _compile_phase(exp.name, [c for c, _ in work], n_workers > 1, hidden)
+                with click.progressbar(
+                    length=total, label=f"{exp.name}: trials", file=sys.stderr, hidden=hidden, show_pos=True
+                ) as bar:
+                    bar.update(len(done))
+                    if backend == "serial" or not work:
+                        results = _serial(work, trial_fn)
+                    elif backend == "process":
+                        results = _process(work, trial_fn, n_workers)
+                    else:
+                        results = _ray(work, trial_fn, workers, ray_address, ray_info)
+                    with closing(results):
+                        for config, result in results:
+                            store.save_trial(run_dir, result, config)
+                            computed += 1
+                            bar.update(1)
             except KeyboardInterrupt:
                 raise RunInterrupted(run_dir, len(done) + computed, total) from None
             except Exception as e:
-                e.add_note(
-                    f"{len(done) + computed} of {total} trials are saved in '{run_dir}'; "
-                    "running again resumes"
-                )
+                # nothing half-made stays: a policy without its trial, empty folders, a config alone
+                folder.discard_unfinished(run_dir, exp, created)
+                saved = len(done) + computed
+                if saved:
+                    e.add_note(f"{saved} of {total} trials are saved in '{run_dir}'; running again resumes")
                 raise
-        if backend == "ray":
-            n_workers = ray_info["cpus"] or 1
-        store.ensure_policies(run_dir, exp)
-        tables = store.write_tables(run_dir, exp)
+            if backend == "ray":
+                n_workers = ray_info["cpus"] or 1
+            store.ensure_policies(run_dir, exp)
+            tables = store.write_tables(run_dir, exp)
+    except Exception:
+        remove_empty_folders(run_dir, made)  # the lock file is gone now; so go empty folders made here
+        raise
     return RunSummary(
         run_dir=Path(run_dir),
         backend=backend,

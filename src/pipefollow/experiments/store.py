@@ -19,8 +19,6 @@ from __future__ import annotations
 import json
 import os
 import zipfile
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +34,6 @@ FORMAT_VERSION = 1
 CONFIG_FILE = "config.json"
 RESULTS_FILE = "results.csv"
 EVALUATION_FILE = "evaluation.csv"
-LOCK_FILE = ".lock"
 
 RESULTS_COLUMNS = (
     "experiment",
@@ -140,7 +137,7 @@ def read_config(run_dir: str | os.PathLike) -> ExperimentConfig:
     if not run_dir.is_dir():
         raise StoreError(f"run folder '{run_dir}': no such folder")
     try:
-        data = json.loads(path.read_text())
+        data = json.loads(path.read_text(encoding="utf-8"))
         return from_dict(data)
     except FileNotFoundError:
         msg = f"'{run_dir}' is not a run folder (no {CONFIG_FILE}; 'pipefollow reproduce' writes one)"
@@ -154,7 +151,7 @@ def prepare(run_dir: str | os.PathLike, exp: ExperimentConfig) -> Path:
     """Create ``run_dir`` for ``exp``, or check that it holds the same resolved configuration.
 
     A different configuration raises :class:`ConfigError`; temporary files left by an interrupted
-    run are removed. Call it with the folder locked (:func:`locked`).
+    run are removed. Call it with the folder locked (:func:`pipefollow.experiments.folder.locked`).
     """
     run_dir = Path(run_dir)
     if run_dir.exists() and not run_dir.is_dir():
@@ -163,7 +160,7 @@ def prepare(run_dir: str | os.PathLike, exp: ExperimentConfig) -> Path:
     path = run_dir / CONFIG_FILE
     if path.exists():
         try:
-            stored = json.loads(path.read_text())
+            stored = json.loads(path.read_text(encoding="utf-8"))
             same = from_dict(stored) == exp
         except (OSError, ValueError, KeyError, TypeError) as e:
             raise StoreError(f"run folder '{run_dir}': unreadable {CONFIG_FILE} ({e})") from None
@@ -189,33 +186,6 @@ def prepare(run_dir: str | os.PathLike, exp: ExperimentConfig) -> Path:
     return run_dir
 
 
-@contextmanager
-def locked(run_dir: str | os.PathLike) -> Iterator[Path]:
-    """Hold an exclusive lock on ``run_dir`` (created if missing) while the block runs.
-
-    A second run in the same folder gets a :class:`ConfigError` instead of interleaving its files
-    with the first one's. The lock dies with the process, so a killed run leaves no stale lock.
-    """
-    run_dir = Path(run_dir)
-    if run_dir.exists() and not run_dir.is_dir():
-        raise ConfigError(f"--out '{run_dir}': exists and is not a folder")
-    run_dir.mkdir(parents=True, exist_ok=True)
-    try:
-        import fcntl
-    except ImportError:  # pragma: no cover - not POSIX: no locking
-        yield run_dir
-        return
-    fd = os.open(run_dir / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o644)
-    try:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            raise ConfigError(f"run folder '{run_dir}' is in use by another pipefollow run") from None
-        yield run_dir
-    finally:
-        os.close(fd)
-
-
 # ---------------------------------------------------------------------------------------------
 # Trial files
 
@@ -232,7 +202,7 @@ def save_trial(run_dir: str | os.PathLike, result: TrialResult, config: TrialCon
         "format": np.array(FORMAT),
         "format_version": np.array(FORMAT_VERSION),
         "trial": np.array(result.trial),
-        "seed": np.array(result.seed, dtype=np.int64),
+        "seed": np.array(str(result.seed)),  # text: seeds may exceed 64 bits (SeedSequence takes any)
         "stats": np.asarray(result.stats, dtype=np.float64),
         "phase": np.asarray(result.phase, dtype=np.int64),
         "sigma": np.asarray(result.sigma, dtype=np.float64),
@@ -266,8 +236,9 @@ def load_trial(run_dir: str | os.PathLike, trial: str, seed: int) -> TrialResult
     try:
         if int(data["format_version"]) > FORMAT_VERSION:
             raise StoreError(f"{src}: format version {int(data['format_version'])} is newer than this reads")
-        if str(data["trial"]) != trial or int(data["seed"]) != seed:
-            raise StoreError(f"{src}: holds trial '{data['trial']}' seed {int(data['seed'])}")
+        stored_seed = int(str(data["seed"]))  # int64 in files written before seeds were text
+        if str(data["trial"]) != trial or stored_seed != seed:
+            raise StoreError(f"{src}: holds trial '{data['trial']}' seed {stored_seed}")
         names = [str(n) for n in data["evaluation_controllers"]]
         values = data["evaluation_values"]
         stats = data["stats"]
