@@ -128,3 +128,15 @@ def test_a_policy_file_from_before_readings_loads_with_the_weights_step(tmp_path
     old = load_policy(tmp_path / "old.npz")
     assert old.params.skew_step == cacla.STEP_WEIGHTS and old.params.skew_sample == cacla.SAMPLE_CENTRED
     assert old.readings == "skew_step=weights,skew_sample=centred"
+
+
+def test_a_trial_applies_its_readings_to_sigma_start_and_features():
+    from pipefollow.experiments.config import Phase, TrialConfig
+    from pipefollow.experiments.trial import build_agent, run_trial
+
+    base = TrialConfig(name="t", phases=(Phase("paper-left", 3),), skew_deg=22.5)
+    t = dataclasses.replace(base, readings=("sigma_unit=rad", "start_speed=cruise,rbf=literal"))
+    r = run_trial(t, 1)
+    np.testing.assert_allclose(r.sigma, [2 / math.pi, (1 + 0.01) / math.pi, 0.02 / math.pi])
+    assert build_agent(t).grid.form == "literal" and build_agent(base).grid.form == "normalized"
+    assert not np.array_equal(run_trial(base, 1).stats, r.stats)
