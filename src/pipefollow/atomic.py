@@ -1,8 +1,9 @@
-"""Atomic file writes: a file is either complete or absent, never half-written.
+"""Atomic file writes, and the one way the package reads a user's text file.
 
 Every file the package writes goes through :func:`atomic_file`: the content goes to a temporary
 file ``.<name>.<random>.tmp`` beside the target (never mistaken for a result), is flushed to
-disk, and is then renamed over the target in one step.
+disk, and is then renamed over the target in one step. Pipeline and experiment files are read by
+:func:`read_text_file`: UTF-8, a byte-order mark allowed, every problem one error naming the file.
 """
 
 from __future__ import annotations
@@ -82,3 +83,17 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         if isinstance(e, OSError) and e.errno is not None and e.filename is None:
             raise type(e)(e.errno, e.strerror, str(path)) from None
         raise
+
+
+def read_text_file(path: Path, source: str, error: type[ValueError]) -> str:
+    """The text of a UTF-8 file (a byte-order mark is skipped); problems raise ``error`` naming ``source``."""
+    try:
+        data = Path(path).read_bytes()
+    except FileNotFoundError:
+        raise error(f"{source}: no such file") from None
+    except OSError as e:
+        raise error(f"{source}: cannot read ({e.strerror})") from None
+    try:
+        return data.decode("utf-8-sig")  # editors on Windows may add a byte-order mark
+    except UnicodeDecodeError as e:
+        raise error(f"{source}: not UTF-8 text (byte {e.start})") from None

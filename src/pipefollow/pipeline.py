@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from pipefollow.atomic import write_text_atomic
+from pipefollow.atomic import read_text_file, write_text_atomic
 
 BUILTIN_NAMES = ("paper-left", "paper-right", "paper-validation")
 
@@ -111,16 +111,7 @@ def load(path: str | os.PathLike) -> Pipeline:
     """Read a pipeline file; any problem raises :class:`PipelineError` naming the file."""
     p = Path(path)
     source = f"pipeline file '{p}'"
-    try:
-        raw = p.read_bytes()
-    except FileNotFoundError:
-        raise PipelineError(f"{source}: no such file") from None
-    except OSError as e:
-        raise PipelineError(f"{source}: cannot read ({e.strerror})") from None
-    try:
-        text = raw.decode("utf-8-sig")  # JSON is UTF-8; editors on Windows may add a byte-order mark
-    except UnicodeDecodeError as e:
-        raise PipelineError(f"{source}: not UTF-8 text (byte {e.start})") from None
+    text = read_text_file(p, source, PipelineError)
     try:
         data = json.loads(text)
     except json.JSONDecodeError as e:

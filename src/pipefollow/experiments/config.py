@@ -17,6 +17,7 @@ from typing import Any
 
 from pipefollow import readings as rd
 from pipefollow.agents import ALGORITHMS
+from pipefollow.atomic import read_text_file
 
 # Bounds that keep a run finite (a day of simulated time per episode is far beyond any use).
 MAX_EPISODES = 10_000_000
@@ -292,20 +293,6 @@ def shipped_experiments() -> list[str]:
     """Names of the experiments shipped with the package (``paper``, ``readings``)."""
     folder = resources.files("pipefollow.experiments")
     return sorted(p.name[: -len(".toml")] for p in folder.iterdir() if p.name.endswith(".toml"))
-
-
-def read_text_file(path: Path, source: str, error: type[ValueError]) -> str:
-    """The text of a UTF-8 file (a byte-order mark is skipped); problems raise ``error`` naming ``source``."""
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise error(f"{source}: no such file") from None
-    except OSError as e:
-        raise error(f"{source}: cannot read ({e.strerror})") from None
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError as e:
-        raise error(f"{source}: not UTF-8 text (byte {e.start})") from None
 
 
 def load_experiment(spec: str | Path = "paper") -> ExperimentConfig:
