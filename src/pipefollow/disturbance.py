@@ -22,12 +22,11 @@ draws from its ``np_random``, the compiled loops from the generator they are giv
 missed when ``Φ(z) < miss_prob``, which has probability ``miss_prob``.
 
 The command-line options and TOML tables are parsed and checked here too
-(:func:`click_options`, :func:`disturbance_from_dict`).
+(:func:`parse_current`, :func:`check_camera_noise`, :func:`check_miss_prob`, :func:`disturbance_from_dict`).
 """
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Mapping
 from typing import Any, NamedTuple
@@ -293,62 +292,12 @@ def parse_current(text: str) -> tuple[float, float]:
     return speed, direction
 
 
-def click_options(fn):
-    """Decorate a click command with ``--current``, ``--camera-noise`` and ``--miss-prob``.
+def check_camera_noise(value: Any) -> float:
+    """A camera-noise s.d. (m) given on the command line: a finite number ≥ 0."""
+    return _at_least_zero(value, "camera noise", "")
 
-    The command receives one keyword argument ``disturbance`` (a :class:`Disturbance`). Bad
-    values are click usage errors that name the option (exit status 2).
-    """
-    import click
 
-    def _checked(convert):
-        def callback(ctx, param, value):
-            if value is None:
-                return None
-            try:
-                return convert(value)
-            except DisturbanceError as e:
-                raise click.BadParameter(str(e), ctx=ctx, param=param) from None
+def check_miss_prob(value: Any) -> float:
+    """A miss probability given on the command line: a number in [0, 1]."""
+    return _probability(value, "miss probability", "")
 
-        return callback
-
-    def _noise(value):
-        return _at_least_zero(value, "camera noise", "")
-
-    def _prob(value):
-        return _probability(value, "miss probability", "")
-
-    @functools.wraps(fn)
-    def wrapper(*args, current, camera_noise, miss_prob, **kwargs):
-        speed, direction = current if current is not None else (0.0, 0.0)
-        d = make_disturbance(speed, direction, camera_noise=camera_noise or 0.0, miss_prob=miss_prob or 0.0)
-        return fn(*args, disturbance=d, **kwargs)
-
-    options = [
-        click.option(
-            "--current",
-            metavar="SPEED,DIR_DEG",
-            default=None,
-            callback=_checked(parse_current),
-            help="Ocean current: SPEED m/s flowing towards DIR_DEG degrees clockwise from north.",
-        ),
-        click.option(
-            "--camera-noise",
-            type=float,
-            default=None,
-            metavar="M",
-            callback=_checked(_noise),
-            help="Standard deviation (m) of Gaussian noise on the camera's pipe end points. [default: 0]",
-        ),
-        click.option(
-            "--miss-prob",
-            type=float,
-            default=None,
-            metavar="P",
-            callback=_checked(_prob),
-            help="Probability per decision that the camera misses the pipe. [default: 0]",
-        ),
-    ]
-    for option in reversed(options):
-        wrapper = option(wrapper)
-    return wrapper

@@ -1,0 +1,354 @@
+"""``pipefollow evaluate`` and ``pipefollow train``: one controller, one pipeline."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+
+from pipefollow import disturbance as _disturbance
+from pipefollow.cli.common import (
+    SEED,
+    UserError,
+    apply_readings,
+    controller_options,
+    disturbance_options,
+    finite,
+    guard,
+    load_controller,
+    main,
+    reading_option,
+    writable_folder,
+)
+from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS
+
+
+def _default_seconds(pipeline: str, seconds: float | None) -> float:
+    if seconds is not None:
+        return seconds
+    return 60.0 if pipeline == "paper-validation" else 20.0
+
+
+_LEARNING_RATES = ("alpha_v", "alpha_pi", "discount", "delta_k", "k_max", "forgetting")  # not train options
+
+
+def _summary(stats) -> dict:
+    rows = [
+        {
+            "return": s.ret,
+            "pipe_in_view": s.pipe_in_view,
+            "progress_m": s.progress_m,
+            "time_lost_s": s.time_lost_s,
+        }
+        for s in stats
+    ]
+    return {
+        "mean_return": float(np.mean([r["return"] for r in rows])),
+        "mean_pipe_in_view": float(np.mean([r["pipe_in_view"] for r in rows])),
+        "mean_progress_m": float(np.mean([r["progress_m"] for r in rows])),
+        "episodes": rows,
+    }
+
+
+@main.command()
+@controller_options
+@click.option(
+    "--pipeline",
+    default="paper-left",
+    show_default=True,
+    help="Built-in name (paper-left, paper-right, paper-validation) or a JSON file.",
+)
+@click.option("--episodes", default=1, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
+@click.option(
+    "--seconds",
+    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
+    callback=finite,
+    default=None,
+    help="Episode length in seconds [default: 60 on paper-validation, else 20].",
+)
+@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the start perturbation.")
+@click.option(
+    "--start-noise",
+    default=0.0,
+    show_default=True,
+    type=click.FloatRange(min=0.0),
+    callback=finite,
+    help="Uniform random lateral start offset up to this many metres.",
+)
+@click.option(
+    "--heading-noise",
+    default=0.0,
+    show_default=True,
+    type=click.FloatRange(min=0.0),
+    callback=finite,
+    help="Uniform random start heading offset up to this many degrees.",
+)
+@click.option(
+    "--plot",
+    "plot_path",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Save a trajectory plot of the first episode (.png, .svg, .pdf, .jpg, ...).",
+)
+@click.option(
+    "--animate",
+    "animate_path",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Save an animation of the first episode in the Fig. 2 view (.gif, or .mp4 with ffmpeg).",
+)
+@reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@disturbance_options
+@guard
+def evaluate(
+    controller,
+    lookahead,
+    pipeline,
+    episodes,
+    seconds,
+    seed,
+    start_noise,
+    heading_noise,
+    plot_path,
+    animate_path,
+    readings,
+    as_json,
+    disturbance,
+):
+    """Evaluate a controller deterministically (σ = 0) on a pipeline."""
+    from pipefollow.env import PipelineFollowingEnv
+    from pipefollow.pipeline import resolve
+    from pipefollow.readings import sim_params
+    from pipefollow.training import run_episode
+
+    if plot_path:
+        from pipefollow.outputs import check_output_file, image_formats
+
+        check_output_file(plot_path, "--plot", tuple(image_formats()))
+    if animate_path:
+        from pipefollow.animation import check_animation_path
+
+        check_animation_path(animate_path, "--animate")
+    pipe = resolve(pipeline)
+    agent = load_controller(controller, seed, lookahead)
+    reading = apply_readings(readings, getattr(agent, "readings", "default"))
+    env = PipelineFollowingEnv(
+        pipe,
+        _default_seconds(pipeline, seconds),
+        start_noise,
+        heading_noise,
+        params=sim_params(reading)._replace(disturbance=disturbance),
+    )
+    stats, frames = [], []
+    for e in range(episodes):
+        if e == 0 and animate_path:
+            from pipefollow.animation import Recorder
+
+            recorder = Recorder(env)  # the same episode, with its states kept for the animation
+            stats.append(run_episode(recorder, agent, seed=seed))
+            frames = recorder.frames
+        else:
+            stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
+    result = {
+        "controller": controller,
+        "pipeline": pipeline,
+        "seconds": env.episode_seconds,
+        "readings": reading.id,
+        **_summary(stats),
+    }
+    if disturbance != _disturbance.NO_DISTURBANCE:
+        result["disturbance"] = _disturbance.to_dict(disturbance)
+    if plot_path:
+        from pipefollow.render import plot_trajectories
+
+        name = "heuristic" if controller == "heuristic" else Path(controller).stem
+        plot_trajectories(
+            pipe, {name: stats[0].poses}, plot_path, title=f"{name} on {pipe.name}: return {stats[0].ret:.2f}"
+        )
+        result["plot"] = str(plot_path)
+    if animate_path:
+        from pipefollow.animation import write_animation
+
+        write_animation(pipe, frames, animate_path, env.params)
+        result["animation"] = str(animate_path)
+    if as_json:
+        click.echo(json.dumps(result))
+        return
+    click.echo(f"{controller} on {pipeline}, {episodes} episode(s) of {env.episode_seconds:g} s")
+    click.echo(f"{'episode':>7} {'return':>9} {'in view':>8} {'progress':>9}")
+    for i, row in enumerate(result["episodes"]):
+        click.echo(f"{i:>7} {row['return']:>9.3f} {row['pipe_in_view']:>8.1%} {row['progress_m']:>8.2f}m")
+    click.echo(
+        f"{'mean':>7} {result['mean_return']:>9.3f} {result['mean_pipe_in_view']:>8.1%} "
+        f"{result['mean_progress_m']:>8.2f}m"
+    )
+    if plot_path:
+        click.echo(f"plot: {plot_path}")
+    if animate_path:
+        click.echo(f"animation: {animate_path}")
+
+
+@main.command()
+@click.option("--algorithm", type=click.Choice(["sarsa", "cacla"]), required=True)
+@click.option(
+    "--skew",
+    type=click.FloatRange(min=0.0, max=180.0),
+    callback=finite,
+    default=0.0,
+    show_default=True,
+    help="CACLA skew step Δγ in degrees (eq. 15): 11.25, 22.5 or 45 in the paper; 0 = Gaussian.",
+)
+@click.option("--supervised", is_flag=True, help="Supervised CACLA with the heuristic as supervisor.")
+@click.option(
+    "--pipeline",
+    default="paper-left",
+    show_default=True,
+    help="Built-in name or JSON file to train on, or random[:FAMILY] for a new pipe every episode "
+    "(families: see 'pipefollow suites'; random = random:mixed).",
+)
+@click.option("--episodes", default=500, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
+@click.option(
+    "--seconds",
+    default=20.0,
+    show_default=True,
+    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
+    callback=finite,
+    help="Episode length in seconds.",
+)
+@click.option("--seed", default=0, show_default=True, type=SEED)
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False),
+    required=True,
+    help="Folder for policy.npz and learning_curve.csv.",
+)
+@click.option(
+    "--init",
+    "init_policy",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Continue training from this policy file (e.g. left turns, then right turns).",
+)
+@click.option("--force", is_flag=True, help="Replace the policy and learning curve already in --out.")
+@reading_option(
+    "Reading of an open point, e.g. skew_step=weights or skew_sample=centred (repeatable; "
+    "see docs/design.md) [default: the project's readings, or those of --init]."
+)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
+@disturbance_options
+@guard
+def train(
+    algorithm,
+    skew,
+    supervised,
+    pipeline,
+    episodes,
+    seconds,
+    seed,
+    out_dir,
+    init_policy,
+    force,
+    readings,
+    as_json,
+    disturbance,
+):
+    """Train a learner; writes the policy and its learning curve.
+
+    An --out folder that already holds them is refused unless --force is given. Ctrl-C stops
+    without writing anything (exit status 130).
+    """
+    from pipefollow.agents import make_agent
+    from pipefollow.readings import cacla_params, sigma_scale, sim_params
+    from pipefollow.suites import Suite, resolve_training
+    from pipefollow.training import STAT_NAMES, train_compiled, train_random_compiled
+
+    if algorithm == "sarsa" and (skew or supervised):
+        raise UserError("--skew and --supervised apply to --algorithm cacla only")
+    pipe = resolve_training(pipeline)  # a Pipeline, or a Suite for random[:FAMILY]
+    rng = np.random.default_rng(seed)
+    if init_policy:
+        from pipefollow.policy import load_policy
+
+        agent = load_policy(init_policy)
+        reading = apply_readings(readings, agent.readings)
+        if agent.algorithm != algorithm:
+            raise UserError(f"--init {init_policy}: holds a {agent.name} policy, not {algorithm}")
+        if algorithm == "cacla":
+            wanted = cacla_params(reading, skew, supervised=supervised)
+            held = agent.params._replace(**{k: getattr(wanted, k) for k in _LEARNING_RATES})
+            if held != wanted:
+                raise UserError(
+                    f"--init {init_policy}: holds a {agent.name} policy under readings "
+                    f"'{agent.readings}'; its options differ from these"
+                )
+        agent.readings = reading.id
+        agent.rng = rng
+    else:
+        reading = apply_readings(readings)
+        agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng, readings=reading)
+    from pipefollow.results import TRAINING_OUTPUTS, write_training_outputs
+
+    existing = [name for name in TRAINING_OUTPUTS if (Path(out_dir) / name).exists()]
+    if existing and not force:
+        raise UserError(f"--out '{out_dir}' already holds {existing[0]}; use --force to replace it")
+    from pipefollow.outputs import first_missing, remove_empty_folders
+
+    made = first_missing(out_dir)
+    out = writable_folder(out_dir, "--out")  # before training, after the checks of --init
+    show = not as_json and sys.stderr.isatty()
+    try:
+        with click.progressbar(
+            length=episodes, label=f"training {agent.name}", file=sys.stderr, hidden=not show
+        ) as bar:
+            done = [0]
+
+            def progress(n):
+                bar.update(n - done[0])
+                done[0] = n
+
+            scale = sigma_scale(reading)
+            schedule = dict(
+                episode_seconds=seconds,
+                sigma_start=scale,
+                sigma_end=0.01 * scale,
+                params=sim_params(reading)._replace(disturbance=disturbance),
+                env_rng=np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0]),
+                progress=progress,
+            )
+            if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the seed's generator
+                stats = train_random_compiled(agent, pipe, episodes, pipe_rng=rng.spawn(1)[0], **schedule)
+            else:
+                stats = train_compiled(agent, pipe, episodes, **schedule)
+        policy_path, curve_path = write_training_outputs(
+            out, agent, stats, episodes, pipeline=pipe.name, seed=seed
+        )
+    except BaseException as e:
+        remove_empty_folders(out, made)  # an interrupted or failed run leaves no empty --out behind
+        if isinstance(e, KeyboardInterrupt):
+            click.echo(f"pipefollow: interrupted; nothing written to '{out_dir}'", err=True)
+            sys.exit(130)
+        raise
+    result = {
+        "algorithm": agent.name,
+        "readings": reading.id,
+        "policy": str(policy_path),
+        "learning_curve": str(curve_path),
+        "returns": stats[:, 0].tolist(),
+        **{f"final_mean_{n}": float(stats[-min(50, episodes) :, i].mean()) for i, n in enumerate(STAT_NAMES)},
+    }
+    if disturbance != _disturbance.NO_DISTURBANCE:
+        result["disturbance"] = _disturbance.to_dict(disturbance)
+    if as_json:
+        click.echo(json.dumps(result))
+        return
+    k = min(10, episodes)
+    click.echo(
+        f"{agent.name}: mean return of the first {k} episodes {stats[:k, 0].mean():.2f}, "
+        f"of the last {k} {stats[-k:, 0].mean():.2f}"
+    )
+    click.echo(f"policy: {policy_path}\nlearning curve: {curve_path}")

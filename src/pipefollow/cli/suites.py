@@ -1,0 +1,182 @@
+"""``pipefollow suites``, ``pipelines`` and ``benchmark``: pipes a controller has never seen."""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+from pipefollow import disturbance as _disturbance
+from pipefollow.cli.common import (
+    SEED,
+    UserError,
+    apply_readings,
+    controller_options,
+    disturbance_options,
+    finite,
+    guard,
+    load_controller,
+    main,
+    reading_option,
+    writable_folder,
+)
+from pipefollow.experiments.config import MAX_SECONDS
+
+
+@main.group(invoke_without_command=True)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@click.pass_context
+def suites(ctx, as_json):
+    """List the pipeline suites: training families and held-out test suites."""
+    if ctx.invoked_subcommand is not None:
+        return
+    from pipefollow.suites import SUITES
+
+    rows = [s.summary() for s in SUITES.values()]
+    if as_json:
+        click.echo(json.dumps({"suites": rows}))
+        return
+    head = ("suite", "kind", "pipes", "turns", "straights", "arc radii")
+    click.echo("{:<15} {:<8} {:>5} {:>9} {:>10} {:>10}  description".format(*head))
+    for r in rows:
+        count = "∞" if r["count"] is None else str(r["count"])
+        turns = "{:g}–{:g}°".format(*r["turn_deg"])
+        straights = "{:g}–{:g} m".format(*r["straight_m"])
+        radii = "{:g}–{:g} m".format(*r["arc_radius_m"])
+        cells = (r["name"], r["kind"], count, turns, straights, radii, r["description"])
+        click.echo("{:<15} {:<8} {:>5} {:>9} {:>10} {:>10}  {}".format(*cells))
+
+
+@suites.command("export")
+@click.argument("name")
+@click.option(
+    "--out", "out_dir", type=click.Path(file_okay=False), required=True, help="Folder for the JSON files."
+)
+@click.option(
+    "--pipes",
+    type=click.IntRange(min=1, max=100_000),
+    default=None,
+    help="Number of pipes [default: all of a held-out suite, 100 of a training family].",
+)
+@click.option(
+    "--seconds",
+    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
+    callback=finite,
+    default=60.0,
+    show_default=True,
+    help="Episode length the pipes must be long enough for.",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object: the files written.")
+@guard
+def suites_export(name, out_dir, pipes, seconds, as_json):
+    """Write the pipes of suite NAME as pipeline JSON files (NAME-000.json, ...)."""
+    from pipefollow.suites import export_suite, get_suite, min_length_for
+
+    suite = get_suite(name)
+    n = pipes if pipes is not None else (suite.count or 100)
+    if suite.count is not None and n > suite.count:
+        raise UserError(f"--pipes {n}: suite '{name}' has {suite.count} pipes")
+    out = writable_folder(out_dir, "--out")
+    paths = export_suite(suite, out, n, min_length_for(seconds))
+    if as_json:
+        click.echo(json.dumps({"suite": name, "files": [str(p) for p in paths]}))
+        return
+    click.echo(f"wrote {len(paths)} pipes of '{name}' to {out}")
+
+
+@main.command()
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
+def pipelines(as_json):
+    """List the named pipelines.
+
+    The names --pipeline and experiment files accept, with segment count and length.
+    """
+    from pipefollow.listings import pipeline_rows, table
+    from pipefollow.listings import pipelines as entries
+
+    rows = pipeline_rows(entries())
+    if as_json:
+        click.echo(json.dumps(rows, ensure_ascii=False))
+        return
+    columns = [("name", "name"), ("group", "group"), ("segments", "segments"), ("length_m", "length (m)")]
+    click.echo(table(rows, [*columns, ("description", "description")]))
+
+
+@main.command()
+@controller_options
+@click.option(
+    "--suite", "suite_name", default="heldout", show_default=True, help="Suite (see 'pipefollow suites')."
+)
+@click.option(
+    "--seconds",
+    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
+    callback=finite,
+    default=60.0,
+    show_default=True,
+    help="Episode length in seconds.",
+)
+@click.option(
+    "--pipes",
+    type=click.IntRange(min=1, max=100_000),
+    default=None,
+    help="Number of pipes [default: all of a held-out suite, 100 of a training family].",
+)
+@click.option(
+    "--seed",
+    default=0,
+    show_default=True,
+    type=SEED,
+    help="Seed of the bootstrap resampling and of the random disturbances.",
+)
+@click.option(
+    "--plot",
+    "plot_path",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Save a PNG: per-pipe return differences to the heuristic and a few trajectories.",
+)
+@reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@disturbance_options
+@guard
+def benchmark(
+    controller, lookahead, suite_name, seconds, pipes, seed, plot_path, readings, as_json, disturbance
+):
+    """Run a controller deterministically on every pipe of a suite, beside the heuristic.
+
+    Reports the mean return with a bootstrap 95 % confidence interval, the interquartile mean,
+    the success rate (pipe in view at ≥ 95 % of the decisions) and, for a controller other than
+    the heuristic, the paired per-pipe difference to the heuristic with its confidence interval.
+    """
+    from pipefollow.benchmark import benchmark as run_benchmark
+    from pipefollow.benchmark import format_summary
+    from pipefollow.readings import sim_params
+    from pipefollow.suites import get_suite
+
+    suite = get_suite(suite_name)
+    if suite.count is not None and pipes is not None and pipes > suite.count:
+        raise UserError(f"--pipes {pipes}: suite '{suite_name}' has {suite.count} pipes")
+    agent = load_controller(controller, seed, lookahead)
+    reading = apply_readings(readings, getattr(agent, "readings", "default"))
+    run = run_benchmark(
+        agent,
+        suite,
+        controller=controller,
+        seconds=seconds,
+        params=sim_params(reading)._replace(disturbance=disturbance),
+        n_pipes=pipes,
+        seed=seed,
+    )
+    run.summary["readings"] = reading.id
+    if disturbance != _disturbance.NO_DISTURBANCE:
+        run.summary["disturbance"] = _disturbance.to_dict(disturbance)
+    if plot_path:
+        from pipefollow.benchmark_plot import plot_benchmark
+
+        plot_benchmark(run, plot_path)
+    if as_json:
+        click.echo(json.dumps(run.summary))
+        return
+    click.echo(format_summary(run.summary, seconds))
+    if plot_path:
+        click.echo(f"plot: {plot_path}")
