@@ -163,11 +163,21 @@ def _interrupting_trial(config, seed):
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the test's trial function needs fork")
 def test_ctrl_c_stops_the_process_pool_without_waiting(tmp_path, monkeypatch):
     monkeypatch.setenv("PIPEFOLLOW_TEST_RUN", str(tmp_path))
+    # Python's Ctrl-C handler, also where the test runner was started with SIGINT ignored (nohup, &)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     t0 = time.perf_counter()
-    with pytest.raises(RunInterrupted) as e:
-        run_experiment(
-            TINY, tmp_path, backend="process", workers=2, show_progress=False, trial_fn=_interrupting_trial
-        )
+    try:
+        with pytest.raises(RunInterrupted) as e:
+            run_experiment(
+                TINY,
+                tmp_path,
+                backend="process",
+                workers=2,
+                show_progress=False,
+                trial_fn=_interrupting_trial,
+            )
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert time.perf_counter() - t0 < 60  # the hung workers were stopped, not waited for
     assert e.value.saved == 1
     assert multiprocessing.active_children() == []
