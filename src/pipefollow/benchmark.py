@@ -1,6 +1,7 @@
 """Benchmark a controller on a suite of pipes: one deterministic episode per pipe, beside the heuristic.
 
-The episodes of the paper's controllers (heuristic, CACLA, SARSA policies) run in one compiled
+The episodes of the paper's controllers (heuristic, CACLA, SARSA policies) and of exported
+network policies (:class:`~pipefollow.mlp.MLPPolicy`: PPO, SAC) run in one compiled
 call over all pipes, their points concatenated into one array with offsets; other controllers
 (anything with ``act(obs, explore)``) run through the Gymnasium environment. Both give the same
 numbers (tested). The summary has bootstrap confidence intervals (:mod:`pipefollow.stats`).
@@ -24,6 +25,7 @@ import numpy as np
 from numba import njit
 
 from pipefollow import cacla as cacla_mod
+from pipefollow import mlp as mlp_mod
 from pipefollow import sarsa as sarsa_mod
 from pipefollow import simulation as sim
 from pipefollow.heuristic import Heuristic, heuristic_action
@@ -33,7 +35,7 @@ from pipefollow.stats import bootstrap_ci, iqm, paired_difference
 from pipefollow.suites import Suite, min_length_for
 
 SUCCESS_IN_VIEW = 0.95
-HEURISTIC, CACLA, SARSA = 0, 1, 2  # controller kinds of the compiled episodes
+HEURISTIC, CACLA, SARSA, MLP = 0, 1, 2, 3  # controller kinds of the compiled episodes
 
 # Columns of the per-episode results.
 RET, IN_VIEW, PROGRESS, SUM_E2, N_SEEN = 0, 1, 2, 3, 4
@@ -70,6 +72,8 @@ def _suite_episodes(
     grid_offsets,
     widths,
     normalized,
+    theta,
+    layout,
     out,
     poses,
 ):
@@ -77,6 +81,8 @@ def _suite_episodes(
     p = cacla_mod.unpack(hp)
     s = np.empty(sim.STATE_SIZE)
     phi = np.empty(w.shape[1])
+    h0, h1 = np.empty(layout[0, 3]), np.empty(layout[0, 3])
+    a_out = np.empty(layout[0, 1])
     for e in range(offsets.shape[0] - 1):
         pts = points_all[offsets[e] : offsets[e + 1]]
         cum = cum_all[offsets[e] : offsets[e + 1]]
@@ -91,6 +97,8 @@ def _suite_episodes(
             if s[sim.IN_VIEW] != 0.0:
                 if kind == HEURISTIC:
                     a = heuristic_action(s[sim.X1], s[sim.Y1])
+                elif kind == MLP:
+                    a = mlp_mod.action1(theta, layout, s[:4], h0, h1, a_out)
                 else:
                     grid_features(s[:4], centres, grid_offsets, widths, normalized, phi)
                     if kind == CACLA:
@@ -113,6 +121,8 @@ def _suite_episodes(
 def _compiled_kind(agent):
     """``(kind, weights, packed params, search actions, search ψ)`` for the compiled episodes, or None."""
     empty = np.zeros((1, 1))
+    if isinstance(agent, mlp_mod.MLPPolicy):
+        return MLP, np.zeros((4, 1)), cacla_mod.pack(cacla_mod.PAPER_CACLA), np.zeros(1), empty
     if isinstance(agent, Heuristic):
         return HEURISTIC, np.zeros((4, 1)), cacla_mod.pack(cacla_mod.PAPER_CACLA), np.zeros(1), empty
     if isinstance(agent, cacla_mod.Cacla) and agent.default_supervisor:
@@ -126,6 +136,9 @@ def _compiled_kind(agent):
             agent.search_psi,
         )
     return None
+
+
+_NO_NET = (np.zeros(1), np.ones((1, 4), dtype=np.int64))  # theta, layout of "no network"
 
 
 def concatenate(pipes: Sequence[Pipeline]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -153,12 +166,14 @@ def run_episodes(
         _env_episodes(agent, pipes, seconds, params, out, poses)
         return out, poses
     kind, w, hp, sa, spsi = compiled
-    grid = STATE_GRID if kind == HEURISTIC else agent.grid  # the heuristic computes no features
+    # the heuristic and the networks compute no features
+    grid = STATE_GRID if kind in (HEURISTIC, MLP) else agent.grid
     grid_arrays, normalized = grid.packed, grid.form == "normalized"
+    theta, layout = (agent.theta, agent.layout) if kind == MLP else _NO_NET
     points, cum, offsets = concatenate(pipes)
     _suite_episodes(
         kind, w, hp, sa, spsi, points, cum, offsets, sim.pack_params(params), n_decisions,
-        *grid_arrays, normalized, out, poses,
+        *grid_arrays, normalized, theta, layout, out, poses,
     )  # fmt: skip
     return out, poses
 
