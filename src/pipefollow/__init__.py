@@ -79,11 +79,15 @@ _configure_numba_cache()
 
 
 def register_envs() -> None:
-    """Register the Gymnasium environment (idempotent)."""
+    """Register the Gymnasium environment and its batched vector version (idempotent)."""
     from gymnasium.envs.registration import register, registry
 
     if ENV_ID not in registry:
-        register(id=ENV_ID, entry_point="pipefollow.env:PipelineFollowingEnv")
+        register(
+            id=ENV_ID,
+            entry_point="pipefollow.env:PipelineFollowingEnv",
+            vector_entry_point="pipefollow.vector_env:PipelineFollowingVectorEnv",
+        )
 
 
 register_envs()
