@@ -297,7 +297,12 @@ def evaluate(
 
 
 @main.command()
-@click.option("--algorithm", type=click.Choice(["sarsa", "cacla"]), required=True)
+@click.option(
+    "--algorithm",
+    type=click.Choice(["sarsa", "cacla", "ppo", "sac"]),
+    required=True,
+    help="The paper's learners, or PPO / SAC from Stable-Baselines3 (extra 'deep').",
+)
 @click.option(
     "--skew",
     type=click.FloatRange(min=0.0, max=180.0),
@@ -322,6 +327,12 @@ def evaluate(
     type=click.FloatRange(min=1.0, max=MAX_SECONDS),
     callback=_finite,
     help="Episode length in seconds.",
+)
+@click.option(
+    "--steps",
+    type=click.IntRange(min=1, max=100_000_000),
+    default=None,
+    help="PPO and SAC: budget in environment steps (decisions) [default: 100,000].",
 )
 @click.option("--seed", default=0, show_default=True, type=int)
 @click.option(
@@ -352,6 +363,7 @@ def train(
     pipeline,
     episodes,
     seconds,
+    steps,
     seed,
     out_dir,
     init_policy,
@@ -360,6 +372,10 @@ def train(
     disturbance,
 ):
     """Train a learner; writes the policy and its learning curve."""
+    if algorithm in ("ppo", "sac"):
+        return _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance)
+    if steps is not None:
+        raise UserError("--steps applies to --algorithm ppo and sac only (use --episodes)")
     from pipefollow.agents import make_agent
     from pipefollow.readings import cacla_params, sigma_scale, sim_params
     from pipefollow.suites import Suite, resolve_training
@@ -437,6 +453,58 @@ def train(
         f"of the last {k} {stats[-k:, 0].mean():.2f}"
     )
     click.echo(f"policy: {policy_path}\nlearning curve: {curve_path}")
+
+
+def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance) -> None:
+    """``train --algorithm ppo|sac``: :func:`pipefollow.deep.train_to_folder`."""
+    from click.core import ParameterSource
+
+    ctx = click.get_current_context()
+    given = [
+        f"--{name.replace('_', '-')}"
+        for name in ("skew", "supervised", "episodes", "init_policy", "readings")
+        if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE
+    ]
+    if given:
+        raise UserError(f"{', '.join(given)} not available with --algorithm {algorithm} (see --steps)")
+    try:
+        from pipefollow import deep
+    except ImportError as e:  # pipefollow.deep.DeepExtraMissing: torch or Stable-Baselines3 missing
+        if type(e).__name__ != "DeepExtraMissing":
+            raise
+        raise UserError(str(e).split(" (")[0]) from None
+    from pipefollow.suites import resolve_training
+
+    resolve_training(pipeline)  # a bad pipeline fails before any work
+    out = _writable_folder(out_dir, "--out")
+    steps = 100_000 if steps is None else steps
+    show = not as_json and sys.stderr.isatty()
+    label = f"training {algorithm.upper()}"
+    with click.progressbar(length=steps, label=label, file=sys.stderr, hidden=not show) as bar:
+        done = [0]
+
+        def progress(n):
+            if n - done[0] >= 256 or n >= steps:
+                bar.update(min(n, steps) - done[0])
+                done[0] = min(n, steps)
+
+        extra = {} if disturbance == _disturbance.NO_DISTURBANCE else {"disturbance": disturbance}
+        result = deep.train_to_folder(
+            algorithm, pipeline, out, steps=steps, seconds=seconds, seed=seed, progress=progress, **extra
+        )
+    if disturbance != _disturbance.NO_DISTURBANCE:
+        result["disturbance"] = _disturbance.to_dict(disturbance)
+    if as_json:
+        click.echo(json.dumps(result))
+        return
+    r = result["returns"]
+    k = min(10, len(r))
+    click.echo(
+        f"{algorithm.upper()}: {result['steps']} steps in {result['wall_s']:.1f} s; mean return of the "
+        f"first {k} episodes {np.mean(r[:k]) if k else float('nan'):.2f}, of the last {k} "
+        f"{np.mean(r[-k:]) if k else float('nan'):.2f}"
+    )
+    click.echo(f"policy: {result['policy']}\nhyper-parameters: {result['hyperparameters']}")
 
 
 def _write_figures(run_dir: Path, required: bool) -> list[Path]:
