@@ -13,6 +13,11 @@ Definitions:
 * ``rms_e_dist``: root mean square of ``e_dist`` over the decisions that end with the pipe in
   view (per episode; pooled over all episodes for the summary); ``None`` without such decisions.
 * ``progress_m``: arc length reached along the pipe.
+
+Random disturbances (camera noise, missed detections, a varying current) draw, for pipe ``k``,
+from ``numpy.random.default_rng(SeedSequence([noise_seed, k]))`` in the order the environment
+draws from its ``np_random``: the reset's camera reading, then one reading per decision. Every
+controller meets the same noise on the same pipe.
 """
 
 from __future__ import annotations
@@ -74,6 +79,7 @@ def _suite_episodes(
     normalized,
     theta,
     layout,
+    z_all,
     out,
     poses,
 ):
@@ -87,7 +93,7 @@ def _suite_episodes(
         pts = points_all[offsets[e] : offsets[e + 1]]
         cum = cum_all[offsets[e] : offsets[e + 1]]
         psi0 = math.atan2(pts[1, 1] - pts[0, 1], pts[1, 0] - pts[0, 0])
-        sim.init_state(s, pts, cum, pts[0, 0], pts[0, 1], psi0, ps)
+        sim.init_state(s, pts, cum, pts[0, 0], pts[0, 1], psi0, ps, z_all[e, 0])
         poses[e, 0, 0], poses[e, 0, 1], poses[e, 0, 2] = s[sim.X], s[sim.Y], s[sim.PSI]
         total = 0.0
         seen = 0
@@ -106,7 +112,7 @@ def _suite_episodes(
                         a, _ = cacla_mod.act(w, phi, 0.0, 0.0, 0.0, a_sup, p)
                     else:
                         a = sarsa_mod.choose(w, phi, search_actions, search_psi, 0.0, 0.0)
-            total += sim.decide(s, a, pts, cum, ps)
+            total += sim.decide(s, a, pts, cum, ps, z_all[e, t + 1])
             if s[sim.IN_VIEW] != 0.0:
                 seen += 1
                 sum_e2 += s[sim.E_DIST] * s[sim.E_DIST]
@@ -150,10 +156,21 @@ def concatenate(pipes: Sequence[Pipeline]) -> tuple[np.ndarray, np.ndarray, np.n
     return points, cum, offsets
 
 
+def _noise_rng(noise_seed: int, k: int) -> np.random.Generator:
+    """The generator of pipe ``k``'s random disturbances (module docstring)."""
+    return np.random.default_rng(np.random.SeedSequence([noise_seed, k]))
+
+
 def run_episodes(
-    agent, pipes: Sequence[Pipeline], seconds: float, params: sim.SimParams = sim.PAPER_SIM
+    agent,
+    pipes: Sequence[Pipeline],
+    seconds: float,
+    params: sim.SimParams = sim.PAPER_SIM,
+    noise_seed: int = 0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """One deterministic episode (σ = 0) of ``agent`` per pipe.
+
+    ``noise_seed`` seeds the random disturbances, if any (module docstring).
 
     Returns ``(results, poses)``: (pipes, 5) columns return, pipe_in_view, progress_m, Σ e_dist²
     and number of decisions in view; (pipes, decisions + 1, 3) poses (x, y, ψ).
@@ -163,8 +180,15 @@ def run_episodes(
     poses = np.zeros((len(pipes), n_decisions + 1, 3))
     compiled = _compiled_kind(agent)
     if compiled is None:
-        _env_episodes(agent, pipes, seconds, params, out, poses)
+        _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed)
         return out, poses
+    from pipefollow.disturbance import noise_count
+
+    k = noise_count(params.disturbance)
+    z_all = np.zeros((len(pipes), n_decisions + 1, k))
+    if k:
+        for e in range(len(pipes)):
+            z_all[e] = _noise_rng(noise_seed, e).standard_normal((n_decisions + 1, k))
     kind, w, hp, sa, spsi = compiled
     # the heuristic and the networks compute no features
     grid = STATE_GRID if kind in (HEURISTIC, MLP) else agent.grid
@@ -173,17 +197,18 @@ def run_episodes(
     points, cum, offsets = concatenate(pipes)
     _suite_episodes(
         kind, w, hp, sa, spsi, points, cum, offsets, sim.pack_params(params), n_decisions,
-        *grid_arrays, normalized, theta, layout, out, poses,
+        *grid_arrays, normalized, theta, layout, z_all, out, poses,
     )  # fmt: skip
     return out, poses
 
 
-def _env_episodes(agent, pipes, seconds, params, out, poses) -> None:
+def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0) -> None:
     """:func:`run_episodes` through the Gymnasium environment, for controllers without a compiled kind."""
     from pipefollow.env import PipelineFollowingEnv
 
     for i, pipe in enumerate(pipes):
         env = PipelineFollowingEnv(pipe, seconds, params=params)
+        env.np_random = _noise_rng(noise_seed, i)
         agent.begin_episode(0.0)
         obs, info = env.reset()
         done = False
@@ -225,6 +250,7 @@ def benchmark(
     params: sim.SimParams = sim.PAPER_SIM,
     n_pipes: int | None = None,
     seed: int = 0,
+    noise_seed: int = 0,
 ) -> BenchmarkRun:
     """Run ``agent`` and the heuristic on the suite's pipes and summarize (module docstring).
 
@@ -236,15 +262,16 @@ def benchmark(
         params: the simulated system, disturbances included, for every episode.
         n_pipes: number of pipes (default: the whole held-out suite; 100 of a training family).
         seed: seed of the bootstrap resampling.
+        noise_seed: seed of the random disturbances (module docstring), the same for both.
     """
     n = n_pipes if n_pipes is not None else (suite.count or 100)
     pipes = suite.pipes(n, min_length_for(seconds))
-    res, poses = run_episodes(agent, pipes, seconds, params)
+    res, poses = run_episodes(agent, pipes, seconds, params, noise_seed)
     is_heuristic = isinstance(agent, Heuristic)
     if is_heuristic:
         h_res, h_poses = res, poses
     else:
-        h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params)
+        h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params, noise_seed)
     ret = res[:, RET]
     lo, hi = bootstrap_ci(ret, seed)
     summary = {
