@@ -13,6 +13,8 @@ from pipefollow.cli import main
 from pipefollow.env import PipelineFollowingEnv
 from pipefollow.policy import load_policy
 
+pytestmark = pytest.mark.deep
+
 
 def _sb3():
     return pytest.importorskip("stable_baselines3")
