@@ -96,10 +96,16 @@ def test_cli_trains_ppo_and_sac_and_the_policies_run_without_torch(tmp_path):
     for algorithm in ("ppo", "sac"):
         out = tmp_path / algorithm
         args = ["train", "--algorithm", algorithm, "--pipeline", "random:easy", "--seconds", "10"]
+        if algorithm == "ppo":  # the disturbance options reach the training environment
+            args += ["--current", "0.1,45", "--camera-noise", "0.05"]
         res = runner.invoke(main, [*args, "--steps", "200", "--seed", "1", "--out", str(out), "--json"])
         assert res.exit_code == 0, res.output
         result = json.loads(res.stdout)
         assert set(result) >= {"policy", "returns", "steps", "wall_s"}
+        assert ("disturbance" in result) == (algorithm == "ppo")
+        res = runner.invoke(main, ["evaluate", "--controller", result["policy"], "--json"])
+        assert res.exit_code == 0, res.output
+        assert json.loads(res.stdout)["mean_progress_m"] > 0
         assert result["steps"] >= 200 and result["wall_s"] > 0 and len(result["returns"]) >= 1
         hp = json.loads((out / "hyperparameters.json").read_text())
         assert (
