@@ -113,8 +113,9 @@ def table(out: Path) -> str:
     def cell(rs, cond):
         m = [r[cond]["mean_return"] for r in rs]
         worst = min(rs, key=lambda r: r[cond]["ci95_return"][0])[cond]["ci95_return"]
-        succ = [r[cond]["success_rate"] for r in rs]
-        return f"{np.mean(m):.1f} [{worst[0]:.1f}, {worst[1]:.1f}]", f"{min(succ):.0%}–{max(succ):.0%}"
+        lo, hi = min(r[cond]["success_rate"] for r in rs), max(r[cond]["success_rate"] for r in rs)
+        succ = f"{lo:.0%}" if lo == hi else f"{lo:.0%}–{hi:.0%}"
+        return f"{np.mean(m):.1f} [{worst[0]:.1f}, {worst[1]:.1f}]", succ
 
     hc, hd = h["calm"], h["disturbed"]
     c_lo, c_hi = hc["ci95_return"]
