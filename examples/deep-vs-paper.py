@@ -8,7 +8,9 @@ deterministic episode each, beside the heuristic) without disturbances and with 
 (towards 45°) and 0.05 m camera noise. Training itself is undisturbed.
 
     python examples/deep-vs-paper.py --out runs/deep-vs-paper            # everything (≈1 h here)
-    python examples/deep-vs-paper.py --out runs/dvp --learners sac --budgets 100000 --seeds 0
+    python examples/deep-vs-paper.py --out runs/deep-vs-paper --learners sac --budgets 100000 --seeds 0
+    python examples/deep-vs-paper.py --out runs/deep-vs-paper --learners ppo cacla supervised-cacla \
+        --budgets 450000                                                # generalize.toml's budget
     python examples/deep-vs-paper.py --out runs/deep-vs-paper --table   # the table of what is done
 
 Each (learner, budget, seed) writes one JSON file under OUT/runs/ (resumable: done runs are
