@@ -2,8 +2,10 @@ import json
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
 from pipefollow import benchmark as bm
+from pipefollow.cli import main
 from pipefollow.mlp import MLPPolicy
 from pipefollow.policy import PolicyError, load_policy, save_policy
 from pipefollow.suites import get_suite
@@ -70,6 +72,10 @@ def test_network_that_does_not_fit_the_spaces_is_refused(tmp_path):
     with pytest.raises(PolicyError, match=r"in\.npz.*observation gives 4 values") as e:
         load_policy(tmp_path / "in.npz")
     assert "\n" not in str(e.value)
+    for command in ("evaluate", "benchmark"):  # on the command line: one line, exit 2
+        res = CliRunner().invoke(main, [command, "--controller", str(tmp_path / "in.npz")])
+        assert res.exit_code == 2 and len(res.stderr.strip().splitlines()) == 1
+        assert res.stderr.startswith(f"pipefollow: error: policy file '{tmp_path / 'in.npz'}'")
     bad_out = dict(data, layer2_weight=np.zeros((2, 64)), layer2_bias=np.zeros(2))
     np.savez(tmp_path / "out.npz", **bad_out)
     with pytest.raises(PolicyError, match="gives 2 outputs, the action space has 1"):
