@@ -42,14 +42,33 @@ from pipefollow.suites import min_length_for, parse_random_spec
 
 
 @njit(cache=True)
-def step_batch(states, actions, points, cum, n_points, packed, z, skip, rewards):
-    """One decision of every sub-environment not in ``skip``; rewards into ``rewards``."""
+def step_batch(
+    states, actions, points, cum, n_points, packed, z, skip, rewards, decisions, seen, sum_e2, max_n, ended
+):
+    """One decision of every sub-environment not in ``skip``, with its episode counters.
+
+    Actions are clipped to [-1, 1]; returns False (stepping nothing) if one is NaN. Writes the
+    rewards, counts decisions, decisions ending in view and their Σ e_dist², and marks in
+    ``ended`` the sub-environments whose episode this decision ends.
+    """
     for i in range(states.shape[0]):
+        if math.isnan(actions[i]):
+            return False
+    for i in range(states.shape[0]):
+        ended[i] = False
         if skip[i]:
             rewards[i] = 0.0
-        else:
-            n = n_points[i]
-            rewards[i] = sim.decide_packed(states[i], actions[i], points[i, :n], cum[i, :n], packed, z[i])
+            continue
+        n = n_points[i]
+        a = min(1.0, max(-1.0, actions[i]))
+        s = states[i]
+        rewards[i] = sim.decide_packed(s, a, points[i, :n], cum[i, :n], packed, z[i])
+        decisions[i] += 1
+        if s[sim.IN_VIEW] != 0.0:
+            seen[i] += 1
+            sum_e2[i] += s[sim.E_DIST] ** 2
+        ended[i] = decisions[i] >= max_n
+    return True
 
 
 _SCALARS = (
@@ -128,6 +147,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self._autoreset = np.zeros(n, dtype=bool)
         self._rewards = np.zeros(n)
         self._no_skip = np.zeros(n, dtype=bool)
+        self._ended = np.zeros(n, dtype=bool)
 
     def _load_pipe(self, i: int, pipe: Pipeline) -> None:
         m = len(pipe.points)
@@ -214,12 +234,9 @@ class PipelineFollowingVectorEnv(VectorEnv):
 
     def step(self, actions):
         """One 1-s decision of every sub-environment (next-step autoreset; module docstring)."""
-        a = np.array(actions, dtype=np.float64).reshape(-1)
+        a = np.asarray(actions, dtype=np.float64).reshape(-1)
         if a.size != self.num_envs:
             raise ValueError(f"expected {self.num_envs} actions (one per sub-environment), got {a.size}")
-        if np.isnan(a).any():
-            raise ValueError("action is NaN")
-        np.clip(a, -1.0, 1.0, out=a)
         resetting = self._autoreset
         any_reset = bool(resetting.any())
         if self._z.shape[1]:
@@ -228,24 +245,21 @@ class PipelineFollowingVectorEnv(VectorEnv):
                 if not resetting[i]:
                     rngs[i].standard_normal(out=self._z[i])
         skip = resetting if any_reset else self._no_skip
-        rewards = self._rewards
-        step_batch(
-            self.states, a, self._points, self._cum, self._n_points, self._packed, self._z, skip, rewards
-        )
-        stepped = ~resetting
+        rewards, truncated = self._rewards, self._ended
+        ok = step_batch(
+            self.states, a, self._points, self._cum, self._n_points, self._packed, self._z, skip, rewards,
+            self._decisions, self._seen, self._sum_e2, self.max_decisions, truncated,
+        )  # fmt: skip
+        if not ok:
+            raise ValueError("action is NaN")
         if any_reset:
             for i in np.flatnonzero(resetting):
                 self._reset_one(int(i))
-        s = self.states
-        self._decisions += stepped
-        seen = stepped & (s[:, sim.IN_VIEW] != 0.0)
-        self._seen += seen
-        self._sum_e2 += np.where(seen, s[:, sim.E_DIST] ** 2, 0.0)
-        truncated = stepped & (self._decisions >= self.max_decisions)
+        truncated = truncated.copy()
         terminated = np.zeros(self.num_envs, dtype=bool)
         infos = self._infos(truncated)
-        self._autoreset = truncated | terminated
-        return s[:, :4].copy(), rewards.copy(), terminated, truncated, infos
+        self._autoreset = truncated.copy()  # no terminal states: only truncations end episodes
+        return self.states[:, :4].copy(), rewards.copy(), terminated, truncated, infos
 
     def reset_done(self) -> np.ndarray:
         """Reset the sub-environments whose episode ended at the last step, now; their first observations.
