@@ -122,3 +122,19 @@ def test_gymnasium_vector_api_checks_and_bad_input():
     with pytest.raises(ValueError, match="episode_seconds"):
         make_vec(2, episode_seconds=0.1)
     vec.close()
+
+
+def test_gymnasium_vector_wrappers_read_its_episodes():
+    from gymnasium.wrappers.vector import RecordEpisodeStatistics
+
+    vec = RecordEpisodeStatistics(make_vec(2, pipeline="random:easy", episode_seconds=5))
+    vec.reset(seed=0)
+    total = np.zeros(2)
+    for t in range(7):
+        obs, rew, term, trunc, info = vec.step(np.full((2, 1), 0.2, dtype=np.float32))
+        total += rew
+        if t == 4:
+            assert trunc.all() and info["_episode"].all()
+            np.testing.assert_allclose(info["episode"]["r"], total)
+            np.testing.assert_array_equal(info["episode"]["l"], [5, 5])
+    assert len(vec.return_queue) == 2 and not trunc.any()
