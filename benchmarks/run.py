@@ -209,6 +209,110 @@ def bench_random_training(repeats):
     return median_time(one, max(3, repeats // 5))
 
 
+def bench_vector_env(repeats):
+    """One step of the batched vector env with 64 AUVs, timed in turns with 64 single ``env.step`` calls."""
+    import gymnasium as gym
+
+    import pipefollow  # noqa: F401  (registers the environment)
+
+    n = 64
+    mode = "vector_entry_point"
+    vec = gym.make_vec("pipefollow/PipelineFollowing-v0", n, vectorization_mode=mode, episode_seconds=1e6)
+    vec.reset(seed=0)
+    single = gym.make("pipefollow/PipelineFollowing-v0", episode_seconds=1e6)
+    single.reset(seed=0)
+    actions = np.full((n, 1), 0.1, dtype=np.float32)
+    action = actions[0]
+    vec.step(actions), single.step(action)
+
+    def sixty_four():
+        for _ in range(n):
+            single.step(action)
+
+    batched, singles = [], []
+    for _ in range(repeats):
+        batched.append(median_time(lambda: vec.step(actions), 1, inner=50))
+        singles.append(median_time(sixty_four, 1, inner=50))
+    ratio = statistics.median(b / s for b, s in zip(batched, singles, strict=True))
+    NOTES.append(
+        f"vector env, 64 AUVs: one batched step / 64 single env.step, paired: {ratio:.3f} (target ≤ 0.333; "
+        f"batched {statistics.median(batched) * 1e6:.0f} µs = {statistics.median(batched) / n * 1e6:.2f} µs "
+        f"per AUV, single {statistics.median(singles) / n * 1e6:.2f} µs)"
+    )
+    return statistics.median(batched)
+
+
+def bench_mlp_benchmark(repeats):
+    """Compiled benchmark episodes (100 held-out pipes × 60 s) of a 64×64 MLP policy, in turns with CACLA."""
+    from pipefollow.agents import make_agent
+    from pipefollow.benchmark import run_episodes
+    from pipefollow.mlp import MLPPolicy
+    from pipefollow.suites import get_suite, min_length_for
+
+    rng = np.random.default_rng(0)
+    sizes = [4, 64, 64, 1]
+    mlp = MLPPolicy(
+        [rng.normal(size=(o, i)) / np.sqrt(i) for i, o in zip(sizes[:-1], sizes[1:], strict=True)],
+        [rng.normal(size=o) * 0.1 for o in sizes[1:]],
+        ["tanh", "tanh", "identity"],
+    )
+    cacla = make_agent("cacla", rng=np.random.default_rng(0))
+    cacla.weights[:] = rng.normal(size=cacla.weights.shape) * 0.1
+    pipes = get_suite("heldout").pipes(None, min_length_for(60.0))
+    run_episodes(mlp, pipes, 60.0), run_episodes(cacla, pipes, 60.0)  # compile
+    t_mlp, t_cacla = [], []
+    for _ in range(repeats):
+        t_mlp.append(median_time(lambda: run_episodes(mlp, pipes, 60.0), 1))
+        t_cacla.append(median_time(lambda: run_episodes(cacla, pipes, 60.0), 1))
+    ratio = statistics.median(m / c for m, c in zip(t_mlp, t_cacla, strict=True))
+    NOTES.append(
+        f"benchmark episodes, MLP 64×64 / CACLA policy, paired: {ratio:.3f} (target ≤ 2; "
+        f"CACLA {statistics.median(t_cacla) * 1e3:.1f} ms for 6,000 decisions)"
+    )
+    return statistics.median(t_mlp)
+
+
+def bench_ppo_throughput(repeats):
+    """PPO, 16,384 steps with the default settings (8 environments), on the vector env vs DummyVecEnv."""
+    try:
+        import torch
+        from stable_baselines3.common.utils import set_random_seed
+        from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
+    except ImportError:
+        NOTES.append("PPO throughput: skipped (extra 'deep' not installed)")
+        return float("nan")
+    from pipefollow import deep
+    from pipefollow.env import PipelineFollowingEnv
+    from pipefollow.vector_env import PipelineFollowingVectorEnv
+
+    hp = deep.hyperparameters("ppo")
+    steps = 16_384
+    torch.set_num_threads(1)
+
+    def train(kind):
+        set_random_seed(0)
+        if kind == "vector":
+            env = deep.SB3VecEnv(PipelineFollowingVectorEnv(hp["n_envs"], "random:mixed", episode_seconds=90))
+        else:
+            env = DummyVecEnv([lambda: PipelineFollowingEnv("random:mixed", 90) for _ in range(hp["n_envs"])])
+        model = deep.make_model("ppo", VecMonitor(env), hp, seed=0)
+        t = time.perf_counter()
+        model.learn(total_timesteps=steps)
+        return steps / (time.perf_counter() - t)
+
+    train("vector"), train("dummy")  # warm up
+    vec, dummy = [], []
+    for _ in range(max(3, repeats // 5)):
+        vec.append(train("vector"))
+        dummy.append(train("dummy"))
+    ratio = statistics.median(v / d for v, d in zip(vec, dummy, strict=True))
+    NOTES.append(
+        f"PPO steps/s, vector env / DummyVecEnv, paired: {ratio:.3f} (target ≥ 1; "
+        f"{statistics.median(vec):.0f} vs {statistics.median(dummy):.0f} steps/s, 8 envs, 1 torch thread)"
+    )
+    return 1.0 / statistics.median(vec)
+
+
 # name, function, floor (s), target (s), unit for display
 BENCHES = [
     ("RK4 substep (closed loop)", bench_substep, 0.09e-6, None),
@@ -228,6 +332,9 @@ BENCHES = [
     ("benchmark, 100 pipes × 60 s", bench_suite_benchmark, None, 1.0),
     ("random-pipe CACLA, 100k dec.", bench_random_training, None, 3.0),
     ("render one frame (rgb_array)", bench_render_frame, None, 30e-3),
+    ("vector env step, 64 AUVs", bench_vector_env, 64 * 20 * 0.09e-6, 64 * 3e-6),
+    ("benchmark episodes, MLP 64×64", bench_mlp_benchmark, None, None),
+    ("PPO (SB3), time per step", bench_ppo_throughput, None, None),
     ("pipefollow reproduce (warm)", bench_reproduce, 1.5, 8.0),
     # 13 training readings × 8 trials × 10 repeats (1,040 trials); opt in with --readings
     (

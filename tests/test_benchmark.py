@@ -158,12 +158,12 @@ def test_compiled_episodes_equal_the_environment_under_random_disturbances(kind)
         disturbance=make_disturbance(0.1, 120.0, camera_noise=0.05, miss_prob=0.03)
     )
     pipes = get_suite("heldout").pipes(3)
-    res, poses = run_episodes(agent, pipes, 30.0, params, seed=7)
+    res, poses = run_episodes(agent, pipes, 30.0, params, noise_seed=7)
     env_res, env_poses = np.zeros_like(res), np.zeros_like(poses)
-    _env_episodes(agent, pipes, 30.0, params, env_res, env_poses, seed=7)
+    _env_episodes(agent, pipes, 30.0, params, env_res, env_poses, noise_seed=7)
     np.testing.assert_allclose(res, env_res, rtol=0, atol=1e-9)
     np.testing.assert_allclose(poses, env_poses, rtol=0, atol=1e-9)
-    clean, _ = run_episodes(agent, pipes, 30.0, seed=7)
+    clean, _ = run_episodes(agent, pipes, 30.0, noise_seed=7)
     assert not np.allclose(clean, res)  # the disturbances changed the episodes
 
 

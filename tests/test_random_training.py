@@ -89,7 +89,13 @@ def test_gym_make_random_draws_a_new_pipe_every_reset_and_reports_the_episode():
 
 
 def test_vector_env_autoresets_onto_new_pipes():
-    envs = gym.make_vec("pipefollow/PipelineFollowing-v0", num_envs=1, pipeline="random", episode_seconds=2)
+    envs = gym.make_vec(
+        "pipefollow/PipelineFollowing-v0",
+        num_envs=1,
+        vectorization_mode="sync",
+        pipeline="random",
+        episode_seconds=2,
+    )
     envs.reset(seed=0)
     seen = set()
     for _ in range(9):

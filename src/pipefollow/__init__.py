@@ -79,7 +79,7 @@ _configure_numba_cache()
 
 
 def register_envs() -> None:
-    """Register the Gymnasium environment (idempotent)."""
+    """Register the Gymnasium environment and its batched vector version (idempotent)."""
     from gymnasium.envs.registration import register, registry
 
     if ENV_ID not in registry:
@@ -88,6 +88,7 @@ def register_envs() -> None:
         register(
             id=ENV_ID,
             entry_point="pipefollow.env:PipelineFollowingEnv",
+            vector_entry_point="pipefollow.vector_env:PipelineFollowingVectorEnv",
             max_episode_steps=86_400,  # pipefollow.env.MAX_EPISODE_SECONDS / 1-s decisions
         )
 

@@ -1,12 +1,10 @@
 """Benchmark a controller on a suite of pipes: one deterministic episode per pipe, beside the heuristic.
 
-The episodes of the built-in controllers (heuristic, LOS) and of CACLA and SARSA policies run in
-one compiled call over all pipes, their points concatenated into one array with offsets; other
-controllers (anything with ``act(obs, explore)``) run through the Gymnasium environment. Both give
-the same numbers (tested). Random disturbances (camera noise, misses, a varying current) draw
-pipe ``i``'s standard normals from ``numpy.random.default_rng([seed, i])``, so every controller
-meets the same noise on the same pipe (common random numbers for the paired comparison). The
-summary has bootstrap confidence intervals (:mod:`pipefollow.stats`).
+The episodes of the built-in controllers (heuristic, line-of-sight guidance), of CACLA and SARSA
+policies and of exported network policies (:class:`~pipefollow.mlp.MLPPolicy`: PPO, SAC) run in
+one compiled call over all pipes, their points concatenated into one array with offsets; other controllers
+(anything with ``act(obs, explore)``) run through the Gymnasium environment. Both give the same
+numbers (tested). The summary has bootstrap confidence intervals (:mod:`pipefollow.stats`).
 
 Definitions:
 
@@ -15,6 +13,11 @@ Definitions:
 * ``rms_e_dist``: root mean square of ``e_dist`` over the decisions that end with the pipe in
   view (per episode; pooled over all episodes for the summary); ``None`` without such decisions.
 * ``progress_m``: arc length reached along the pipe.
+
+Random disturbances (camera noise, missed detections, a varying current) draw, for pipe ``k``,
+from ``numpy.random.default_rng(SeedSequence([noise_seed, k]))`` in the order the environment
+draws from its ``np_random``: the reset's camera reading, then one reading per decision. Every
+controller meets the same noise on the same pipe (common random numbers for the paired comparison).
 """
 
 from __future__ import annotations
@@ -27,9 +30,9 @@ import numpy as np
 from numba import njit
 
 from pipefollow import cacla as cacla_mod
+from pipefollow import mlp as mlp_mod
 from pipefollow import sarsa as sarsa_mod
 from pipefollow import simulation as sim
-from pipefollow.disturbance import noise_count
 from pipefollow.heuristic import Heuristic, heuristic_action
 from pipefollow.los import LOS, los_action
 from pipefollow.pipeline import Pipeline
@@ -38,7 +41,7 @@ from pipefollow.stats import bootstrap_ci, iqm, paired_difference
 from pipefollow.suites import Suite, min_length_for
 
 SUCCESS_IN_VIEW = 0.95
-HEURISTIC, CACLA, SARSA, LOS_KIND = 0, 1, 2, 3  # controller kinds of the compiled episodes
+HEURISTIC, CACLA, SARSA, MLP, LOS_KIND = 0, 1, 2, 3, 4  # controller kinds of the compiled episodes
 
 # Columns of the per-episode results.
 RET, IN_VIEW, PROGRESS, SUM_E2, N_SEEN = 0, 1, 2, 3, 4
@@ -86,15 +89,19 @@ def _suite_episodes(
     grid_offsets,
     widths,
     normalized,
+    theta,
+    layout,
+    z_all,
     out,
     poses,
     lookahead,
-    z_all,
 ):
     ps = sim.unpack_params(simp)
     p = cacla_mod.unpack(hp)
     s = np.empty(sim.STATE_SIZE)
     phi = np.empty(w.shape[1])
+    h0, h1 = np.empty(layout[0, 3]), np.empty(layout[0, 3])
+    a_out = np.empty(layout[0, 1])
     for e in range(offsets.shape[0] - 1):
         pts = points_all[offsets[e] : offsets[e + 1]]
         cum = cum_all[offsets[e] : offsets[e + 1]]
@@ -109,6 +116,8 @@ def _suite_episodes(
             if s[sim.IN_VIEW] != 0.0:
                 if kind == HEURISTIC:
                     a = heuristic_action(s[sim.X1], s[sim.Y1])
+                elif kind == MLP:
+                    a = mlp_mod.action1(theta, layout, s[:4], h0, h1, a_out)
                 elif kind == LOS_KIND:  # from the observation alone, as the LOS agent (y_near = 0)
                     a = los_action(s[sim.X1], s[sim.Y1], s[sim.X2], 0.0, lookahead)
                 else:
@@ -133,6 +142,8 @@ def _suite_episodes(
 def _compiled_kind(agent):
     """``(kind, weights, packed params, search actions, search ψ)`` for the compiled episodes, or None."""
     empty = np.zeros((1, 1))
+    if isinstance(agent, mlp_mod.MLPPolicy):
+        return MLP, np.zeros((4, 1)), cacla_mod.pack(cacla_mod.PAPER_CACLA), np.zeros(1), empty
     if isinstance(agent, Heuristic):
         return HEURISTIC, np.zeros((4, 1)), cacla_mod.pack(cacla_mod.PAPER_CACLA), np.zeros(1), empty
     if isinstance(agent, LOS):
@@ -150,6 +161,9 @@ def _compiled_kind(agent):
     return None
 
 
+_NO_NET = (np.zeros(1), np.ones((1, 4), dtype=np.int64))  # theta, layout of "no network"
+
+
 def concatenate(pipes: Sequence[Pipeline]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Points and arc lengths of all pipes in two arrays, pipe ``i`` at ``offsets[i]:offsets[i + 1]``."""
     offsets = np.zeros(len(pipes) + 1, dtype=np.int64)
@@ -159,17 +173,22 @@ def concatenate(pipes: Sequence[Pipeline]) -> tuple[np.ndarray, np.ndarray, np.n
     return points, cum, offsets
 
 
-def noise_generator(seed: int, i: int) -> np.random.Generator:
-    """The generator of pipe ``i``'s random disturbances in a benchmark with ``seed``."""
-    return np.random.default_rng([seed, i])
+def _noise_rng(noise_seed: int, k: int) -> np.random.Generator:
+    """The generator of pipe ``k``'s random disturbances (module docstring)."""
+    return np.random.default_rng(np.random.SeedSequence([noise_seed, k]))
 
 
 def run_episodes(
-    agent, pipes: Sequence[Pipeline], seconds: float, params: sim.SimParams = sim.PAPER_SIM, seed: int = 0
+    agent,
+    pipes: Sequence[Pipeline],
+    seconds: float,
+    params: sim.SimParams = sim.PAPER_SIM,
+    noise_seed: int = 0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """One deterministic episode (σ = 0) of ``agent`` per pipe.
 
-    Random disturbances of ``params`` draw from :func:`noise_generator` (``seed``, pipe index).
+    ``noise_seed`` seeds the random disturbances, if any (module docstring).
+
     Returns ``(results, poses)``: (pipes, 5) columns return, pipe_in_view, progress_m, Σ e_dist²
     and number of decisions in view; (pipes, decisions + 1, 3) poses (x, y, ψ).
     """
@@ -178,31 +197,35 @@ def run_episodes(
     poses = np.zeros((len(pipes), n_decisions + 1, 3))
     compiled = _compiled_kind(agent)
     if compiled is None:
-        _env_episodes(agent, pipes, seconds, params, out, poses, seed)
+        _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed)
         return out, poses
+    from pipefollow.disturbance import noise_count
+
     k = noise_count(params.disturbance)
     z_all = np.zeros((len(pipes), n_decisions + 1, k))
-    if k:  # the readings' normals in the order the environment draws them: reset, then each step
-        for i in range(len(pipes)):
-            z_all[i] = noise_generator(seed, i).standard_normal((n_decisions + 1, k))
+    if k:
+        for e in range(len(pipes)):
+            z_all[e] = _noise_rng(noise_seed, e).standard_normal((n_decisions + 1, k))
     kind, w, hp, sa, spsi = compiled
-    grid = STATE_GRID if kind in (HEURISTIC, LOS_KIND) else agent.grid  # these compute no features
+    # the heuristic, LOS and the networks compute no features
+    grid = STATE_GRID if kind in (HEURISTIC, MLP, LOS_KIND) else agent.grid
     grid_arrays, normalized = grid.packed, grid.form == "normalized"
+    theta, layout = (agent.theta, agent.layout) if kind == MLP else _NO_NET
     points, cum, offsets = concatenate(pipes)
     _suite_episodes(
         kind, w, hp, sa, spsi, points, cum, offsets, sim.pack_params(params), n_decisions,
-        *grid_arrays, normalized, out, poses, getattr(agent, "lookahead", 0.0), z_all,
+        *grid_arrays, normalized, theta, layout, z_all, out, poses, getattr(agent, "lookahead", 0.0),
     )  # fmt: skip
     return out, poses
 
 
-def _env_episodes(agent, pipes, seconds, params, out, poses, seed=0) -> None:
+def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0) -> None:
     """:func:`run_episodes` through the Gymnasium environment, for controllers without a compiled kind."""
     from pipefollow.env import PipelineFollowingEnv
 
     for i, pipe in enumerate(pipes):
         env = PipelineFollowingEnv(pipe, seconds, params=params)
-        env.np_random = noise_generator(seed, i)
+        env.np_random = _noise_rng(noise_seed, i)
         agent.begin_episode(0.0)
         obs, info = env.reset()
         done = False
@@ -244,6 +267,7 @@ def benchmark(
     params: sim.SimParams = sim.PAPER_SIM,
     n_pipes: int | None = None,
     seed: int = 0,
+    noise_seed: int = 0,
 ) -> BenchmarkRun:
     """Run ``agent`` and the heuristic on the suite's pipes and summarize (module docstring).
 
@@ -254,16 +278,17 @@ def benchmark(
         seconds: episode length.
         params: the simulated system, disturbances included, for every episode.
         n_pipes: number of pipes (default: the whole held-out suite; 100 of a training family).
-        seed: seed of the bootstrap resampling and of the random disturbances.
+        seed: seed of the bootstrap resampling.
+        noise_seed: seed of the random disturbances (module docstring), the same for both.
     """
     n = n_pipes if n_pipes is not None else (suite.count or 100)
     pipes = suite.pipes(n, min_length_for(seconds))
-    res, poses = run_episodes(agent, pipes, seconds, params, seed)
+    res, poses = run_episodes(agent, pipes, seconds, params, noise_seed)
     is_heuristic = isinstance(agent, Heuristic)
     if is_heuristic:
         h_res, h_poses = res, poses
     else:
-        h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params, seed)
+        h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params, noise_seed)
     ret = res[:, RET]
     lo, hi = bootstrap_ci(ret, seed)
     summary = {

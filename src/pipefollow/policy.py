@@ -7,7 +7,13 @@ A file holds ``format`` (``pipefollow-policy``), ``format_version``, ``package_v
 it is evaluated unless told otherwise. The loaded agent carries it as ``agent.readings``.
 
 Format versions: 3 adds ``readings`` and CACLA's reading fields; files of version 2 and older were
-trained with eq. 15 moving the weights by Δγ·φ(s), and load with ``skew_step=weights``.
+trained with eq. 15 moving the weights by Δγ·φ(s), and load with ``skew_step=weights``. 4 adds
+``algorithm`` ``mlp``: a feed-forward network exported from a deep-RL learner
+(:class:`~pipefollow.mlp.MLPPolicy`), stored as ``n_layers``, ``layer{k}_weight`` (out × in) and
+``layer{k}_bias`` (float64), ``activations`` (JSON list: ``identity``, ``tanh`` or ``relu`` per
+layer), ``output`` (``clip`` or ``tanh``), ``obs_offset``, ``obs_scale``, ``action_low``,
+``action_high``, ``trained_by`` (``ppo``, ``sac``) and ``params`` (JSON: the training's
+hyper-parameters, for the record). Loading it needs neither torch nor Stable-Baselines3.
 """
 
 from __future__ import annotations
@@ -23,23 +29,26 @@ import pipefollow
 from pipefollow import cacla
 from pipefollow.atomic import atomic_file
 from pipefollow.cacla import Cacla, CaclaParams
+from pipefollow.mlp import MLPPolicy
 from pipefollow.rbf import RBFGrid
 from pipefollow.sarsa import Sarsa, SarsaParams
 
 FORMAT = "pipefollow-policy"
-FORMAT_VERSION = 3  # 2: SARSA weights per action centre (13 × 1,764); 3: readings
+FORMAT_VERSION = 4  # 2: SARSA weights per action centre (13 × 1,764); 3: readings; 4: mlp
 
 
 class PolicyError(ValueError):
     """A policy file that cannot be used; the message names the file and the problem."""
 
 
-def save_policy(agent: Cacla | Sarsa, path: str | os.PathLike, **metadata) -> Path:
+def save_policy(agent: Cacla | Sarsa | MLPPolicy, path: str | os.PathLike, **metadata) -> Path:
     """Write ``agent`` to ``path`` (``.npz``) atomically, with its readings' id (``agent.readings``).
 
     Extra string ``metadata`` is stored too.
     """
     path = Path(path)
+    if isinstance(agent, MLPPolicy):
+        return _save_mlp(agent, path, metadata)
     if isinstance(agent, Cacla):
         algorithm, extra = "cacla", {}
     elif isinstance(agent, Sarsa):
@@ -64,7 +73,61 @@ def save_policy(agent: Cacla | Sarsa, path: str | os.PathLike, **metadata) -> Pa
     return path
 
 
-def load_policy(path: str | os.PathLike, seed: int | None = None) -> Cacla | Sarsa:
+def _header(algorithm: str, metadata: dict) -> dict[str, np.ndarray]:
+    return {
+        "format": np.array(FORMAT),
+        "format_version": np.array(FORMAT_VERSION),
+        "package_version": np.array(pipefollow.__version__),
+        "algorithm": np.array(algorithm),
+        "metadata": np.array(json.dumps({k: str(v) for k, v in metadata.items()})),
+    }
+
+
+def _save_mlp(agent: MLPPolicy, path: Path, metadata: dict) -> Path:
+    hyper = metadata.pop("hyperparameters", {})
+    arrays = {
+        **_header("mlp", metadata),
+        "params": np.array(json.dumps(hyper)),
+        "n_layers": np.array(len(agent.weights)),
+        "activations": np.array(json.dumps(agent.activations)),
+        "output": np.array(agent.output),
+        "obs_offset": agent.obs_offset,
+        "obs_scale": agent.obs_scale,
+        "action_low": agent.action_low,
+        "action_high": agent.action_high,
+        "trained_by": np.array(agent.trained_by),
+        "readings": np.array(agent.readings),
+    }
+    for k, (w, b) in enumerate(zip(agent.weights, agent.biases, strict=True)):
+        arrays[f"layer{k}_weight"], arrays[f"layer{k}_bias"] = w, b
+    with atomic_file(path) as f:
+        np.savez_compressed(f, **arrays)
+    return path
+
+
+def _load_mlp(data: dict, src: str) -> MLPPolicy:
+    try:
+        n = int(data["n_layers"])
+        weights = [np.asarray(data[f"layer{k}_weight"], dtype=np.float64) for k in range(n)]
+        biases = [np.asarray(data[f"layer{k}_bias"], dtype=np.float64) for k in range(n)]
+        activations = json.loads(str(data["activations"]))
+        fields = {k: np.asarray(data[k], dtype=np.float64) for k in ("obs_offset", "obs_scale")}
+        fields |= {k: np.asarray(data[k], dtype=np.float64) for k in ("action_low", "action_high")}
+        output, trained_by = str(data["output"]), str(data["trained_by"])
+    except (KeyError, ValueError, TypeError) as e:
+        raise PolicyError(f"{src}: missing or malformed entry ({e})") from None
+    if not isinstance(activations, list) or len(activations) != n:
+        raise PolicyError(f"{src}: 'activations' must list one activation per layer ({n})")
+    try:
+        agent = MLPPolicy(weights, biases, activations, output=output, trained_by=trained_by, **fields)
+    except ValueError as e:
+        raise PolicyError(f"{src}: network does not fit the environment ({e})") from None
+    agent.readings = str(data.get("readings", "default"))
+    agent.hyperparameters = json.loads(str(data.get("params", "{}")))
+    return agent
+
+
+def load_policy(path: str | os.PathLike, seed: int | None = None) -> Cacla | Sarsa | MLPPolicy:
     """Read a policy file written by :func:`save_policy`; problems raise :class:`PolicyError`."""
     path = Path(path)
     src = f"policy file '{path}'"
@@ -78,6 +141,11 @@ def load_policy(path: str | os.PathLike, seed: int | None = None) -> Cacla | Sar
         raise PolicyError(f"{src}: not a readable .npz file ({type(e).__name__})") from None
     if str(data.get("format", "")) != FORMAT:
         raise PolicyError(f"{src}: not a pipefollow policy (no '{FORMAT}' marker)")
+    if str(data.get("algorithm", "")) == "mlp":
+        version = int(data.get("format_version", 0))
+        if version > FORMAT_VERSION:
+            raise PolicyError(f"{src}: format version {version} is newer than this pipefollow reads")
+        return _load_mlp(data, src)
     try:
         version = int(data["format_version"])
         algorithm = str(data["algorithm"])
@@ -103,7 +171,7 @@ def load_policy(path: str | os.PathLike, seed: int | None = None) -> Cacla | Sar
             action_grid = RBFGrid.from_dict(json.loads(str(data["action_grid"])))
             agent = Sarsa(SarsaParams(**params), grid=grid, action_grid=action_grid, seed=seed)
         else:
-            raise PolicyError(f"{src}: unknown algorithm '{algorithm}' (expected cacla or sarsa)")
+            raise PolicyError(f"{src}: unknown algorithm '{algorithm}' (expected cacla, sarsa or mlp)")
     except (TypeError, KeyError, ValueError) as e:
         if isinstance(e, PolicyError):
             raise

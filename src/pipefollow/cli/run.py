@@ -193,7 +193,12 @@ def evaluate(
 
 
 @main.command()
-@click.option("--algorithm", type=click.Choice(["sarsa", "cacla"]), required=True)
+@click.option(
+    "--algorithm",
+    type=click.Choice(["sarsa", "cacla", "ppo", "sac"]),
+    required=True,
+    help="The paper's learners, or PPO / SAC from Stable-Baselines3 (extra 'deep').",
+)
 @click.option(
     "--skew",
     type=click.FloatRange(min=0.0, max=180.0),
@@ -218,6 +223,12 @@ def evaluate(
     type=click.FloatRange(min=1.0, max=MAX_SECONDS),
     callback=finite,
     help="Episode length in seconds.",
+)
+@click.option(
+    "--steps",
+    type=click.IntRange(min=1, max=100_000_000),
+    default=None,
+    help="PPO and SAC: budget in environment steps (decisions) [default: 100,000].",
 )
 @click.option("--seed", default=0, show_default=True, type=SEED)
 @click.option(
@@ -249,6 +260,7 @@ def train(
     pipeline,
     episodes,
     seconds,
+    steps,
     seed,
     out_dir,
     init_policy,
@@ -262,6 +274,15 @@ def train(
     An --out folder that already holds them is refused unless --force is given. Ctrl-C stops
     without writing anything (exit status 130).
     """
+    from pipefollow.results import TRAINING_OUTPUTS
+
+    existing = [name for name in TRAINING_OUTPUTS if (Path(out_dir) / name).exists()]
+    if existing and not force:
+        raise UserError(f"--out '{out_dir}' already holds {existing[0]}; use --force to replace it")
+    if algorithm in ("ppo", "sac"):
+        return _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance)
+    if steps is not None:
+        raise UserError("--steps applies to --algorithm ppo and sac only (use --episodes)")
     from pipefollow.agents import make_agent
     from pipefollow.readings import cacla_params, sigma_scale, sim_params
     from pipefollow.suites import Suite, resolve_training
@@ -291,12 +312,8 @@ def train(
     else:
         reading = apply_readings(readings)
         agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng, readings=reading)
-    from pipefollow.results import TRAINING_OUTPUTS, write_training_outputs
-
-    existing = [name for name in TRAINING_OUTPUTS if (Path(out_dir) / name).exists()]
-    if existing and not force:
-        raise UserError(f"--out '{out_dir}' already holds {existing[0]}; use --force to replace it")
     from pipefollow.outputs import first_missing, remove_empty_folders
+    from pipefollow.results import write_training_outputs
 
     made = first_missing(out_dir)
     out = writable_folder(out_dir, "--out")  # before training, after the checks of --init
@@ -352,3 +369,55 @@ def train(
         f"of the last {k} {stats[-k:, 0].mean():.2f}"
     )
     click.echo(f"policy: {policy_path}\nlearning curve: {curve_path}")
+
+
+def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance) -> None:
+    """``train --algorithm ppo|sac``: :func:`pipefollow.deep.train_to_folder`."""
+    from click.core import ParameterSource
+
+    ctx = click.get_current_context()
+    given = [
+        f"--{name.replace('_', '-')}"
+        for name in ("skew", "supervised", "episodes", "init_policy", "readings")
+        if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE
+    ]
+    if given:
+        raise UserError(f"{', '.join(given)} not available with --algorithm {algorithm} (see --steps)")
+    try:
+        from pipefollow import deep
+    except ImportError as e:  # pipefollow.deep.DeepExtraMissing: torch or Stable-Baselines3 missing
+        if type(e).__name__ != "DeepExtraMissing":
+            raise
+        raise UserError(str(e).split(" (")[0]) from None
+    from pipefollow.suites import resolve_training
+
+    resolve_training(pipeline)  # a bad pipeline fails before any work
+    out = writable_folder(out_dir, "--out")
+    steps = 100_000 if steps is None else steps
+    show = not as_json and sys.stderr.isatty()
+    label = f"training {algorithm.upper()}"
+    with click.progressbar(length=steps, label=label, file=sys.stderr, hidden=not show) as bar:
+        done = [0]
+
+        def progress(n):
+            if n - done[0] >= 256 or n >= steps:
+                bar.update(min(n, steps) - done[0])
+                done[0] = min(n, steps)
+
+        extra = {} if disturbance == _disturbance.NO_DISTURBANCE else {"disturbance": disturbance}
+        result = deep.train_to_folder(
+            algorithm, pipeline, out, steps=steps, seconds=seconds, seed=seed, progress=progress, **extra
+        )
+    if disturbance != _disturbance.NO_DISTURBANCE:
+        result["disturbance"] = _disturbance.to_dict(disturbance)
+    if as_json:
+        click.echo(json.dumps(result))
+        return
+    r = result["returns"]
+    k = min(10, len(r))
+    click.echo(
+        f"{algorithm.upper()}: {result['steps']} steps in {result['wall_s']:.1f} s; mean return of the "
+        f"first {k} episodes {np.mean(r[:k]) if k else float('nan'):.2f}, of the last {k} "
+        f"{np.mean(r[-k:]) if k else float('nan'):.2f}"
+    )
+    click.echo(f"policy: {result['policy']}\nhyper-parameters: {result['hyperparameters']}")

@@ -166,6 +166,7 @@ def benchmark(
         params=sim_params(reading)._replace(disturbance=disturbance),
         n_pipes=pipes,
         seed=seed,
+        noise_seed=seed,
     )
     run.summary["readings"] = reading.id
     if disturbance != _disturbance.NO_DISTURBANCE:
