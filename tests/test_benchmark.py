@@ -182,3 +182,24 @@ def test_cli_benchmark_bad_input(tmp_path, args):
     assert res.exit_code == 2, res.output
     assert res.stderr.startswith("pipefollow: error: ") and res.stderr.count("\n") == 1
     assert not plot.exists()
+
+
+def test_cli_benchmark_refuses_a_plot_format_before_any_episode(tmp_path, monkeypatch):
+    import pipefollow.benchmark as bm
+
+    def no_episodes(*args, **kwargs):
+        raise AssertionError("episodes ran before the --plot check")
+
+    monkeypatch.setattr(bm, "run_episodes", no_episodes)
+    plot = tmp_path / "b.xyz"
+    res = CliRunner().invoke(main, ["benchmark", "--pipes", "2", "--plot", str(plot)])
+    assert res.exit_code == 2, res.output
+    assert "--plot" in res.stderr and "xyz" in res.stderr and res.stderr.count("\n") == 1
+    assert not plot.exists()
+
+
+def test_cli_benchmark_plot_in_the_format_its_suffix_names(tmp_path):
+    svg = tmp_path / "b.svg"
+    res = CliRunner().invoke(main, ["benchmark", "--pipes", "2", "--seconds", "5", "--plot", str(svg)])
+    assert res.exit_code == 0, res.output
+    assert b"<svg" in svg.read_bytes()[:500]

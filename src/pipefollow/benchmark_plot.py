@@ -12,7 +12,7 @@ from pipefollow.render import PIPE_COLOR, _figure, save_figure
 
 
 def plot_benchmark(run: BenchmarkRun, path: str | os.PathLike) -> None:
-    """Draw a benchmark's figure and write it atomically as PNG.
+    """Draw a benchmark's figure and write it atomically, in the format its suffix names.
 
     Left: the paired per-pipe differences (controller − heuristic), sorted, with the mean and its
     CI (for the heuristic itself: its sorted returns, mean and CI). Right: the worst, median and

@@ -231,3 +231,11 @@ def disturbance_options(fn):
     for option in reversed(options):
         wrapper = option(wrapper)
     return wrapper
+
+
+def check_plot_path(plot_path: str | None) -> None:
+    """Refuse a ``--plot`` file whose suffix is not an image format, before any work is done."""
+    if plot_path:
+        from pipefollow.outputs import check_output_file, image_formats
+
+        check_output_file(plot_path, "--plot", tuple(image_formats()))

@@ -14,6 +14,7 @@ from pipefollow.cli.common import (
     SEED,
     UserError,
     apply_readings,
+    check_plot_path,
     controller_options,
     disturbance_options,
     finite,
@@ -125,10 +126,7 @@ def evaluate(
     from pipefollow.readings import sim_params
     from pipefollow.training import run_episode
 
-    if plot_path:
-        from pipefollow.outputs import check_output_file, image_formats
-
-        check_output_file(plot_path, "--plot", tuple(image_formats()))
+    check_plot_path(plot_path)
     if animate_path:
         from pipefollow.animation import check_animation_path
 

@@ -11,6 +11,7 @@ from pipefollow.cli.common import (
     SEED,
     UserError,
     apply_readings,
+    check_plot_path,
     controller_options,
     disturbance_options,
     finite,
@@ -133,7 +134,8 @@ def pipelines(as_json):
     "plot_path",
     type=click.Path(dir_okay=False),
     default=None,
-    help="Save a PNG: per-pipe return differences to the heuristic and a few trajectories.",
+    help="Save a plot of the per-pipe return differences to the heuristic and a few trajectories "
+    "(.png, .svg, .pdf, ...).",
 )
 @reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
@@ -153,6 +155,7 @@ def benchmark(
     from pipefollow.readings import sim_params
     from pipefollow.suites import get_suite
 
+    check_plot_path(plot_path)
     suite = get_suite(suite_name)
     if suite.count is not None and pipes is not None and pipes > suite.count:
         raise UserError(f"--pipes {pipes}: suite '{suite_name}' has {suite.count} pipes")
