@@ -183,8 +183,8 @@ def bench_suite_benchmark(repeats):
     """``pipefollow benchmark`` of a CACLA policy: 100 held-out pipes × 60 s, heuristic and CIs included."""
     from pipefollow.agents import make_agent
     from pipefollow.benchmark import benchmark
+    from pipefollow.random_training import train_random_compiled
     from pipefollow.suites import get_suite
-    from pipefollow.training import train_random_compiled
 
     agent = make_agent("cacla", rng=np.random.default_rng(0))
     rng = np.random.default_rng(1)
@@ -197,8 +197,8 @@ def bench_suite_benchmark(repeats):
 def bench_random_training(repeats):
     """CACLA on a new pipe of the mixed family every episode: 2,500 episodes × 40 s = 100,000 decisions."""
     from pipefollow.agents import make_agent
+    from pipefollow.random_training import train_random_compiled
     from pipefollow.suites import get_suite
-    from pipefollow.training import train_random_compiled
 
     suite = get_suite("mixed")
 

@@ -34,7 +34,7 @@ from pipefollow.heuristic import Heuristic
 from pipefollow.policy import save_policy
 from pipefollow.simulation import PAPER_SIM
 from pipefollow.suites import get_suite
-from pipefollow.training import train_random_compiled
+from pipefollow.random_training import train_random_compiled
 
 LEARNERS = ("ppo", "sac", "cacla", "supervised-cacla")
 TRAIN_PIPES, EPISODE_S, TEST_SUITE, TEST_S = "random:mixed", 90.0, "heldout", 60.0

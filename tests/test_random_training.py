@@ -14,8 +14,9 @@ from pipefollow.env import PipelineFollowingEnv
 from pipefollow.experiments.config import Phase, TrialConfig
 from pipefollow.experiments.trial import run_trial
 from pipefollow.heuristic import Heuristic
+from pipefollow.random_training import train_random_compiled
 from pipefollow.suites import get_suite, min_length_for
-from pipefollow.training import train, train_random_compiled
+from pipefollow.training import train
 
 KINDS = {
     "cacla": dict(algorithm="cacla"),

@@ -282,9 +282,10 @@ def train(
     if steps is not None:
         raise UserError("--steps applies to --algorithm ppo and sac only (use --episodes)")
     from pipefollow.agents import make_agent
+    from pipefollow.random_training import train_random_compiled
     from pipefollow.readings import cacla_params, sigma_scale, sim_params
     from pipefollow.suites import Suite, resolve_training
-    from pipefollow.training import STAT_NAMES, train_compiled, train_random_compiled
+    from pipefollow.training import STAT_NAMES, train_compiled
 
     if algorithm == "sarsa" and (skew or supervised):
         raise UserError("--skew and --supervised apply to --algorithm cacla only")

@@ -96,6 +96,7 @@ RESULT_MODULES = (
     "sarsa.py",
     "simulation.py",
     "suites.py",
+    "random_training.py",
     "training.py",
     "experiments/config.py",
     "experiments/trial.py",

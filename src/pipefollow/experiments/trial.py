@@ -14,9 +14,10 @@ from pipefollow.env import PipelineFollowingEnv
 from pipefollow.experiments.config import TrialConfig
 from pipefollow.exploration import linear_sigma
 from pipefollow.heuristic import Heuristic
+from pipefollow.random_training import train_random_compiled
 from pipefollow.readings import sigma_scale, sim_params
 from pipefollow.suites import Suite, min_length_for, resolve_training
-from pipefollow.training import run_episode, train_compiled, train_random_compiled
+from pipefollow.training import run_episode, train_compiled
 
 
 @dataclass(frozen=True)
