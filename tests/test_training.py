@@ -170,3 +170,17 @@ def test_equivalence_with_a_cruise_start():
     np.testing.assert_allclose(b.weights, a.weights, rtol=0, atol=1e-9)
     rest = train_compiled(make_agent("cacla", skew_deg=22.5, rng=np.random.default_rng(1)), pipe, 8)
     assert not np.array_equal(rest, stats_fast)  # the start speed changes the episodes
+
+
+def test_the_compiled_loops_refuse_an_agent_they_cannot_run():
+    from pipefollow.heuristic import Heuristic
+    from pipefollow.random_training import train_random_compiled
+    from pipefollow.suites import get_suite
+
+    with pytest.raises(TypeError, match="no compiled training loop for Heuristic"):
+        train_compiled(Heuristic(), builtin("paper-left"), 2)
+    with pytest.raises(TypeError, match="no compiled training loop for Heuristic"):
+        train_random_compiled(Heuristic(), get_suite("easy"), 2, pipe_rng=np.random.default_rng(0))
+    noisy = sim.PAPER_SIM._replace(disturbance=make_disturbance(0.0, 0.0, camera_noise=0.05))
+    with pytest.raises(ValueError, match="pass a seeded env_rng"):
+        train_compiled(make_agent("cacla"), builtin("paper-left"), 2, params=noisy)

@@ -14,10 +14,8 @@ import numpy as np
 from numba import njit
 
 from pipefollow import cacla as cacla_mod
-from pipefollow import sarsa as sarsa_mod
 from pipefollow import simulation as sim
-from pipefollow.exploration import linear_sigma
-from pipefollow.training import _cacla_episodes, _sarsa_episodes
+from pipefollow.training import _cacla_episodes, _sarsa_episodes, compiled_setup
 
 
 @njit(cache=True)
@@ -71,29 +69,13 @@ def train_random_compiled(
     (required ``env_rng``) draw from ``env_rng``, a stream of their own, where the environment
     draws them from ``np_random`` between its pipes. Returns (episodes, 4) statistics.
     """
-    from pipefollow.disturbance import check, noise_count
     from pipefollow.suites import min_length_for
 
-    check(params.disturbance)
-    dz = np.zeros(noise_count(params.disturbance))
-    if env_rng is None:
-        if dz.size:
-            raise ValueError("params.disturbance has random parts: pass a seeded env_rng")
-        env_rng = np.random.default_rng(0)  # not drawn from: no random parts
-
-    sigmas = np.array([linear_sigma(e, episodes, sigma_start, sigma_end) for e in range(episodes)])
-    n_decisions = int(round(episode_seconds / (params.dt * params.substeps)))
+    run = compiled_setup(agent, episodes, episode_seconds, sigma_start, sigma_end, params, env_rng)
+    sigmas, n_decisions, stats, simp, env_rng, dz = run
     min_length = min_length_for(episode_seconds)
-    stats = np.empty((episodes, 4))
     centres, offsets, widths = agent.grid.packed
     normalized = agent.grid.form == "normalized"
-    simp = sim.pack_params(params)
-    if isinstance(agent, cacla_mod.Cacla) and agent.params.supervised and not agent.default_supervisor:
-        raise TypeError(
-            "the compiled loop supervises with the heuristic only; use train() for other supervisors"
-        )
-    if not isinstance(agent, (cacla_mod.Cacla, sarsa_mod.Sarsa)):
-        raise TypeError(f"no compiled training loop for {type(agent).__name__}")
     for lo in range(0, episodes, max(1, chunk)):
         hi = min(episodes, lo + max(1, chunk))
         pipes = [suite.draw(pipe_rng, min_length) for _ in range(lo, hi)]

@@ -295,6 +295,35 @@ def _sarsa_episodes(
         stats[e, 3] = (n_decisions - seen) * decision_s
 
 
+def compiled_setup(agent, episodes, episode_seconds, sigma_start, sigma_end, params, env_rng):
+    """What every compiled training loop needs, after checking the agent and the disturbances.
+
+    Returns ``(σ per episode, decisions per episode, an empty (episodes, 4) statistics array,
+    packed parameters, the disturbances' generator, an array for their normals)``.
+
+    Raises:
+        ValueError: random disturbances without a seeded ``env_rng``.
+        TypeError: an agent without a compiled loop, or supervised by another than the heuristic.
+    """
+    from pipefollow.disturbance import check, noise_count
+
+    if not isinstance(agent, (cacla_mod.Cacla, sarsa_mod.Sarsa)):
+        raise TypeError(f"no compiled training loop for {type(agent).__name__}")
+    if isinstance(agent, cacla_mod.Cacla) and agent.params.supervised and not agent.default_supervisor:
+        raise TypeError(
+            "the compiled loop supervises with the heuristic only; use train() for other supervisors"
+        )
+    check(params.disturbance)
+    dz = np.zeros(noise_count(params.disturbance))
+    if env_rng is None:
+        if dz.size:
+            raise ValueError("params.disturbance has random parts: pass a seeded env_rng")
+        env_rng = np.random.default_rng(0)  # not drawn from: no random parts
+    sigmas = np.array([linear_sigma(e, episodes, sigma_start, sigma_end) for e in range(episodes)])
+    n_decisions = int(round(episode_seconds / (params.dt * params.substeps)))
+    return sigmas, n_decisions, np.empty((episodes, 4)), sim.pack_params(params), env_rng, dz
+
+
 def train_compiled(
     agent,
     pipeline: Pipeline,
@@ -316,26 +345,12 @@ def train_compiled(
     parts (camera noise, misses, a varying current). Runs ``chunk`` episodes per compiled call
     and reports the episodes done to ``progress``. Returns (episodes, 4) statistics.
     """
-    from pipefollow.disturbance import check, noise_count
-
-    check(params.disturbance)
-    dz = np.zeros(noise_count(params.disturbance))
-    if env_rng is None:
-        if dz.size:
-            raise ValueError("params.disturbance has random parts: pass a seeded env_rng")
-        env_rng = np.random.default_rng(0)  # not drawn from: no random parts
-    sigmas = np.array([linear_sigma(e, episodes, sigma_start, sigma_end) for e in range(episodes)])
-    n_decisions = int(round(episode_seconds / (params.dt * params.substeps)))
-    start = np.array([pipeline.points[0, 0], pipeline.points[0, 1], pipeline.start_heading])
-    stats = np.empty((episodes, 4))
+    run = compiled_setup(agent, episodes, episode_seconds, sigma_start, sigma_end, params, env_rng)
+    sigmas, n_decisions, stats, simp, env_rng, dz = run
     centres, offsets, widths = agent.grid.packed
     normalized = agent.grid.form == "normalized"
-    simp = sim.pack_params(params)
+    start = np.array([pipeline.points[0, 0], pipeline.points[0, 1], pipeline.start_heading])
     pts, cum = pipeline.points, pipeline.cumulative
-    if isinstance(agent, cacla_mod.Cacla) and agent.params.supervised and not agent.default_supervisor:
-        raise TypeError(
-            "the compiled loop supervises with the heuristic only; use train() for other supervisors"
-        )
     for lo in range(0, episodes, max(1, chunk)):
         hi = min(episodes, lo + max(1, chunk))
         sig, out = sigmas[lo:hi], stats[lo:hi]
@@ -358,7 +373,7 @@ def train_compiled(
                 env_rng,
                 dz,
             )
-        elif isinstance(agent, sarsa_mod.Sarsa):
+        else:  # a Sarsa agent (compiled_setup refused the others)
             ac, _, aw = agent.action_grid.packed
             _sarsa_episodes(
                 agent.weights,
@@ -384,8 +399,6 @@ def train_compiled(
                 env_rng,
                 dz,
             )
-        else:
-            raise TypeError(f"no compiled training loop for {type(agent).__name__}")
         if progress is not None:
             progress(hi)
     agent.begin_episode(sigmas[-1] if episodes else sigma_start)
