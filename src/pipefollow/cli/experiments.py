@@ -38,8 +38,8 @@ def _write_figures(run_dir: Path, required: bool) -> list[Path]:
     "out_dir",
     type=click.Path(file_okay=False),
     default=None,
-    help="Run folder; running again with the same options resumes. "
-    "[default: ./reproduction, ./reproduction-quick with --quick]",
+    help="Run folder; running again with the same options resumes. [default: ./reproduction for the "
+    "paper, ./reproduction-NAME for experiment NAME; with --quick, -quick appended]",
 )
 @click.option(
     "--backend",

@@ -23,6 +23,21 @@ from pipefollow.cli.common import (
 )
 from pipefollow.experiments.config import MAX_SECONDS
 
+pipes_option = click.option(
+    "--pipes",
+    type=click.IntRange(min=1, max=100_000),
+    default=None,
+    help="Number of pipes [default: all of a held-out suite, 100 of a training family].",
+)
+
+
+def _pipe_count(suite, pipes: int | None) -> int:
+    """The pipes ``--pipes`` asks of ``suite`` (its default if None); a one-line error past its end."""
+    n = pipes if pipes is not None else (suite.count or 100)
+    if suite.count is not None and n > suite.count:
+        raise UserError(f"--pipes {n}: suite '{suite.name}' has {suite.count} pipes")
+    return n
+
 
 @main.group(invoke_without_command=True)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
@@ -53,12 +68,7 @@ def suites(ctx, as_json):
 @click.option(
     "--out", "out_dir", type=click.Path(file_okay=False), required=True, help="Folder for the JSON files."
 )
-@click.option(
-    "--pipes",
-    type=click.IntRange(min=1, max=100_000),
-    default=None,
-    help="Number of pipes [default: all of a held-out suite, 100 of a training family].",
-)
+@pipes_option
 @click.option(
     "--seconds",
     type=click.FloatRange(min=1.0, max=MAX_SECONDS),
@@ -74,9 +84,7 @@ def suites_export(name, out_dir, pipes, seconds, as_json):
     from pipefollow.suites import export_suite, get_suite, min_length_for
 
     suite = get_suite(name)
-    n = pipes if pipes is not None else (suite.count or 100)
-    if suite.count is not None and n > suite.count:
-        raise UserError(f"--pipes {n}: suite '{name}' has {suite.count} pipes")
+    n = _pipe_count(suite, pipes)
     out = writable_folder(out_dir, "--out")
     paths = export_suite(suite, out, n, min_length_for(seconds))
     if as_json:
@@ -116,12 +124,7 @@ def pipelines(as_json):
     show_default=True,
     help="Episode length in seconds.",
 )
-@click.option(
-    "--pipes",
-    type=click.IntRange(min=1, max=100_000),
-    default=None,
-    help="Number of pipes [default: all of a held-out suite, 100 of a training family].",
-)
+@pipes_option
 @click.option(
     "--seed",
     default=0,
@@ -157,8 +160,7 @@ def benchmark(
 
     check_plot_path(plot_path)
     suite = get_suite(suite_name)
-    if suite.count is not None and pipes is not None and pipes > suite.count:
-        raise UserError(f"--pipes {pipes}: suite '{suite_name}' has {suite.count} pipes")
+    _pipe_count(suite, pipes)
     agent = load_controller(controller, seed, lookahead)
     reading = apply_readings(readings, getattr(agent, "readings", "default"))
     run = run_benchmark(
