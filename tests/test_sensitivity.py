@@ -98,3 +98,15 @@ def test_a_small_readings_run_writes_the_table_and_the_report(tmp_path):
     for c in claims:
         assert f"- **{c}**" in report
     assert "claim 1a:" in result.output
+
+
+def test_readings_csv_reads_back_to_the_same_verdicts(tmp_path):
+    toml = tmp_path / "small.toml"
+    toml.write_text(SMALL)
+    out = tmp_path / "run"
+    args = ["reproduce", "--experiment", str(toml), "--out", str(out), "--episodes", "2", "--repeats", "1"]
+    assert CliRunner().invoke(main, [*args, "--backend", "serial"]).exit_code == 0
+    computed = sensitivity.load(out)
+    back = sensitivity.read_csv(out / sensitivity.READINGS_CSV)
+    assert back.readings == computed.readings and back.claim_ids() == computed.claim_ids()
+    assert all(back.verdict_line(c) == computed.verdict_line(c) for c in computed.claim_ids())

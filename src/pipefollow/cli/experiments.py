@@ -145,7 +145,6 @@ def reproduce(
         click.echo(f"note: '{run.run_dir}' is complete and read-only: summarised, nothing written", err=True)
     elif not no_figures:
         outputs += _write_figures(run.run_dir, required=False)
-    per_trial = summary(run.run_dir, exp)
     if as_json:
         click.echo(
             json.dumps(
@@ -158,7 +157,7 @@ def reproduce(
                     "trials_reused": run.trials_reused,
                     "wall_seconds": run.wall_seconds,
                     "outputs": [str(p) for p in outputs],
-                    "trials": per_trial,
+                    "trials": summary(run.run_dir, exp),
                 }
             )
         )
@@ -170,6 +169,7 @@ def reproduce(
     if exp.compare_readings:
         _echo_sensitivity(run.run_dir, outputs)
         return
+    per_trial = summary(run.run_dir, exp)
     width = max(len(r["label"]) for r in per_trial.values()) if per_trial else 5
     click.echo(f"{'trial':<{width}}  {'return, last 50 (mean ± sd over seeds)':>38}  {'in view':>7}")
     for row in per_trial.values():
@@ -187,7 +187,9 @@ def _echo_sensitivity(run_dir: Path, outputs: list[Path]) -> None:
     """The per-claim lines of a sensitivity study."""
     from pipefollow.experiments import sensitivity
 
-    s = sensitivity.load(run_dir)
+    table = run_dir / sensitivity.READINGS_CSV
+    # the table this run just wrote holds every verdict; without it (--no-figures) compute them
+    s = sensitivity.read_csv(table) if table in outputs else sensitivity.load(run_dir)
     for claim in s.claim_ids():
         click.echo(f"claim {claim}: {s.verdict_line(claim)}")
     for p in outputs:

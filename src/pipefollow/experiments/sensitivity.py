@@ -236,6 +236,15 @@ def csv_text(s: Sensitivity) -> str:
     return buf.getvalue()
 
 
+def read_csv(path: str | Path) -> Sensitivity:
+    """The verdicts of a written ``readings.csv`` (no findings, no statements)."""
+    rows = tuple(
+        Row(r["reading"], r["claim"], "", int(r["passed"]), int(r["repeats"]), r["verdict"])
+        for r in read_rows(path)
+    )
+    return Sensitivity(None, tuple(dict.fromkeys(r.reading for r in rows)), {}, rows)
+
+
 def load(run_dir: str | Path) -> Sensitivity:
     """The sensitivity study of a run folder, computed from its tables."""
     run_dir = Path(run_dir)
