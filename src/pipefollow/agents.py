@@ -16,7 +16,6 @@ import numpy as np
 
 from pipefollow import readings as rd
 from pipefollow.cacla import Cacla
-from pipefollow.exploration import skew_step_to_gamma
 from pipefollow.sarsa import Sarsa, SarsaParams
 
 ALGORITHMS = ("sarsa", "cacla")
@@ -45,7 +44,6 @@ def make_agent(
         agent.readings = readings.id
         return agent
     if algorithm == "cacla":
-        skew_step_to_gamma(skew_deg)  # checks the value
         params = rd.cacla_params(readings, skew_deg, supervised=supervised, **params)
         agent = Cacla(params, grid=grid, rng=rng)
         agent.readings = readings.id

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 from pipefollow import cacla
 from pipefollow.cacla import CaclaParams
+from pipefollow.exploration import skew_step_to_gamma
 from pipefollow.rbf import ACTION_CENTRES, FORMS, STATE_CENTRES, WIDTHS, RBFGrid
 from pipefollow.simulation import PAPER_SIM, SimParams
 
@@ -179,10 +180,6 @@ class Readings:
             if getattr(self, p.key) != getattr(DEFAULT, p.key)
         }
 
-    def with_ids(self, ids: Iterable[str]) -> Readings:
-        """A copy with the readings of ``ids`` applied in order (later ones win)."""
-        return parse(ids, self)
-
     @property
     def trains_like_default(self) -> bool:
         """True if only report-level readings (the convergence thresholds) differ from the defaults."""
@@ -247,8 +244,13 @@ def parse(ids: Iterable[str] | str, base: Readings = DEFAULT, source: str = "rea
 
 
 def skew_gamma(skew_deg: float, r: Readings = DEFAULT) -> float:
-    """Δγ of eq. 15 from degrees to units of γ under the ``skew_unit`` reading."""
-    return math.radians(skew_deg) if r.skew_unit == "rad" else skew_deg / 45.0
+    """Δγ of eq. 15 from degrees to units of γ under the ``skew_unit`` reading.
+
+    Raises:
+        ValueError: ``skew_deg`` negative or not finite.
+    """
+    gamma = skew_step_to_gamma(skew_deg)  # 45° is one unit of γ; checks the value
+    return math.radians(skew_deg) if r.skew_unit == "rad" else gamma
 
 
 def cacla_params(r: Readings = DEFAULT, skew_deg: float = 0.0, **fields) -> CaclaParams:
