@@ -38,7 +38,7 @@ def median_time(fn, repeats: int, inner: int = 1) -> float:
 def bench_substep(repeats):
     from numba import njit
 
-    from pipefollow import simulation as sim
+    from pipefollow.sim import decision as sim
 
     @njit(cache=False)
     def substeps(s, n, p):
@@ -75,7 +75,7 @@ def bench_env_step_disturbed(repeats):
     import gymnasium as gym
 
     import pipefollow  # noqa: F401  (registers the environment)
-    from pipefollow.disturbance import make_disturbance
+    from pipefollow.sim.disturbance import make_disturbance
 
     dist = make_disturbance(0.1, 45.0, camera_noise=0.05)
     envs = [
@@ -99,7 +99,7 @@ def bench_env_step_disturbed(repeats):
 
 
 def bench_features(repeats):
-    from pipefollow.rbf import STATE_GRID
+    from pipefollow.learners.rbf import STATE_GRID
 
     x = np.array([0.3, 2.1, -0.2, 0.35])
     out = np.empty(STATE_GRID.n_features)
@@ -122,7 +122,7 @@ def _decision_bench(agent, repeats):
 
 
 def bench_cacla_decision(repeats):
-    from pipefollow.agents import make_agent
+    from pipefollow.training.agents import make_agent
 
     return _decision_bench(
         make_agent("cacla", skew_deg=22.5, supervised=True, rng=np.random.default_rng(0)), repeats
@@ -130,15 +130,15 @@ def bench_cacla_decision(repeats):
 
 
 def bench_sarsa_decision(repeats):
-    from pipefollow.agents import make_agent
+    from pipefollow.training.agents import make_agent
 
     return _decision_bench(make_agent("sarsa", rng=np.random.default_rng(0)), repeats)
 
 
 def _trial_bench(algorithm, repeats, **kw):
-    from pipefollow.agents import make_agent
-    from pipefollow.pipeline import builtin
-    from pipefollow.training import train_compiled
+    from pipefollow.sim.pipeline import builtin
+    from pipefollow.training.agents import make_agent
+    from pipefollow.training.compiled import train_compiled
 
     pipe = builtin("paper-left")
     train_compiled(make_agent(algorithm, rng=np.random.default_rng(0), **kw), pipe, 2)  # compile
@@ -151,8 +151,8 @@ def _trial_bench(algorithm, repeats, **kw):
 
 def bench_render_frame(repeats):
     """One ``env.render()`` in rgb_array mode (the Fig. 2 view), mid-episode, with its trail."""
-    from pipefollow.env import PipelineFollowingEnv
-    from pipefollow.heuristic import Heuristic
+    from pipefollow.envs.env import PipelineFollowingEnv
+    from pipefollow.learners.heuristic import Heuristic
 
     env = PipelineFollowingEnv("paper-validation", episode_seconds=60, render_mode="rgb_array")
     obs, _ = env.reset(seed=0)
@@ -181,10 +181,10 @@ def bench_reproduce(repeats, extra=(), runs=None):
 
 def bench_suite_benchmark(repeats):
     """``pipefollow benchmark`` of a CACLA policy: 100 held-out pipes × 60 s, heuristic and CIs included."""
-    from pipefollow.agents import make_agent
-    from pipefollow.benchmark import benchmark
-    from pipefollow.random_training import train_random_compiled
-    from pipefollow.suites import get_suite
+    from pipefollow.evaluation.benchmark import benchmark
+    from pipefollow.sim.suites import get_suite
+    from pipefollow.training.agents import make_agent
+    from pipefollow.training.random_pipes import train_random_compiled
 
     agent = make_agent("cacla", rng=np.random.default_rng(0))
     rng = np.random.default_rng(1)
@@ -196,9 +196,9 @@ def bench_suite_benchmark(repeats):
 
 def bench_random_training(repeats):
     """CACLA on a new pipe of the mixed family every episode: 2,500 episodes × 40 s = 100,000 decisions."""
-    from pipefollow.agents import make_agent
-    from pipefollow.random_training import train_random_compiled
-    from pipefollow.suites import get_suite
+    from pipefollow.sim.suites import get_suite
+    from pipefollow.training.agents import make_agent
+    from pipefollow.training.random_pipes import train_random_compiled
 
     suite = get_suite("mixed")
 
@@ -245,10 +245,10 @@ def bench_vector_env(repeats):
 
 def bench_mlp_benchmark(repeats):
     """Compiled benchmark episodes (100 held-out pipes × 60 s) of a 64×64 MLP policy, in turns with CACLA."""
-    from pipefollow.agents import make_agent
-    from pipefollow.benchmark import run_episodes
-    from pipefollow.mlp import MLPPolicy
-    from pipefollow.suites import get_suite, min_length_for
+    from pipefollow.evaluation.benchmark import run_episodes
+    from pipefollow.learners.mlp import MLPPolicy
+    from pipefollow.sim.suites import get_suite, min_length_for
+    from pipefollow.training.agents import make_agent
 
     rng = np.random.default_rng(0)
     sizes = [4, 64, 64, 1]
@@ -282,9 +282,9 @@ def bench_ppo_throughput(repeats):
     except ImportError:
         NOTES.append("PPO throughput: skipped (extra 'deep' not installed)")
         return float("nan")
-    from pipefollow import deep
-    from pipefollow.env import PipelineFollowingEnv
-    from pipefollow.vector_env import PipelineFollowingVectorEnv
+    from pipefollow.envs.env import PipelineFollowingEnv
+    from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
+    from pipefollow.training import deep
 
     hp = deep.hyperparameters("ppo")
     steps = 16_384

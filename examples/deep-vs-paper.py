@@ -26,15 +26,15 @@ from pathlib import Path
 
 import numpy as np
 
-from pipefollow.agents import make_agent
-from pipefollow.atomic import write_text_atomic
-from pipefollow.benchmark import benchmark
-from pipefollow.disturbance import make_disturbance
-from pipefollow.heuristic import Heuristic
-from pipefollow.policy import save_policy
-from pipefollow.simulation import PAPER_SIM
-from pipefollow.suites import get_suite
-from pipefollow.random_training import train_random_compiled
+from pipefollow.evaluation.benchmark import benchmark
+from pipefollow.files.atomic import write_text_atomic
+from pipefollow.learners.heuristic import Heuristic
+from pipefollow.sim.decision import PAPER_SIM
+from pipefollow.sim.disturbance import make_disturbance
+from pipefollow.sim.suites import get_suite
+from pipefollow.training.agents import make_agent
+from pipefollow.training.policy_files import save_policy
+from pipefollow.training.random_pipes import train_random_compiled
 
 LEARNERS = ("ppo", "sac", "cacla", "supervised-cacla")
 TRAIN_PIPES, EPISODE_S, TEST_SUITE, TEST_S = "random:mixed", 90.0, "heldout", 60.0
@@ -48,7 +48,7 @@ LABELS = {"ppo": "PPO", "sac": "SAC", "cacla": "CACLA", "supervised-cacla": "sup
 def train(learner: str, budget: int, seed: int):
     """(policy, steps, wall_s) of one training run."""
     if learner in ("ppo", "sac"):
-        from pipefollow.deep import train_deep
+        from pipefollow.training.deep import train_deep
 
         run = train_deep(learner, TRAIN_PIPES, steps=budget, seconds=EPISODE_S, seed=seed)
         return run.policy, run.steps, run.wall_s

@@ -4,7 +4,7 @@
     python examples/generalize_table.py generalize --csv docs/generalize/heldout.csv
 
 Every policy of the run folder, the heuristic and the line-of-sight controller run one
-deterministic 60-s episode per held-out pipe (`pipefollow.benchmark`) in three scenarios: calm
+deterministic 60-s episode per held-out pipe (`pipefollow.evaluation.benchmark`) in three scenarios: calm
 water, a 0.1 m/s current flowing east (across the pipes' first leg, which runs north), and that
 current with camera noise of 0.05 m (s.d. on each detected end point). The noise of pipe i is the
 same for every controller (common random numbers). Prints a markdown table (per learner: the range
@@ -20,10 +20,10 @@ import json
 import re
 from pathlib import Path
 
-from pipefollow.benchmark import benchmark, load_controller
-from pipefollow.disturbance import make_disturbance
-from pipefollow.simulation import PAPER_SIM
-from pipefollow.suites import get_suite
+from pipefollow.evaluation.benchmark import benchmark, load_controller
+from pipefollow.sim.decision import PAPER_SIM
+from pipefollow.sim.disturbance import make_disturbance
+from pipefollow.sim.suites import get_suite
 
 SCENARIOS = {
     "calm": make_disturbance(0.0, 0.0),

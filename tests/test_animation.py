@@ -2,12 +2,12 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from pipefollow import animation
-from pipefollow.animation import Recorder, check_animation_path, write_animation
-from pipefollow.env import PipelineFollowingEnv
-from pipefollow.heuristic import Heuristic
-from pipefollow.outputs import OutputError
-from pipefollow.training import run_episode
+from pipefollow.envs import animation
+from pipefollow.envs.animation import Recorder, check_animation_path, write_animation
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.files.output_paths import OutputError
+from pipefollow.learners.heuristic import Heuristic
+from pipefollow.training.compiled import run_episode
 
 
 @pytest.fixture(scope="module")

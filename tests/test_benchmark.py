@@ -8,15 +8,15 @@ import pytest
 from click.testing import CliRunner
 from scipy import stats as sps
 
-from pipefollow.agents import make_agent
-from pipefollow.benchmark import _env_episodes, _rms, benchmark, run_episodes
 from pipefollow.cli import main
-from pipefollow.env import PipelineFollowingEnv
-from pipefollow.heuristic import Heuristic
-from pipefollow.policy import save_policy
-from pipefollow.stats import N_RESAMPLES, bootstrap_ci
-from pipefollow.suites import get_suite
-from pipefollow.training import run_episode
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.evaluation.benchmark import _env_episodes, _rms, benchmark, run_episodes
+from pipefollow.evaluation.stats import N_RESAMPLES, bootstrap_ci
+from pipefollow.learners.heuristic import Heuristic
+from pipefollow.sim.suites import get_suite
+from pipefollow.training.agents import make_agent
+from pipefollow.training.compiled import run_episode
+from pipefollow.training.policy_files import save_policy
 
 KEYS = {
     "controller", "suite", "n_episodes", "mean_return", "ci95_return", "iqm_return", "success_rate",
@@ -149,9 +149,9 @@ def test_cli_benchmark_with_a_current_camera_noise_and_los():
 
 @pytest.mark.parametrize("kind", ["heuristic", "los", "cacla", "sarsa"])
 def test_compiled_episodes_equal_the_environment_under_random_disturbances(kind):
-    from pipefollow import simulation as sim
-    from pipefollow.disturbance import make_disturbance
-    from pipefollow.los import LOS
+    from pipefollow.learners.los import LOS
+    from pipefollow.sim import decision as sim
+    from pipefollow.sim.disturbance import make_disturbance
 
     agent = LOS(1.3) if kind == "los" else _random_agent(kind)
     params = sim.PAPER_SIM._replace(
@@ -185,7 +185,7 @@ def test_cli_benchmark_bad_input(tmp_path, args):
 
 
 def test_cli_benchmark_refuses_a_plot_format_before_any_episode(tmp_path, monkeypatch):
-    import pipefollow.benchmark as bm
+    import pipefollow.evaluation.benchmark as bm
 
     def no_episodes(*args, **kwargs):
         raise AssertionError("episodes ran before the --plot check")

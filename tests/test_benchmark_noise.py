@@ -1,10 +1,10 @@
 import numpy as np
 
-from pipefollow import benchmark as bm
-from pipefollow.disturbance import make_disturbance
-from pipefollow.heuristic import Heuristic
-from pipefollow.simulation import PAPER_SIM
-from pipefollow.suites import get_suite
+from pipefollow.evaluation import benchmark as bm
+from pipefollow.learners.heuristic import Heuristic
+from pipefollow.sim.decision import PAPER_SIM
+from pipefollow.sim.disturbance import make_disturbance
+from pipefollow.sim.suites import get_suite
 
 
 class EnvOnlyHeuristic:

@@ -5,13 +5,13 @@ import math
 import numpy as np
 import pytest
 
-from pipefollow import cacla
-from pipefollow.agents import make_agent
-from pipefollow.cacla import A, Cacla, CaclaParams, G, K, V
-from pipefollow.exploration import skew_normal_from_normals
-from pipefollow.pipeline import builtin
-from pipefollow.rbf import RBFGrid
-from pipefollow.training import train_compiled
+from pipefollow.learners import cacla
+from pipefollow.learners.cacla import A, Cacla, CaclaParams, G, K, V
+from pipefollow.learners.exploration import skew_normal_from_normals
+from pipefollow.learners.rbf import RBFGrid
+from pipefollow.sim.pipeline import builtin
+from pipefollow.training.agents import make_agent
+from pipefollow.training.compiled import train_compiled
 
 PHI = np.array([0.2, 0.5, 0.3])
 PHI_NEXT = np.array([0.0, 0.4, 0.6])

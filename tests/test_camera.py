@@ -10,8 +10,15 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from pipefollow.camera import PAPER_CAMERA, CameraParams, clip_segment, observe, to_camera, tracking_errors
-from pipefollow.pipeline import Pipeline
+from pipefollow.sim.camera import (
+    PAPER_CAMERA,
+    CameraParams,
+    clip_segment,
+    observe,
+    to_camera,
+    tracking_errors,
+)
+from pipefollow.sim.pipeline import Pipeline
 
 
 def view(points, x, y, psi, progress=None, cam=PAPER_CAMERA):

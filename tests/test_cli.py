@@ -269,12 +269,12 @@ def test_train_refuses_to_replace_a_policy_unless_forced(runner, tmp_path):
 
 
 def test_ctrl_c_during_train_exits_130_and_leaves_nothing(runner, tmp_path, monkeypatch):
-    import pipefollow.training
+    import pipefollow.training.compiled
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(pipefollow.training, "train_compiled", interrupted)
+    monkeypatch.setattr(pipefollow.training.compiled, "train_compiled", interrupted)
     out = tmp_path / "new" / "runs" / "run"
     res = runner.invoke(main, [*TRAIN, "--out", str(out)])
     assert res.exit_code == 130, res.output
@@ -285,12 +285,12 @@ def test_ctrl_c_during_train_exits_130_and_leaves_nothing(runner, tmp_path, monk
 def test_full_disk_during_train_names_the_file_and_leaves_nothing(runner, tmp_path, monkeypatch):
     import errno
 
-    import pipefollow.atomic
+    import pipefollow.files.atomic
 
     def no_space(fd):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(pipefollow.atomic.os, "fsync", no_space)
+    monkeypatch.setattr(pipefollow.files.atomic.os, "fsync", no_space)
     out = tmp_path / "run"
     res = runner.invoke(main, [*TRAIN, "--out", str(out)])
     _one_line_error(res, str(out / "policy.npz"), "No space left on device")
@@ -298,14 +298,14 @@ def test_full_disk_during_train_names_the_file_and_leaves_nothing(runner, tmp_pa
 
 
 def test_full_disk_on_the_second_training_output_removes_the_first(runner, tmp_path, monkeypatch):
-    import pipefollow.results
+    import pipefollow.training.outputs
 
     def no_space(path, *args, **kwargs):
         import errno
 
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
-    monkeypatch.setattr(pipefollow.results, "write_learning_curve", no_space)
+    monkeypatch.setattr(pipefollow.training.outputs, "write_learning_curve", no_space)
     out = tmp_path / "run"
     out.mkdir()
     res = runner.invoke(main, [*TRAIN, "--out", str(out)])

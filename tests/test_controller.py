@@ -7,8 +7,8 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.optimize import brentq
 
-from pipefollow import simulation as sim
-from pipefollow.controller import (
+from pipefollow.sim import decision as sim
+from pipefollow.sim.controller import (
     PAPER_CONTROLLER,
     ControllerParams,
     control_force,
@@ -16,7 +16,7 @@ from pipefollow.controller import (
     place_waypoint,
     wrap_angle,
 )
-from pipefollow.pipeline import Pipeline
+from pipefollow.sim.pipeline import Pipeline
 
 
 def test_paper_gains():

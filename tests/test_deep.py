@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-import pipefollow
+import pipefollow.training
 from pipefollow.cli import main
-from pipefollow.env import PipelineFollowingEnv
-from pipefollow.policy import load_policy
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.training.policy_files import load_policy
 
 pytestmark = pytest.mark.deep
 
@@ -28,12 +28,12 @@ def random_obs(n, seed=0):
 @pytest.mark.parametrize("algorithm", ["ppo", "sac"])
 def test_exported_actor_equals_the_models_deterministic_predict(algorithm):
     _sb3()
-    from pipefollow.deep import train_deep
+    from pipefollow.training.deep import train_deep
 
     small = dict(n_envs=2, n_steps=64, batch_size=64) if algorithm == "ppo" else dict(learning_starts=100)
     run = train_deep(algorithm, "random:mixed", steps=256, seconds=20, seed=3, **small)
     assert run.steps >= 256 and len(run.returns) >= 1
-    from pipefollow.deep import export_policy
+    from pipefollow.training.deep import export_policy
 
     obs = random_obs(500)
     expected = run.model.predict(obs, deterministic=True)[0][:, 0]
@@ -50,7 +50,7 @@ def test_exported_actor_equals_the_models_deterministic_predict(algorithm):
 
 def test_same_seed_same_training():
     _sb3()
-    from pipefollow.deep import train_deep
+    from pipefollow.training.deep import train_deep
 
     runs = [
         train_deep("ppo", "random:easy", steps=128, seconds=10, seed=5, n_envs=2, n_steps=64, batch_size=64)
@@ -65,8 +65,8 @@ def test_adapter_equals_dummy_vec_env_of_single_environments():
     _sb3()
     from stable_baselines3.common.vec_env import DummyVecEnv
 
-    from pipefollow.deep import SB3VecEnv
-    from pipefollow.vector_env import PipelineFollowingVectorEnv
+    from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
+    from pipefollow.training.deep import SB3VecEnv
 
     kw = dict(episode_seconds=4, start_lateral_noise=0.2)
     ours = SB3VecEnv(PipelineFollowingVectorEnv(3, "random:mixed", **kw))
@@ -121,9 +121,9 @@ def test_cli_trains_ppo_and_sac_and_the_policies_run_without_torch(tmp_path):
         "        if name.split('.')[0] in ('torch', 'stable_baselines3'):\n"
         "            raise ImportError(name)\n"
         "sys.meta_path.insert(0, Block())\n"
-        "from pipefollow.policy import load_policy\n"
-        "from pipefollow.benchmark import benchmark\n"
-        "from pipefollow.suites import get_suite\n"
+        "from pipefollow.training.policy_files import load_policy\n"
+        "from pipefollow.evaluation.benchmark import benchmark\n"
+        "from pipefollow.sim.suites import get_suite\n"
         f"p = load_policy({str(tmp_path / 'sac' / 'policy.npz')!r})\n"
         "s = benchmark(p, get_suite('heldout'), controller='sac', seconds=20, n_pipes=5).summary\n"
         "print(p.name, s['n_episodes'], 'torch' in sys.modules)\n"
@@ -135,8 +135,8 @@ def test_cli_trains_ppo_and_sac_and_the_policies_run_without_torch(tmp_path):
 
 def test_without_the_extra_ppo_is_a_one_line_error(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "stable_baselines3", None)  # makes the import fail
-    monkeypatch.delitem(sys.modules, "pipefollow.deep", raising=False)
-    monkeypatch.delattr(pipefollow, "deep", raising=False)
+    monkeypatch.delitem(sys.modules, "pipefollow.training.deep", raising=False)
+    monkeypatch.delattr(pipefollow.training, "deep", raising=False)
     res = CliRunner().invoke(main, ["train", "--algorithm", "ppo", "--out", str(tmp_path / "o")])
     assert res.exit_code == 2
     lines = res.stderr.strip().splitlines()

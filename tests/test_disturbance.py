@@ -11,11 +11,12 @@ from scipy import stats
 from scipy.integrate import solve_ivp
 
 from pipefollow import readings
-from pipefollow import simulation as sim
-from pipefollow.agents import make_agent
-from pipefollow.camera import observe
-from pipefollow.controller import ControllerParams, pd_force
-from pipefollow.disturbance import (
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.learners.heuristic import Heuristic
+from pipefollow.sim import decision as sim
+from pipefollow.sim.camera import observe
+from pipefollow.sim.controller import ControllerParams, pd_force
+from pipefollow.sim.disturbance import (
     NO_DISTURBANCE,
     Disturbance,
     DisturbanceError,
@@ -27,11 +28,10 @@ from pipefollow.disturbance import (
     to_dict,
     vary_current,
 )
-from pipefollow.dynamics import PAPER_AUV, coriolis_matrix, damping_matrix, mass_matrix
-from pipefollow.env import PipelineFollowingEnv
-from pipefollow.heuristic import Heuristic
-from pipefollow.pipeline import Pipeline, builtin
-from pipefollow.training import run_episode, train_compiled
+from pipefollow.sim.dynamics import PAPER_AUV, coriolis_matrix, damping_matrix, mass_matrix
+from pipefollow.sim.pipeline import Pipeline, builtin
+from pipefollow.training.agents import make_agent
+from pipefollow.training.compiled import run_episode, train_compiled
 
 # ---------------------------------------------------------------------------------------------
 # Off by default: the numbers of the code before disturbances existed, bit for bit
@@ -398,7 +398,7 @@ def test_cli_train_with_disturbances(tmp_path):
 def test_the_documented_toml_table_reads():
     import tomllib
 
-    import pipefollow.disturbance as mod
+    import pipefollow.sim.disturbance as mod
 
     doc = mod.disturbance_from_dict.__doc__
     table = doc[doc.index("[disturbance]") : doc.index("Raises:")]

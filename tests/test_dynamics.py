@@ -8,8 +8,8 @@ from numpy.testing import assert_allclose
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from pipefollow import dynamics
-from pipefollow.dynamics import (
+from pipefollow.sim import dynamics
+from pipefollow.sim.dynamics import (
     PAPER_AUV,
     body_acceleration,
     coriolis_matrix,

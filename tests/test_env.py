@@ -6,11 +6,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import pipefollow
-from pipefollow import simulation as sim
-from pipefollow.env import PipelineFollowingEnv
-from pipefollow.heuristic import Heuristic
-from pipefollow.pipeline import Pipeline, random_pipeline
-from pipefollow.training import run_episode
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.learners.heuristic import Heuristic
+from pipefollow.sim import decision as sim
+from pipefollow.sim.pipeline import Pipeline, random_pipeline
+from pipefollow.training.compiled import run_episode
 
 
 def test_check_env_passes():
@@ -167,7 +167,7 @@ def test_actions_of_shape_1_or_plain_numbers_are_the_same_action(action):
 
 
 def test_the_registered_spec_bounds_the_episode_length():
-    from pipefollow.env import MAX_EPISODE_SECONDS
+    from pipefollow.envs.env import MAX_EPISODE_SECONDS
 
     spec = gym.spec(pipefollow.ENV_ID)
     assert spec.max_episode_steps == MAX_EPISODE_SECONDS  # one decision per second

@@ -298,6 +298,6 @@ def test_relative_pipeline_paths_are_relative_to_the_experiment_file(tmp_path, m
     (trial,) = exp.trials
     assert Path(trial.phases[0].pipeline).resolve() == (folder / "pipes" / "mine.json").resolve()
     assert trial.evaluate_on == "paper-validation"  # built-in names stay names
-    from pipefollow.pipeline import resolve
+    from pipefollow.sim.pipeline import resolve
 
     assert resolve(trial.phases[0].pipeline).length == 5.0

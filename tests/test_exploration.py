@@ -10,7 +10,7 @@ from numba import njit
 from numpy.testing import assert_allclose
 from scipy import integrate, stats
 
-from pipefollow.exploration import (
+from pipefollow.learners.exploration import (
     gaussian_action,
     linear_sigma,
     skew_normal_action,

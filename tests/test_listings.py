@@ -3,9 +3,9 @@ import json
 import pytest
 from click.testing import CliRunner
 
-from pipefollow import listings
 from pipefollow.cli import main
-from pipefollow.pipeline import Pipeline
+from pipefollow.cli import tables as listings
+from pipefollow.sim.pipeline import Pipeline
 
 
 def test_builtin_pipelines_with_their_segments_and_lengths():
@@ -77,7 +77,7 @@ def test_cli_trials_of_a_bad_file_is_a_one_line_error(tmp_path, content):
 
 
 def test_the_random_families_are_listed_by_the_name_train_accepts():
-    from pipefollow.suites import resolve_training
+    from pipefollow.sim.suites import resolve_training
 
     rows = [e for e in listings.pipelines() if e.group == "random family"]
     assert [e.name for e in rows] == ["random:easy", "random:medium", "random:hard", "random:mixed"]

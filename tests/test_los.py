@@ -7,9 +7,9 @@ import pytest
 from click.testing import CliRunner
 
 from pipefollow.cli import main
-from pipefollow.env import PipelineFollowingEnv
-from pipefollow.los import DEFAULT_LOOKAHEAD, LOS, los_action
-from pipefollow.training import run_episode
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.learners.los import DEFAULT_LOOKAHEAD, LOS, los_action
+from pipefollow.training.compiled import run_episode
 
 D = 1.5  # lookahead (m)
 QUARTER = math.pi / 2
@@ -69,8 +69,8 @@ def test_los_runs_inside_compiled_loops():
     import numpy as np
     from numba import njit
 
-    from pipefollow import simulation as sim
-    from pipefollow.pipeline import builtin
+    from pipefollow.sim import decision as sim
+    from pipefollow.sim.pipeline import builtin
 
     @njit
     def episode(s, points, cum, p, n, lookahead):

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from pipefollow import benchmark as bm
 from pipefollow.cli import main
-from pipefollow.mlp import MLPPolicy
-from pipefollow.policy import PolicyError, load_policy, save_policy
-from pipefollow.suites import get_suite
+from pipefollow.evaluation import benchmark as bm
+from pipefollow.learners.mlp import MLPPolicy
+from pipefollow.sim.suites import get_suite
+from pipefollow.training.policy_files import PolicyError, load_policy, save_policy
 
 
 def random_mlp(rng, output="clip", hidden=(64, 64), activation="tanh"):

@@ -1,6 +1,6 @@
 import pytest
 
-from pipefollow.outputs import OutputError, check_output_file, first_missing, remove_empty_folders
+from pipefollow.files.output_paths import OutputError, check_output_file, first_missing, remove_empty_folders
 
 
 def test_first_missing_and_removing_what_was_made(tmp_path):

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
-from pipefollow import pipeline as pl
-from pipefollow.pipeline import Pipeline, PipelineError, builtin, load, random_pipeline
+from pipefollow.sim import pipeline as pl
+from pipefollow.sim.pipeline import Pipeline, PipelineError, builtin, load, random_pipeline
 
 
 @pytest.fixture

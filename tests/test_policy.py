@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from pipefollow.agents import make_agent
-from pipefollow.policy import PolicyError, load_policy, save_policy
+from pipefollow.training.agents import make_agent
+from pipefollow.training.policy_files import PolicyError, load_policy, save_policy
 
 
 @pytest.mark.parametrize(

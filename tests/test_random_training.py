@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from pipefollow.agents import make_agent
 from pipefollow.cli import main
-from pipefollow.env import PipelineFollowingEnv
+from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.experiments.config import Phase, TrialConfig
 from pipefollow.experiments.trial import run_trial
-from pipefollow.heuristic import Heuristic
-from pipefollow.random_training import train_random_compiled
-from pipefollow.suites import get_suite, min_length_for
-from pipefollow.training import train
+from pipefollow.learners.heuristic import Heuristic
+from pipefollow.sim.suites import get_suite, min_length_for
+from pipefollow.training.agents import make_agent
+from pipefollow.training.compiled import train
+from pipefollow.training.random_pipes import train_random_compiled
 
 KINDS = {
     "cacla": dict(algorithm="cacla"),

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
-from pipefollow.rbf import (
+from pipefollow.learners.rbf import (
     ACTION_CENTRES,
     ACTION_CENTRES_DEG,
     ACTION_GRID,

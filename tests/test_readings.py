@@ -6,12 +6,12 @@ import math
 import numpy as np
 import pytest
 
-from pipefollow import cacla
 from pipefollow import readings as rd
-from pipefollow import simulation as sim
-from pipefollow.agents import make_agent
-from pipefollow.policy import load_policy, save_policy
-from pipefollow.rbf import STATE_CENTRES
+from pipefollow.learners import cacla
+from pipefollow.learners.rbf import STATE_CENTRES
+from pipefollow.sim import decision as sim
+from pipefollow.training.agents import make_agent
+from pipefollow.training.policy_files import load_policy, save_policy
 
 
 def test_every_open_point_is_a_field_with_its_default():

@@ -6,10 +6,10 @@ import pytest
 from matplotlib.colors import to_rgb
 
 import pipefollow
-from pipefollow import simulation as sim
-from pipefollow.env import PipelineFollowingEnv
-from pipefollow.heuristic import Heuristic
-from pipefollow.render import AUV_COLOR, CAMERA_COLOR, Scene, draw_scene
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.envs.render import AUV_COLOR, CAMERA_COLOR, Scene, draw_scene
+from pipefollow.learners.heuristic import Heuristic
+from pipefollow.sim import decision as sim
 
 
 def _run(env, decisions, seed=0):

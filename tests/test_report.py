@@ -20,7 +20,7 @@ from scipy import stats as sps
 from pipefollow.experiments import claims, report, summary
 from pipefollow.experiments.config import ExperimentConfig, Phase, TrialConfig, to_dict, with_overrides
 from pipefollow.experiments.figures import learning_curve_figure, sliding_average
-from pipefollow.pipeline import builtin
+from pipefollow.sim.pipeline import builtin
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 EPISODES = 160  # ≥ first-100 + last-50 windows, so they do not overlap

@@ -2,7 +2,7 @@
 
 import pytest
 
-from pipefollow.reward import LOST_REWARD, reward
+from pipefollow.sim.reward import LOST_REWARD, reward
 
 
 @pytest.mark.parametrize(

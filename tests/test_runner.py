@@ -266,7 +266,7 @@ def test_sigkill_midway_loses_only_unfinished_trials(tmp_path):
         if rel.startswith("trials/"):
             store.load_trial(killed, p.parent.name, int(p.stem.removeprefix("seed-")))
         elif rel.startswith("policies/"):
-            from pipefollow.policy import load_policy
+            from pipefollow.training.policy_files import load_policy
 
             load_policy(p)
         else:
@@ -395,9 +395,9 @@ def test_a_full_disk_later_keeps_finished_trials_only(tmp_path, monkeypatch):
 
 
 def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, monkeypatch):
-    import pipefollow.atomic
+    import pipefollow.files.atomic
 
-    monkeypatch.setattr(pipefollow.atomic.os, "fsync", _no_space)
+    monkeypatch.setattr(pipefollow.files.atomic.os, "fsync", _no_space)
     with pytest.raises(OSError) as e:
         store.write_tables(tmp_path, TINY)
     assert e.value.filename == str(tmp_path / "results.csv")

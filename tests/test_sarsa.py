@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from pipefollow import sarsa
-from pipefollow.agents import make_agent
-from pipefollow.rbf import ACTION_GRID, STATE_GRID, RBFGrid
-from pipefollow.sarsa import Sarsa, SarsaParams
+from pipefollow.learners import sarsa
+from pipefollow.learners.rbf import ACTION_GRID, STATE_GRID, RBFGrid
+from pipefollow.learners.sarsa import Sarsa, SarsaParams
+from pipefollow.training.agents import make_agent
 
 
 def test_update_matches_hand_computation():
@@ -73,8 +73,8 @@ def test_learns_a_one_step_task():
 
 
 def test_same_seed_gives_identical_weights():
-    from pipefollow.pipeline import builtin
-    from pipefollow.training import train_compiled
+    from pipefollow.sim.pipeline import builtin
+    from pipefollow.training.compiled import train_compiled
 
     ws = []
     for _ in range(2):

@@ -7,12 +7,12 @@ import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 from scipy.integrate import solve_ivp
 
-from pipefollow import simulation as sim
-from pipefollow.camera import CameraParams
-from pipefollow.controller import PAPER_CONTROLLER, ControllerParams, pd_force
-from pipefollow.disturbance import Disturbance
-from pipefollow.dynamics import PAPER_AUV, AUVParams, acceleration, kinematics
-from pipefollow.pipeline import Pipeline
+from pipefollow.sim import decision as sim
+from pipefollow.sim.camera import CameraParams
+from pipefollow.sim.controller import PAPER_CONTROLLER, ControllerParams, pd_force
+from pipefollow.sim.disturbance import Disturbance
+from pipefollow.sim.dynamics import PAPER_AUV, AUVParams, acceleration, kinematics
+from pipefollow.sim.pipeline import Pipeline
 
 P = sim.PAPER_SIM
 POSE = [sim.X, sim.Y, sim.PSI, sim.U, sim.V, sim.R]

@@ -12,7 +12,8 @@ import pipefollow
 from pipefollow.experiments import folder, store
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, Phase, TrialConfig, to_dict
 from pipefollow.experiments.trial import TrialResult, build_agent
-from pipefollow.policy import load_policy
+from pipefollow.files.sources import source_hash
+from pipefollow.training.policy_files import load_policy
 
 TRIALS = (
     TrialConfig(name="sarsa", label="SARSA", algorithm="sarsa", phases=(Phase("paper-left", 4),)),
@@ -232,7 +233,7 @@ def test_prepare_writes_the_resolved_config_and_accepts_the_same_again(tmp_path)
     code = stored.pop("code")
     assert stored == json.loads(json.dumps(to_dict(EXP)))
     assert code["version"] == pipefollow.__version__
-    assert code["sources"] == pipefollow.source_hash(store.RESULT_MODULES)
+    assert code["sources"] == source_hash(store.result_modules())
     assert code["numpy"] == np.__version__
     assert store.read_config(run) == EXP
     store.prepare(run, EXP)  # same configuration: resume
@@ -338,15 +339,28 @@ def test_summary(tmp_path):
     assert set(s["sup-skew"]["evaluation_mean_return"]) == {"learned", "heuristic", "actor"}
 
 
-def test_result_modules_exist_and_cover_the_compiled_learning_code():
-    from pathlib import Path
+def test_the_code_stamp_covers_every_module_a_trial_imports():
+    # A trial run in a fresh interpreter: every pipefollow module it loads must be in the stamp.
+    import subprocess
+    import sys
 
-    root = Path(pipefollow.__file__).parent
-    for module in store.RESULT_MODULES:
-        assert (root / module).is_file(), module
-    assert {"simulation.py", "cacla.py", "sarsa.py", "training.py", "experiments/trial.py"} <= set(
-        store.RESULT_MODULES
+    code = (
+        "import sys\n"
+        "from pipefollow.experiments.config import Phase, TrialConfig\n"
+        "from pipefollow.experiments.trial import run_trial\n"
+        "for algorithm in ('cacla', 'sarsa'):\n"
+        "    run_trial(TrialConfig(name='t', algorithm=algorithm, phases=(Phase('random:easy', 2),), "
+        "skew_deg=22.5 if algorithm == 'cacla' else 0.0, supervised=algorithm == 'cacla', "
+        "evaluate_on='paper-validation', evaluate_seconds=5.0, "
+        "disturbance={'current_speed': 0.1, 'camera_noise': 0.02}), 3)\n"
+        "print('\\n'.join(m for m in sys.modules if m.startswith('pipefollow')))\n"
     )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    loaded = set(out.split())
+    covered = set(store.result_modules())
+    assert loaded - covered == set()
+    assert {"pipefollow.sim.decision", "pipefollow.learners.cacla", "pipefollow.training.compiled"} <= covered
+    assert not any(m.startswith(("pipefollow.cli", "pipefollow.experiments.report")) for m in covered)
 
 
 def test_the_lock_file_goes_when_the_run_ends(tmp_path):

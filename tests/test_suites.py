@@ -8,8 +8,8 @@ import pytest
 from click.testing import CliRunner
 
 from pipefollow.cli import main
-from pipefollow.pipeline import BUILTIN_NAMES, load
-from pipefollow.suites import (
+from pipefollow.sim.pipeline import BUILTIN_NAMES, load
+from pipefollow.sim.suites import (
     HELDOUT_STREAM,
     LEVELS,
     MAX_HEADING_DEG,

@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 
 from pipefollow import readings as rd
-from pipefollow import simulation as sim
-from pipefollow.agents import make_agent
-from pipefollow.disturbance import make_disturbance
-from pipefollow.env import PipelineFollowingEnv
-from pipefollow.pipeline import builtin
-from pipefollow.training import train, train_compiled
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.sim import decision as sim
+from pipefollow.sim.disturbance import make_disturbance
+from pipefollow.sim.pipeline import builtin
+from pipefollow.training.agents import make_agent
+from pipefollow.training.compiled import train, train_compiled
 
 KINDS = {
     "cacla": dict(algorithm="cacla"),
@@ -133,7 +133,7 @@ class Recorder:
 
 
 def test_semi_markov_updates_while_the_pipe_is_lost_by_hand():
-    from pipefollow.training import run_episode
+    from pipefollow.training.compiled import run_episode
 
     visible = [True, True, False, False, True, False, False, False]  # states s0 … s7
     rewards = [1.0, 2.0, -10.0, -10.0, 3.0, -10.0, -10.0]
@@ -152,7 +152,7 @@ def test_semi_markov_updates_while_the_pipe_is_lost_by_hand():
 
 
 def test_compiled_loop_refuses_a_custom_supervisor():
-    from pipefollow.cacla import Cacla, CaclaParams
+    from pipefollow.learners.cacla import Cacla, CaclaParams
 
     agent = Cacla(CaclaParams(supervised=True), supervisor=lambda obs: 0.0)
     with pytest.raises(TypeError, match="heuristic only"):
@@ -173,9 +173,9 @@ def test_equivalence_with_a_cruise_start():
 
 
 def test_the_compiled_loops_refuse_an_agent_they_cannot_run():
-    from pipefollow.heuristic import Heuristic
-    from pipefollow.random_training import train_random_compiled
-    from pipefollow.suites import get_suite
+    from pipefollow.learners.heuristic import Heuristic
+    from pipefollow.sim.suites import get_suite
+    from pipefollow.training.random_pipes import train_random_compiled
 
     with pytest.raises(TypeError, match="no compiled training loop for Heuristic"):
         train_compiled(Heuristic(), builtin("paper-left"), 2)

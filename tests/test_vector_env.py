@@ -4,9 +4,9 @@ import pytest
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 import pipefollow  # noqa: F401  (registers the environment)
-from pipefollow.disturbance import make_disturbance
-from pipefollow.env import PipelineFollowingEnv
-from pipefollow.vector_env import PipelineFollowingVectorEnv
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
+from pipefollow.sim.disturbance import make_disturbance
 
 ID = "pipefollow/PipelineFollowing-v0"
 

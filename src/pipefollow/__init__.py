@@ -15,33 +15,14 @@ except PackageNotFoundError:  # running from a source tree
 ENV_ID = "pipefollow/PipelineFollowing-v0"
 
 
-def source_hash(modules: tuple[str, ...] | None = None) -> str:
-    """A short hash of the package's Python sources (all, or the named module files)."""
-    import hashlib
-    from pathlib import Path
-
-    key = modules or ()
-    if key not in _SOURCE_HASHES:
-        root = Path(__file__).parent
-        paths = sorted(root.rglob("*.py")) if modules is None else [root / m for m in sorted(modules)]
-        digest = hashlib.sha1()
-        for path in paths:
-            digest.update(path.relative_to(root).as_posix().encode())
-            digest.update(path.read_bytes())
-        _SOURCE_HASHES[key] = digest.hexdigest()[:16]
-    return _SOURCE_HASHES[key]
-
-
-_SOURCE_HASHES: dict[tuple[str, ...], str] = {}
-
-
 def _configure_numba_cache() -> None:
     """Keep numba's on-disk cache in step with all of the package's sources.
 
     Numba revalidates a cached function against its own file only, not against the files of
-    the functions compiled into it: after an edit of ``controller.py`` a cached
-    ``simulation.decide`` would still run the old controller. A cache folder named after a
-    hash of every source file of the package rules that out. It lives under
+    the functions compiled into it: after an edit of ``sim/controller.py`` a cached
+    ``sim.decision.decide`` would still run the old controller. A cache folder named after a
+    hash of every module that holds compiled code rules that out; edits elsewhere (the command
+    line, the report) keep the cache. It lives under
     ``$NUMBA_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/pipefollow`` (``~/.cache/pipefollow``);
     if that is not writable, numba's default (``__pycache__``) is left in place.
     """
@@ -51,11 +32,13 @@ def _configure_numba_cache() -> None:
 
     import numba
 
+    from pipefollow.files.sources import compiled_modules, source_hash
+
     base = Path(
         os.environ.get("NUMBA_CACHE_DIR")
         or Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "pipefollow"
     )
-    target = base / f"numba-{source_hash()}"
+    target = base / f"numba-{source_hash(compiled_modules())}"
     try:
         target.mkdir(parents=True, exist_ok=True)
         probe = target / f".probe-{os.getpid()}"
@@ -87,9 +70,9 @@ def register_envs() -> None:
         # bound, one decision per second, so that gym.make's TimeLimit never truncates earlier.
         register(
             id=ENV_ID,
-            entry_point="pipefollow.env:PipelineFollowingEnv",
-            vector_entry_point="pipefollow.vector_env:PipelineFollowingVectorEnv",
-            max_episode_steps=86_400,  # pipefollow.env.MAX_EPISODE_SECONDS / 1-s decisions
+            entry_point="pipefollow.envs.env:PipelineFollowingEnv",
+            vector_entry_point="pipefollow.envs.vector_env:PipelineFollowingVectorEnv",
+            max_episode_steps=86_400,  # pipefollow.envs.env.MAX_EPISODE_SECONDS / 1-s decisions
         )
 
 

@@ -12,13 +12,13 @@ from pathlib import Path
 
 import click
 
-from pipefollow import disturbance as _disturbance
-from pipefollow.disturbance import DisturbanceError
 from pipefollow.experiments.config import ConfigError
 from pipefollow.experiments.store import StoreError
-from pipefollow.outputs import OutputError
-from pipefollow.pipeline import PipelineError
-from pipefollow.policy import PolicyError
+from pipefollow.files.output_paths import OutputError
+from pipefollow.sim import disturbance as _disturbance
+from pipefollow.sim.disturbance import DisturbanceError
+from pipefollow.sim.pipeline import PipelineError
+from pipefollow.training.policy_files import PolicyError
 
 USER_ERRORS: tuple[type[Exception], ...] = (
     PipelineError,
@@ -148,7 +148,7 @@ def apply_readings(ids, base: str = "default"):
 
 def load_controller(spec: str, seed: int, lookahead: float | None = None):
     """``heuristic``, ``los`` (lookahead Δ in m) or a policy file → an agent."""
-    from pipefollow.benchmark import load_controller as load
+    from pipefollow.evaluation.benchmark import load_controller as load
 
     try:
         return load(spec, seed, lookahead)
@@ -179,7 +179,7 @@ def disturbance_options(fn):
     """Decorate a command with ``--current``, ``--camera-noise`` and ``--miss-prob``.
 
     The command receives one keyword argument ``disturbance`` (a
-    :class:`~pipefollow.disturbance.Disturbance`). Bad values are click usage errors that name the
+    :class:`~pipefollow.sim.disturbance.Disturbance`). Bad values are click usage errors that name the
     option (exit status 2).
     """
     import functools
@@ -236,6 +236,6 @@ def disturbance_options(fn):
 def check_plot_path(plot_path: str | None) -> None:
     """Refuse a ``--plot`` file whose suffix is not an image format, before any work is done."""
     if plot_path:
-        from pipefollow.outputs import check_output_file, image_formats
+        from pipefollow.files.output_paths import check_output_file, image_formats
 
         check_output_file(plot_path, "--plot", tuple(image_formats()))

@@ -227,9 +227,9 @@ def trials(experiment, as_json):
 
     Their names (for --trial), labels, learners, options and episodes.
     """
+    from pipefollow.cli.tables import table
+    from pipefollow.cli.tables import trials as rows_of
     from pipefollow.experiments.config import load_experiment
-    from pipefollow.listings import table
-    from pipefollow.listings import trials as rows_of
 
     exp = load_experiment(experiment)
     rows = rows_of(exp)

@@ -9,7 +9,6 @@ from pathlib import Path
 import click
 import numpy as np
 
-from pipefollow import disturbance as _disturbance
 from pipefollow.cli.common import (
     SEED,
     UserError,
@@ -25,6 +24,7 @@ from pipefollow.cli.common import (
     writable_folder,
 )
 from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS
+from pipefollow.sim import disturbance as _disturbance
 
 
 def _default_seconds(pipeline: str, seconds: float | None) -> float:
@@ -121,14 +121,14 @@ def evaluate(
     disturbance,
 ):
     """Evaluate a controller deterministically (σ = 0) on a pipeline."""
-    from pipefollow.env import PipelineFollowingEnv
-    from pipefollow.pipeline import resolve
+    from pipefollow.envs.env import PipelineFollowingEnv
     from pipefollow.readings import sim_params
-    from pipefollow.training import run_episode
+    from pipefollow.sim.pipeline import resolve
+    from pipefollow.training.compiled import run_episode
 
     check_plot_path(plot_path)
     if animate_path:
-        from pipefollow.animation import check_animation_path
+        from pipefollow.envs.animation import check_animation_path
 
         check_animation_path(animate_path, "--animate")
     pipe = resolve(pipeline)
@@ -144,7 +144,7 @@ def evaluate(
     stats, frames = [], []
     for e in range(episodes):
         if e == 0 and animate_path:
-            from pipefollow.animation import Recorder
+            from pipefollow.envs.animation import Recorder
 
             recorder = Recorder(env)  # the same episode, with its states kept for the animation
             stats.append(run_episode(recorder, agent, seed=seed))
@@ -161,7 +161,7 @@ def evaluate(
     if disturbance != _disturbance.NO_DISTURBANCE:
         result["disturbance"] = _disturbance.to_dict(disturbance)
     if plot_path:
-        from pipefollow.render import plot_trajectories
+        from pipefollow.envs.render import plot_trajectories
 
         name = "heuristic" if controller == "heuristic" else Path(controller).stem
         plot_trajectories(
@@ -169,7 +169,7 @@ def evaluate(
         )
         result["plot"] = str(plot_path)
     if animate_path:
-        from pipefollow.animation import write_animation
+        from pipefollow.envs.animation import write_animation
 
         write_animation(pipe, frames, animate_path, env.params)
         result["animation"] = str(animate_path)
@@ -272,7 +272,7 @@ def train(
     An --out folder that already holds them is refused unless --force is given. Ctrl-C stops
     without writing anything (exit status 130).
     """
-    from pipefollow.results import TRAINING_OUTPUTS
+    from pipefollow.training.outputs import TRAINING_OUTPUTS
 
     existing = [name for name in TRAINING_OUTPUTS if (Path(out_dir) / name).exists()]
     if existing and not force:
@@ -281,18 +281,18 @@ def train(
         return _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance)
     if steps is not None:
         raise UserError("--steps applies to --algorithm ppo and sac only (use --episodes)")
-    from pipefollow.agents import make_agent
-    from pipefollow.random_training import train_random_compiled
     from pipefollow.readings import cacla_params, sigma_scale, sim_params
-    from pipefollow.suites import Suite, resolve_training
-    from pipefollow.training import STAT_NAMES, train_compiled
+    from pipefollow.sim.suites import Suite, resolve_training
+    from pipefollow.training.agents import make_agent
+    from pipefollow.training.compiled import STAT_NAMES, train_compiled
+    from pipefollow.training.random_pipes import train_random_compiled
 
     if algorithm == "sarsa" and (skew or supervised):
         raise UserError("--skew and --supervised apply to --algorithm cacla only")
     pipe = resolve_training(pipeline)  # a Pipeline, or a Suite for random[:FAMILY]
     rng = np.random.default_rng(seed)
     if init_policy:
-        from pipefollow.policy import load_policy
+        from pipefollow.training.policy_files import load_policy
 
         agent = load_policy(init_policy)
         reading = apply_readings(readings, agent.readings)
@@ -311,8 +311,8 @@ def train(
     else:
         reading = apply_readings(readings)
         agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng, readings=reading)
-    from pipefollow.outputs import first_missing, remove_empty_folders
-    from pipefollow.results import write_training_outputs
+    from pipefollow.files.output_paths import first_missing, remove_empty_folders
+    from pipefollow.training.outputs import write_training_outputs
 
     made = first_missing(out_dir)
     out = writable_folder(out_dir, "--out")  # before training, after the checks of --init
@@ -371,7 +371,7 @@ def train(
 
 
 def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance) -> None:
-    """``train --algorithm ppo|sac``: :func:`pipefollow.deep.train_to_folder`."""
+    """``train --algorithm ppo|sac``: :func:`pipefollow.training.deep.train_to_folder`."""
     from click.core import ParameterSource
 
     ctx = click.get_current_context()
@@ -383,12 +383,12 @@ def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, dis
     if given:
         raise UserError(f"{', '.join(given)} not available with --algorithm {algorithm} (see --steps)")
     try:
-        from pipefollow import deep
-    except ImportError as e:  # pipefollow.deep.DeepExtraMissing: torch or Stable-Baselines3 missing
+        from pipefollow.training import deep
+    except ImportError as e:  # pipefollow.training.deep.DeepExtraMissing: torch or Stable-Baselines3 missing
         if type(e).__name__ != "DeepExtraMissing":
             raise
         raise UserError(str(e).split(" (")[0]) from None
-    from pipefollow.suites import resolve_training
+    from pipefollow.sim.suites import resolve_training
 
     resolve_training(pipeline)  # a bad pipeline fails before any work
     out = writable_folder(out_dir, "--out")

@@ -6,7 +6,6 @@ import json
 
 import click
 
-from pipefollow import disturbance as _disturbance
 from pipefollow.cli.common import (
     SEED,
     UserError,
@@ -22,6 +21,7 @@ from pipefollow.cli.common import (
     writable_folder,
 )
 from pipefollow.experiments.config import MAX_SECONDS
+from pipefollow.sim import disturbance as _disturbance
 
 pipes_option = click.option(
     "--pipes",
@@ -46,7 +46,7 @@ def suites(ctx, as_json):
     """List the pipeline suites: training families and held-out test suites."""
     if ctx.invoked_subcommand is not None:
         return
-    from pipefollow.suites import SUITES
+    from pipefollow.sim.suites import SUITES
 
     rows = [s.summary() for s in SUITES.values()]
     if as_json:
@@ -81,7 +81,7 @@ def suites(ctx, as_json):
 @guard
 def suites_export(name, out_dir, pipes, seconds, as_json):
     """Write the pipes of suite NAME as pipeline JSON files (NAME-000.json, ...)."""
-    from pipefollow.suites import export_suite, get_suite, min_length_for
+    from pipefollow.sim.suites import export_suite, get_suite, min_length_for
 
     suite = get_suite(name)
     n = _pipe_count(suite, pipes)
@@ -100,8 +100,8 @@ def pipelines(as_json):
 
     The names --pipeline and experiment files accept, with segment count and length.
     """
-    from pipefollow.listings import pipeline_rows, table
-    from pipefollow.listings import pipelines as entries
+    from pipefollow.cli.tables import pipeline_rows, table
+    from pipefollow.cli.tables import pipelines as entries
 
     rows = pipeline_rows(entries())
     if as_json:
@@ -153,10 +153,10 @@ def benchmark(
     the success rate (pipe in view at ≥ 95 % of the decisions) and, for a controller other than
     the heuristic, the paired per-pipe difference to the heuristic with its confidence interval.
     """
-    from pipefollow.benchmark import benchmark as run_benchmark
-    from pipefollow.benchmark import format_summary
+    from pipefollow.evaluation.benchmark import benchmark as run_benchmark
+    from pipefollow.evaluation.benchmark import format_summary
     from pipefollow.readings import sim_params
-    from pipefollow.suites import get_suite
+    from pipefollow.sim.suites import get_suite
 
     check_plot_path(plot_path)
     suite = get_suite(suite_name)
@@ -177,7 +177,7 @@ def benchmark(
     if disturbance != _disturbance.NO_DISTURBANCE:
         run.summary["disturbance"] = _disturbance.to_dict(disturbance)
     if plot_path:
-        from pipefollow.benchmark_plot import plot_benchmark
+        from pipefollow.evaluation.plot import plot_benchmark
 
         plot_benchmark(run, plot_path)
     if as_json:

@@ -1,1 +1,7 @@
-"""Experiments: configuration, the trial unit of work, runner, results store, figures and report."""
+"""Experiments: many trials from one file, stored, summarized and reported.
+
+Configuration files, the trial (the unit of work), the runner, the results store, the run
+folder, summaries, the paper's claims, the report, the readings study and figures.
+
+May import every layer below but the command line.
+"""

@@ -16,8 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from pipefollow import readings as rd
-from pipefollow.agents import ALGORITHMS
-from pipefollow.atomic import read_text_file
+from pipefollow.files.atomic import read_text_file
+from pipefollow.training.agents import ALGORITHMS
 
 # Bounds that keep a run finite (a day of simulated time per episode is far beyond any use).
 MAX_EPISODES = 10_000_000
@@ -72,7 +72,7 @@ class TrialConfig:
     disturbance: dict | None = _f(
         None,
         "ocean current and camera faults in training and evaluation: a table of "
-        "pipefollow.disturbance.TOML_KEYS (m/s, degrees, m); none by default",
+        "pipefollow.sim.disturbance.TOML_KEYS (m/s, degrees, m); none by default",
     )
     evaluate_on: str = _f("", "after training, evaluate deterministically on this pipeline ('' = none)")
     evaluate_seconds: float = _f(60.0, "length of the evaluation episode (s) (paper §4.2)")
@@ -189,7 +189,7 @@ NAME_PATTERN = r"[A-Za-z0-9_.@=,+-]+"  # trial names are file names; '@' joins a
 
 
 def _check_disturbance(table, where: str) -> None:
-    from pipefollow.disturbance import DisturbanceError, disturbance_from_dict
+    from pipefollow.sim.disturbance import DisturbanceError, disturbance_from_dict
 
     try:
         disturbance_from_dict(table, where)
@@ -322,7 +322,7 @@ def _relative_to(exp: ExperimentConfig, folder: Path) -> ExperimentConfig:
     """``exp`` with relative pipeline file paths joined to ``folder`` (built-in names stay)."""
     import os
 
-    from pipefollow.pipeline import BUILTIN_NAMES
+    from pipefollow.sim.pipeline import BUILTIN_NAMES
 
     def rebase(name: str) -> str:
         if not name or name in BUILTIN_NAMES or Path(name).is_absolute():

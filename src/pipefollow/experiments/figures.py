@@ -14,7 +14,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from pipefollow.render import save_figure
+from pipefollow.envs.render import save_figure
 
 SMOOTHING_EPISODES = 10  # sliding-average window (paper §5)
 
@@ -105,7 +105,7 @@ def trajectories_figure(
     """Evaluation trajectories over a pipeline (paper Fig. 4 view), saved as PNG when ``path`` is given.
 
     Args:
-        pipeline: a :class:`~pipefollow.pipeline.Pipeline`, built-in name or pipeline file.
+        pipeline: a :class:`~pipefollow.sim.pipeline.Pipeline`, built-in name or pipeline file.
         trajectories: legend label → (n, 3) poses (x north, y east, ψ).
         path: where to save the PNG, or None.
         title: figure title.
@@ -113,7 +113,7 @@ def trajectories_figure(
     Returns:
         The matplotlib figure.
     """
-    from pipefollow.pipeline import resolve
-    from pipefollow.render import plot_trajectories
+    from pipefollow.envs.render import plot_trajectories
+    from pipefollow.sim.pipeline import resolve
 
     return plot_trajectories(resolve(pipeline), trajectories, path, title=title)

@@ -11,7 +11,6 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from pipefollow.atomic import TMP_SUFFIX
 from pipefollow.experiments.config import ConfigError, ExperimentConfig
 from pipefollow.experiments.store import (
     CONFIG_FILE,
@@ -23,6 +22,7 @@ from pipefollow.experiments.store import (
     read_config,
     trial_path,
 )
+from pipefollow.files.atomic import TMP_SUFFIX
 
 LOCK_FILE = ".lock"
 

@@ -56,7 +56,7 @@ REPORT_MD = "REPORT.md"
 
 
 def _turns_text() -> str:
-    from pipefollow.pipeline import builtin
+    from pipefollow.sim.pipeline import builtin
 
     turns = builtin(CONVERGE_PIPELINE).cumulative[1:-1]
     return " and ".join(f"{s:g} m" for s in turns)
@@ -375,7 +375,7 @@ def write_outputs(run_dir: str | Path) -> list[Path]:
         Paths written: fig5/6/7.png for the figure groups with results, validation-trajectories.png
         if a table1 trial was evaluated and its trial file can be read, and REPORT.md (last).
     """
-    from pipefollow.atomic import write_text_atomic
+    from pipefollow.files.atomic import write_text_atomic
 
     run_dir = Path(run_dir)
     config = from_dict(json.loads((run_dir / "config.json").read_text()))

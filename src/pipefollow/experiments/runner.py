@@ -33,7 +33,7 @@ import click
 from pipefollow.experiments import folder, store
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig
 from pipefollow.experiments.trial import TrialResult, run_trial
-from pipefollow.outputs import first_missing, remove_empty_folders
+from pipefollow.files.output_paths import first_missing, remove_empty_folders
 
 BACKENDS = ("serial", "process", "ray")
 
@@ -95,8 +95,8 @@ def import_ray():
 
 def check_inputs(exp: ExperimentConfig) -> None:
     """Fail before any work on what the trials would fail on late: unreadable pipelines."""
-    from pipefollow.pipeline import resolve
-    from pipefollow.suites import resolve_training
+    from pipefollow.sim.pipeline import resolve
+    from pipefollow.sim.suites import resolve_training
 
     for name in dict.fromkeys(p.pipeline for t in exp.trials for p in t.phases):
         resolve_training(name)

@@ -254,7 +254,7 @@ def load(run_dir: str | Path) -> Sensitivity:
 
 def write_outputs(run_dir: str | Path, wall_seconds: float | None = None) -> list[Path]:
     """Write ``readings.csv`` and ``REPORT.md`` into the run folder of a sensitivity study."""
-    from pipefollow.atomic import write_text_atomic
+    from pipefollow.files.atomic import write_text_atomic
 
     run_dir = Path(run_dir)
     s = load(run_dir)

@@ -23,11 +23,12 @@ from pathlib import Path
 
 import numpy as np
 
-from pipefollow.atomic import TMP_SUFFIX, atomic_file, write_text_atomic
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig, from_dict, to_dict
 from pipefollow.experiments.trial import TrialResult, build_agent
-from pipefollow.results import csv_text
-from pipefollow.training import STAT_NAMES
+from pipefollow.files.atomic import TMP_SUFFIX, atomic_file, write_text_atomic
+from pipefollow.files.sources import imported_modules, source_hash
+from pipefollow.training.compiled import STAT_NAMES
+from pipefollow.training.outputs import csv_text
 
 FORMAT = "pipefollow-trial"
 FORMAT_VERSION = 1
@@ -76,31 +77,15 @@ def _write_npz_atomic(path: Path, arrays: dict[str, np.ndarray]) -> None:
 # The folder and its configuration
 
 
-# The modules whose code decides a trial's numbers; edits elsewhere (CLI, report, figures, this
-# store) do not keep a run from resuming.
-RESULT_MODULES = (
-    "agents.py",
-    "cacla.py",
-    "camera.py",
-    "controller.py",
-    "disturbance.py",
-    "dynamics.py",
-    "env.py",
-    "exploration.py",
-    "heuristic.py",
-    "linear.py",
-    "pipeline.py",
-    "rbf.py",
-    "readings.py",
-    "reward.py",
-    "sarsa.py",
-    "simulation.py",
-    "suites.py",
-    "random_training.py",
-    "training.py",
-    "experiments/config.py",
-    "experiments/trial.py",
-)
+# The code stamp covers the modules whose code decides a trial's numbers: every module that a
+# trial imports (found by walking the imports), so edits elsewhere (the command line, the report,
+# figures, this store) do not keep a run from resuming.
+TRIAL_MODULE = "pipefollow.experiments.trial"
+
+
+def result_modules() -> tuple[str, ...]:
+    """The modules whose code decides a trial's numbers."""
+    return imported_modules(TRIAL_MODULE)
 
 
 def _code_stamp() -> dict[str, str]:
@@ -111,7 +96,7 @@ def _code_stamp() -> dict[str, str]:
 
     return {
         "version": pipefollow.__version__,
-        "sources": pipefollow.source_hash(RESULT_MODULES),
+        "sources": source_hash(result_modules()),
         "numpy": np.__version__,
         "numba": numba.__version__,
     }
@@ -302,7 +287,7 @@ def finished(run_dir: str | os.PathLike, exp: ExperimentConfig) -> set[tuple[str
 
 def save_policy_file(run_dir: str | os.PathLike, config: TrialConfig, result: TrialResult) -> Path:
     """Write the learned policy of ``result`` as a policy file (``pipefollow evaluate --controller``)."""
-    from pipefollow.policy import save_policy
+    from pipefollow.training.policy_files import save_policy
 
     agent = build_agent(config)
     agent.weights[...] = result.weights

@@ -7,17 +7,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pipefollow.agents import make_agent
-from pipefollow.cacla import Cacla
-from pipefollow.disturbance import disturbance_from_dict
-from pipefollow.env import PipelineFollowingEnv
+from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.experiments.config import TrialConfig
-from pipefollow.exploration import linear_sigma
-from pipefollow.heuristic import Heuristic
-from pipefollow.random_training import train_random_compiled
+from pipefollow.learners.cacla import Cacla
+from pipefollow.learners.exploration import linear_sigma
+from pipefollow.learners.heuristic import Heuristic
 from pipefollow.readings import sigma_scale, sim_params
-from pipefollow.suites import Suite, min_length_for, resolve_training
-from pipefollow.training import run_episode, train_compiled
+from pipefollow.sim.disturbance import disturbance_from_dict
+from pipefollow.sim.suites import Suite, min_length_for, resolve_training
+from pipefollow.training.agents import make_agent
+from pipefollow.training.compiled import run_episode, train_compiled
+from pipefollow.training.random_pipes import train_random_compiled
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from pipefollow.atomic import read_text_file, write_text_atomic
+from pipefollow.files.atomic import read_text_file, write_text_atomic
 
 BUILTIN_NAMES = ("paper-left", "paper-right", "paper-validation")
 

@@ -4,7 +4,7 @@ A decision lasts ``substeps * dt`` seconds (1 s = 20 RK4 steps of 0.05 s). It pl
 waypoint (or, with the pipe lost, runs the search behaviour), integrates controller and vehicle
 with RK4, updates the progress along the pipe, reads the camera and computes the reward.
 
-With an ocean current (:mod:`pipefollow.disturbance`) the RK4 integrates the pose η and the
+With an ocean current (:mod:`pipefollow.sim.disturbance`) the RK4 integrates the pose η and the
 velocity relative to the water ν_r (slots ``U, V, R``): eq. 16 in ν_r,
 ``M ν̇_r + C(ν_r) ν_r + D(ν_r) ν_r = τ``, and ``η̇ = R(ψ) ν_r + [V_c cos β_c, V_c sin β_c, 0]``.
 The PD controller damps the velocity over ground ν = ν_r + ν_c, and ``v_x`` (observation and
@@ -22,9 +22,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from pipefollow.camera import PAPER_CAMERA, CameraParams, observe, tracking_errors
-from pipefollow.controller import PAPER_CONTROLLER, ControllerParams, pd_force, place_waypoint
-from pipefollow.disturbance import (
+from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, observe, tracking_errors
+from pipefollow.sim.controller import PAPER_CONTROLLER, ControllerParams, pd_force, place_waypoint
+from pipefollow.sim.disturbance import (
     NO_DISTURBANCE,
     PACKED_SIZE,
     Disturbance,
@@ -32,11 +32,11 @@ from pipefollow.disturbance import (
     noise_layout,
     vary_current,
 )
-from pipefollow.disturbance import pack as _pack_disturbance
-from pipefollow.disturbance import unpack as _unpack_disturbance
-from pipefollow.dynamics import PAPER_AUV, AUVParams, acceleration, kinematics
-from pipefollow.pipeline import project
-from pipefollow.reward import LOST_REWARD, reward
+from pipefollow.sim.disturbance import pack as _pack_disturbance
+from pipefollow.sim.disturbance import unpack as _unpack_disturbance
+from pipefollow.sim.dynamics import PAPER_AUV, AUVParams, acceleration, kinematics
+from pipefollow.sim.pipeline import project
+from pipefollow.sim.reward import LOST_REWARD, reward
 
 
 class SimParams(NamedTuple):
@@ -123,7 +123,7 @@ def closed_loop_rk4(s, wp_x, wp_y, psi_ref, track_bearing, dt, p, vn=0.0, ve=0.0
 def read_camera(s, points, cum, p, z=None):
     """Update the observation slots of ``s`` from the camera at the current pose.
 
-    ``z`` holds the reading's standard normals (see :mod:`pipefollow.disturbance`); without it
+    ``z`` holds the reading's standard normals (see :mod:`pipefollow.sim.disturbance`); without it
     (``None``) the camera is exact and never misses.
     """
     d = p.disturbance
@@ -183,7 +183,7 @@ def decide(s, action, points, cum, p, z=None):
     action is recorded as that side (±1) and the reward is the lost penalty.
 
     ``z``: the decision's standard normals for the random disturbances (see
-    :mod:`pipefollow.disturbance`); with ``None`` the current keeps its speed and direction
+    :mod:`pipefollow.sim.disturbance`); with ``None`` the current keeps its speed and direction
     and the camera is exact and never misses.
     """
     overridden = s[IN_VIEW] == 0.0

@@ -1,9 +1,9 @@
 """Training on a new random pipe every episode, in compiled code (``random[:FAMILY]``).
 
-Episode ``e`` draws its pipe from a training family of :mod:`pipefollow.suites`; the pipes of a
+Episode ``e`` draws its pipe from a training family of :mod:`pipefollow.sim.suites`; the pipes of a
 chunk of episodes are generated in Python, concatenated into one array with offsets, and the
 chunk runs in one compiled call that reuses the one-pipe episode loops of
-:mod:`pipefollow.training` pipe by pipe.
+:mod:`pipefollow.training.compiled` pipe by pipe.
 """
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ from collections.abc import Callable
 import numpy as np
 from numba import njit
 
-from pipefollow import cacla as cacla_mod
-from pipefollow import simulation as sim
-from pipefollow.training import _cacla_episodes, _sarsa_episodes, compiled_setup
+from pipefollow.learners import cacla as cacla_mod
+from pipefollow.sim import decision as sim
+from pipefollow.training.compiled import _cacla_episodes, _sarsa_episodes, compiled_setup
 
 
 @njit(cache=True)
@@ -69,7 +69,7 @@ def train_random_compiled(
     (required ``env_rng``) draw from ``env_rng``, a stream of their own, where the environment
     draws them from ``np_random`` between its pipes. Returns (episodes, 4) statistics.
     """
-    from pipefollow.suites import min_length_for
+    from pipefollow.sim.suites import min_length_for
 
     run = compiled_setup(agent, episodes, episode_seconds, sigma_start, sigma_end, params, env_rng)
     sigmas, n_decisions, stats, simp, env_rng, dz = run

@@ -17,9 +17,9 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-from pipefollow import simulation as sim
-from pipefollow.outputs import OutputError, check_output_file
-from pipefollow.pipeline import Pipeline
+from pipefollow.files.output_paths import OutputError, check_output_file
+from pipefollow.sim import decision as sim
+from pipefollow.sim.pipeline import Pipeline
 
 ANIMATION_SUFFIXES = ("gif", "mp4")
 
@@ -92,8 +92,8 @@ def write_animation(
     """
     from matplotlib import animation
 
-    from pipefollow.atomic import atomic_path
-    from pipefollow.render import Scene
+    from pipefollow.envs.render import Scene
+    from pipefollow.files.atomic import atomic_path
 
     if not frames:
         raise ValueError("no frames to animate")

@@ -1,7 +1,7 @@
 """The agents' common interface and a factory.
 
-Every agent (:class:`~pipefollow.cacla.Cacla`, :class:`~pipefollow.sarsa.Sarsa`,
-:class:`~pipefollow.heuristic.Heuristic`) has:
+Every agent (:class:`~pipefollow.learners.cacla.Cacla`, :class:`~pipefollow.learners.sarsa.Sarsa`,
+:class:`~pipefollow.learners.heuristic.Heuristic`) has:
 
 * ``begin_episode(sigma)``: set the exploration σ for the coming episode;
 * ``act(obs, explore=True) -> float``: the action in [-1, 1];
@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from pipefollow import readings as rd
-from pipefollow.cacla import Cacla
-from pipefollow.sarsa import Sarsa, SarsaParams
+from pipefollow.learners.cacla import Cacla
+from pipefollow.learners.sarsa import Sarsa, SarsaParams
 
 ALGORITHMS = ("sarsa", "cacla")
 
@@ -33,8 +33,8 @@ def make_agent(
     """A fresh learner: ``sarsa`` or ``cacla`` (with ``skew_deg`` Δγ in degrees and ``supervised``).
 
     ``readings`` fixes the open points (RBF form and widths, the skew and k(s) rules); extra
-    keyword arguments override fields of :class:`~pipefollow.cacla.CaclaParams` /
-    :class:`~pipefollow.sarsa.SarsaParams`.
+    keyword arguments override fields of :class:`~pipefollow.learners.cacla.CaclaParams` /
+    :class:`~pipefollow.learners.sarsa.SarsaParams`.
     """
     grid = rd.state_grid(readings)
     if algorithm == "sarsa":

@@ -2,7 +2,7 @@ r"""Disturbances and faults: ocean current, camera noise, missed detections, bur
 
 All are off by default (:data:`NO_DISTURBANCE`), and then the simulation is the paper's, number
 for number. The record :class:`Disturbance` is the ``disturbance`` field of
-:class:`~pipefollow.simulation.SimParams`, so the environment and the compiled loops take it.
+:class:`~pipefollow.sim.decision.SimParams`, so the environment and the compiled loops take it.
 
 * **Ocean current** (Fossen 2021, §10.3): constant speed ``V_c`` and direction ``β_c`` (the
   direction it flows *towards*, clockwise from north) in the north-east frame. The vehicle model

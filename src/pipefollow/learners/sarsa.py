@@ -14,8 +14,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from pipefollow.linear import dot, matvec
-from pipefollow.rbf import ACTION_GRID, STATE_GRID, RBFGrid, dim_activations
+from pipefollow.learners.rbf import ACTION_GRID, STATE_GRID, RBFGrid, dim_activations
+from pipefollow.learners.sums import dot, matvec
 
 
 class SarsaParams(NamedTuple):

@@ -10,10 +10,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from pipefollow import simulation as sim
-from pipefollow.disturbance import Disturbance, check, disturbance_from_dict, noise_count
-from pipefollow.pipeline import Pipeline, resolve
-from pipefollow.suites import min_length_for, parse_random_spec
+from pipefollow.sim import decision as sim
+from pipefollow.sim.disturbance import Disturbance, check, disturbance_from_dict, noise_count
+from pipefollow.sim.pipeline import Pipeline, resolve
+from pipefollow.sim.suites import min_length_for, parse_random_spec
 
 # The longest episode the environment runs (a day of 1-s decisions): the registered
 # ``max_episode_steps``, which must not cut any episode shorter than its ``episode_seconds``.
@@ -76,19 +76,19 @@ class PipelineFollowingEnv(gym.Env):
     ## Arguments
 
     * ``pipeline``: built-in name (``paper-left``, ``paper-right``, ``paper-validation``), path of a
-      JSON file ``{"points": [[x, y], ...]}`` or a :class:`~pipefollow.pipeline.Pipeline`.
+      JSON file ``{"points": [[x, y], ...]}`` or a :class:`~pipefollow.sim.pipeline.Pipeline`.
       ``reset(options={"pipeline": ...})`` switches it. ``random`` or ``random:NAME`` (a training
-      family of :mod:`pipefollow.suites`; ``random`` is ``mixed``) draws a new pipe from the
+      family of :mod:`pipefollow.sim.suites`; ``random`` is ``mixed``) draws a new pipe from the
       environment's generator at every reset, so auto-resetting vector environments train on a
       fresh pipe every episode.
     * ``episode_seconds``: episode length in seconds (default 20).
     * ``start_lateral_noise``, ``start_heading_noise_deg``: start perturbation (default 0).
     * ``render_mode``: ``None``, ``"rgb_array"`` (the paper's Fig. 2 view as an image) or
       ``"human"`` (the same view in a Matplotlib window, updated at every step).
-    * ``params``: a :class:`~pipefollow.simulation.SimParams` (default: the paper's system).
-    * ``disturbance``: a :class:`~pipefollow.disturbance.Disturbance` (ocean current, camera
+    * ``params``: a :class:`~pipefollow.sim.decision.SimParams` (default: the paper's system).
+    * ``disturbance``: a :class:`~pipefollow.sim.disturbance.Disturbance` (ocean current, camera
       noise, missed detections, buried stretches) or a dict of its user-unit keys
-      (:func:`~pipefollow.disturbance.disturbance_from_dict`), replacing ``params.disturbance``;
+      (:func:`~pipefollow.sim.disturbance.disturbance_from_dict`), replacing ``params.disturbance``;
       none by default. Its random parts draw from the environment's seeded ``np_random``.
 
     ## Info
@@ -267,7 +267,7 @@ class PipelineFollowingEnv(gym.Env):
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
             return None
-        from pipefollow.render import Scene
+        from pipefollow.envs.render import Scene
 
         if self._scene is None or self._scene.pipeline is not self.pipeline:
             self.close()

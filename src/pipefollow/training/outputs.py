@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from pipefollow.atomic import write_text_atomic
-from pipefollow.exploration import linear_sigma
-from pipefollow.training import STAT_NAMES
+from pipefollow.files.atomic import write_text_atomic
+from pipefollow.learners.exploration import linear_sigma
+from pipefollow.training.compiled import STAT_NAMES
 
 
 def csv_text(header: Sequence[str], rows: Iterable[Sequence]) -> str:
@@ -45,7 +45,7 @@ def write_training_outputs(
     Each file is written atomically; if the second cannot be written (a full disk), the first is
     removed again, so that ``out`` never holds one without the other from this run.
     """
-    from pipefollow.policy import save_policy
+    from pipefollow.training.policy_files import save_policy
 
     policy_name, curve_name = TRAINING_OUTPUTS
     policy_path = save_policy(agent, Path(out) / policy_name, episodes=episodes, **metadata)

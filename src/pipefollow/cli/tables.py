@@ -11,7 +11,7 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import asdict, dataclass
 
 from pipefollow.experiments.config import ExperimentConfig
-from pipefollow.pipeline import BUILTIN_NAMES, Pipeline, builtin
+from pipefollow.sim.pipeline import BUILTIN_NAMES, Pipeline, builtin
 
 
 @dataclass(frozen=True)
@@ -57,7 +57,7 @@ def _builtins() -> list[PipelineEntry]:
 
 def _random_families() -> list[PipelineEntry]:
     """``random:FAMILY`` for every training family: a new pipe each episode (its first pipe shown)."""
-    from pipefollow.suites import SUITES
+    from pipefollow.sim.suites import SUITES
 
     return [
         entry(

@@ -26,13 +26,13 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from pipefollow import cacla as cacla_mod
-from pipefollow import sarsa as sarsa_mod
-from pipefollow import simulation as sim
-from pipefollow.exploration import linear_sigma
-from pipefollow.heuristic import heuristic_action
-from pipefollow.pipeline import Pipeline
-from pipefollow.rbf import dim_activations, grid_features
+from pipefollow.learners import cacla as cacla_mod
+from pipefollow.learners import sarsa as sarsa_mod
+from pipefollow.learners.exploration import linear_sigma
+from pipefollow.learners.heuristic import heuristic_action
+from pipefollow.learners.rbf import dim_activations, grid_features
+from pipefollow.sim import decision as sim
+from pipefollow.sim.pipeline import Pipeline
 
 # Columns of the per-episode statistics.
 RETURN, IN_VIEW, PROGRESS, TIME_LOST = 0, 1, 2, 3
@@ -72,7 +72,7 @@ def run_episode(
     seed: int | None = None,
     options: dict | None = None,
 ) -> EpisodeStats:
-    """Run one episode of ``agent`` in a :class:`~pipefollow.env.PipelineFollowingEnv`.
+    """Run one episode of ``agent`` in a :class:`~pipefollow.envs.env.PipelineFollowingEnv`.
 
     With ``learn`` the agent is updated as described in the module docstring.
     """
@@ -305,7 +305,7 @@ def compiled_setup(agent, episodes, episode_seconds, sigma_start, sigma_end, par
         ValueError: random disturbances without a seeded ``env_rng``.
         TypeError: an agent without a compiled loop, or supervised by another than the heuristic.
     """
-    from pipefollow.disturbance import check, noise_count
+    from pipefollow.sim.disturbance import check, noise_count
 
     if not isinstance(agent, (cacla_mod.Cacla, sarsa_mod.Sarsa)):
         raise TypeError(f"no compiled training loop for {type(agent).__name__}")
@@ -337,7 +337,7 @@ def train_compiled(
     chunk: int = 50,
     env_rng: np.random.Generator | None = None,
 ) -> np.ndarray:
-    """Train a :class:`~pipefollow.cacla.Cacla` or :class:`~pipefollow.sarsa.Sarsa` agent in compiled code.
+    """Train a :class:`~pipefollow.learners.cacla.Cacla` or a ``Sarsa`` agent in compiled code.
 
     It gives the same numbers as :func:`train` on ``PipelineFollowingEnv(pipeline, episode_seconds,
     params=params)`` with the same agent state and generator, and with ``env_rng`` in the state of

@@ -3,7 +3,7 @@
 Needs the optional extra ``deep`` (``pip install torch`` first, then ``pip install
 'pipefollow[deep]'``); importing this module without it raises :class:`DeepExtraMissing`. After
 training, the actor network is exported to a policy file of kind ``mlp``
-(:class:`~pipefollow.mlp.MLPPolicy`), which loads and runs without torch.
+(:class:`~pipefollow.learners.mlp.MLPPolicy`), which loads and runs without torch.
 
 Default hyper-parameters (:data:`DEFAULTS`, docs/decisions.md): Stable-Baselines3's own defaults,
 except a 64×64 network for both learners (SAC's default is 256×256), a rollout of 8 × 128 steps
@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from pipefollow.mlp import MLPPolicy
+from pipefollow.learners.mlp import MLPPolicy
 
 EXTRA_HINT = "PPO and SAC need the optional extra 'deep': pip install torch && pip install 'pipefollow[deep]'"
 
@@ -48,7 +48,7 @@ try:
 except ImportError as e:  # pragma: no cover - exercised without the extra
     raise DeepExtraMissing(f"{EXTRA_HINT} ({e})") from e
 
-from pipefollow.vector_env import PipelineFollowingVectorEnv  # noqa: E402  (after the extra's check)
+from pipefollow.envs.vector_env import PipelineFollowingVectorEnv  # noqa: E402  (after the extra's check)
 
 ALGORITHMS = ("ppo", "sac")
 DEFAULTS: dict[str, dict[str, Any]] = {
@@ -287,7 +287,7 @@ def train_deep(
 
 def write_hyperparameters(path: str | Path, algorithm: str, hp: dict[str, Any], **run: Any) -> Path:
     """The run's settings as JSON (atomically): algorithm, hyper-parameters and ``run`` entries."""
-    from pipefollow.atomic import write_text_atomic
+    from pipefollow.files.atomic import write_text_atomic
 
     path = Path(path)
     write_text_atomic(
@@ -312,9 +312,9 @@ def train_to_folder(
     Returns the summary: ``algorithm``, ``policy``, ``hyperparameters`` (its file),
     ``learning_curve``, ``returns`` (of the finished training episodes), ``steps``, ``wall_s``.
     """
-    from pipefollow.atomic import write_text_atomic
-    from pipefollow.policy import save_policy
-    from pipefollow.results import csv_text
+    from pipefollow.files.atomic import write_text_atomic
+    from pipefollow.training.outputs import csv_text
+    from pipefollow.training.policy_files import save_policy
 
     out = Path(out)
     run = train_deep(

@@ -1,10 +1,10 @@
 """Benchmark a controller on a suite of pipes: one deterministic episode per pipe, beside the heuristic.
 
 The episodes of the built-in controllers (heuristic, line-of-sight guidance), of CACLA and SARSA
-policies and of exported network policies (:class:`~pipefollow.mlp.MLPPolicy`: PPO, SAC) run in
+policies and of exported network policies (:class:`~pipefollow.learners.mlp.MLPPolicy`: PPO, SAC) run in
 one compiled call over all pipes, their points concatenated into one array with offsets; other controllers
 (anything with ``act(obs, explore)``) run through the Gymnasium environment. Both give the same
-numbers (tested). The summary has bootstrap confidence intervals (:mod:`pipefollow.stats`).
+numbers (tested). The summary has bootstrap confidence intervals (:mod:`pipefollow.evaluation.stats`).
 
 Definitions:
 
@@ -29,16 +29,16 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from pipefollow import cacla as cacla_mod
-from pipefollow import mlp as mlp_mod
-from pipefollow import sarsa as sarsa_mod
-from pipefollow import simulation as sim
-from pipefollow.heuristic import Heuristic, heuristic_action
-from pipefollow.los import LOS, los_action
-from pipefollow.pipeline import Pipeline
-from pipefollow.rbf import STATE_GRID, grid_features
-from pipefollow.stats import bootstrap_ci, iqm, paired_difference
-from pipefollow.suites import Suite, min_length_for
+from pipefollow.evaluation.stats import bootstrap_ci, iqm, paired_difference
+from pipefollow.learners import cacla as cacla_mod
+from pipefollow.learners import mlp as mlp_mod
+from pipefollow.learners import sarsa as sarsa_mod
+from pipefollow.learners.heuristic import Heuristic, heuristic_action
+from pipefollow.learners.los import LOS, los_action
+from pipefollow.learners.rbf import STATE_GRID, grid_features
+from pipefollow.sim import decision as sim
+from pipefollow.sim.pipeline import Pipeline
+from pipefollow.sim.suites import Suite, min_length_for
 
 SUCCESS_IN_VIEW = 0.95
 HEURISTIC, CACLA, SARSA, MLP, LOS_KIND = 0, 1, 2, 3, 4  # controller kinds of the compiled episodes
@@ -68,7 +68,7 @@ def load_controller(spec: str, seed: int = 0, lookahead: float | None = None):
         return LOS(lookahead)
     if spec in CONTROLLERS:
         return CONTROLLERS[spec]()
-    from pipefollow.policy import load_policy
+    from pipefollow.training.policy_files import load_policy
 
     return load_policy(spec, seed=seed)
 
@@ -199,7 +199,7 @@ def run_episodes(
     if compiled is None:
         _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed)
         return out, poses
-    from pipefollow.disturbance import noise_count
+    from pipefollow.sim.disturbance import noise_count
 
     k = noise_count(params.disturbance)
     z_all = np.zeros((len(pipes), n_decisions + 1, k))
@@ -221,7 +221,7 @@ def run_episodes(
 
 def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0) -> None:
     """:func:`run_episodes` through the Gymnasium environment, for controllers without a compiled kind."""
-    from pipefollow.env import PipelineFollowingEnv
+    from pipefollow.envs.env import PipelineFollowingEnv
 
     for i, pipe in enumerate(pipes):
         env = PipelineFollowingEnv(pipe, seconds, params=params)

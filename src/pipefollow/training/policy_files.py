@@ -9,7 +9,7 @@ it is evaluated unless told otherwise. The loaded agent carries it as ``agent.re
 Format versions: 3 adds ``readings`` and CACLA's reading fields; files of version 2 and older were
 trained with eq. 15 moving the weights by Δγ·φ(s), and load with ``skew_step=weights``. 4 adds
 ``algorithm`` ``mlp``: a feed-forward network exported from a deep-RL learner
-(:class:`~pipefollow.mlp.MLPPolicy`), stored as ``n_layers``, ``layer{k}_weight`` (out × in) and
+(:class:`~pipefollow.learners.mlp.MLPPolicy`), stored as ``n_layers``, ``layer{k}_weight`` (out × in) and
 ``layer{k}_bias`` (float64), ``activations`` (JSON list: ``identity``, ``tanh`` or ``relu`` per
 layer), ``output`` (``clip`` or ``tanh``), ``obs_offset``, ``obs_scale``, ``action_low``,
 ``action_high``, ``trained_by`` (``ppo``, ``sac``) and ``params`` (JSON: the training's
@@ -26,12 +26,12 @@ from pathlib import Path
 import numpy as np
 
 import pipefollow
-from pipefollow import cacla
-from pipefollow.atomic import atomic_file
-from pipefollow.cacla import Cacla, CaclaParams
-from pipefollow.mlp import MLPPolicy
-from pipefollow.rbf import RBFGrid
-from pipefollow.sarsa import Sarsa, SarsaParams
+from pipefollow.files.atomic import atomic_file
+from pipefollow.learners import cacla
+from pipefollow.learners.cacla import Cacla, CaclaParams
+from pipefollow.learners.mlp import MLPPolicy
+from pipefollow.learners.rbf import RBFGrid
+from pipefollow.learners.sarsa import Sarsa, SarsaParams
 
 FORMAT = "pipefollow-policy"
 FORMAT_VERSION = 4  # 2: SARSA weights per action centre (13 × 1,764); 3: readings; 4: mlp

@@ -8,7 +8,7 @@ for its random pipes, start perturbation and random disturbances, drawn in the s
 single environment draws them.
 
 * **Pipelines**: ``pipeline`` is one spec for all sub-environments or a list of N specs (names,
-  files, :class:`~pipefollow.pipeline.Pipeline` objects, ``random[:FAMILY]``); a random family
+  files, :class:`~pipefollow.sim.pipeline.Pipeline` objects, ``random[:FAMILY]``); a random family
   draws a new pipe from the sub-environment's generator at each of its resets.
 * **Autoreset**: Gymnasium's next-step mode (``metadata["autoreset_mode"]``): the step after an
   episode's last one resets that sub-environment and returns its first observation, reward 0 and
@@ -35,10 +35,10 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numba import njit
 
-from pipefollow import simulation as sim
-from pipefollow.env import PipelineFollowingEnv
-from pipefollow.pipeline import Pipeline, resolve
-from pipefollow.suites import min_length_for, parse_random_spec
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.sim import decision as sim
+from pipefollow.sim.pipeline import Pipeline, resolve
+from pipefollow.sim.suites import min_length_for, parse_random_spec
 
 
 @njit(cache=True)

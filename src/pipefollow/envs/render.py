@@ -12,8 +12,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from pipefollow import simulation as sim
-from pipefollow.pipeline import Pipeline
+from pipefollow.sim import decision as sim
+from pipefollow.sim.pipeline import Pipeline
 
 PIPE_COLOR = "tab:red"
 AUV_COLOR = "tab:blue"
@@ -21,7 +21,8 @@ CAMERA_COLOR = "tab:green"
 TRAIL_COLORS = ("tab:blue", "tab:orange", "tab:purple", "tab:brown", "tab:gray")
 
 
-def _figure(size=(6.0, 6.0)):
+def new_figure(size=(6.0, 6.0)):
+    """A Matplotlib figure on the Agg canvas, outside pyplot (no global state, no window)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -145,7 +146,7 @@ class Scene:
 
             self.fig = plt.figure(figsize=size, dpi=100)
         else:
-            self.fig = _figure(size)
+            self.fig = new_figure(size)
         self.ax = ax = self.fig.add_subplot()
         _draw_pipe(ax, pipeline)
         ax.set_title(pipeline.name)
@@ -326,7 +327,7 @@ def plot_trajectories(
     The AUV and its camera footprint are drawn every ``every`` decisions. Saves to ``path``
     (PNG, written atomically) when given; returns the figure.
     """
-    fig = _figure((6.5, 6.5))
+    fig = new_figure((6.5, 6.5))
     ax = fig.add_subplot()
     _draw_pipe(ax, pipeline)
     for i, (label, poses) in enumerate(trajectories.items()):
@@ -354,8 +355,8 @@ def save_figure(fig, path: str | os.PathLike) -> None:
     """
     from pathlib import Path
 
-    from pipefollow.atomic import atomic_file
-    from pipefollow.outputs import image_formats
+    from pipefollow.files.atomic import atomic_file
+    from pipefollow.files.output_paths import image_formats
 
     fmt = Path(path).suffix.lower().lstrip(".") or "png"
     if fmt not in image_formats():

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pipefollow.benchmark import BenchmarkRun
-from pipefollow.render import PIPE_COLOR, _figure, save_figure
+from pipefollow.envs.render import PIPE_COLOR, new_figure, save_figure
+from pipefollow.evaluation.benchmark import BenchmarkRun
 
 
 def plot_benchmark(run: BenchmarkRun, path: str | os.PathLike) -> None:
@@ -20,7 +20,7 @@ def plot_benchmark(run: BenchmarkRun, path: str | os.PathLike) -> None:
     """
     s = run.summary
     is_heuristic = "vs_heuristic" not in s
-    fig = _figure((12.0, 4.8))
+    fig = new_figure((12.0, 4.8))
     grid = fig.add_gridspec(1, 4, width_ratios=[1.6, 1, 1, 1])
     ax = fig.add_subplot(grid[0, 0])
     if is_heuristic:

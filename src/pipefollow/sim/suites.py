@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipefollow.pipeline import Pipeline, PipelineError
+from pipefollow.sim.pipeline import Pipeline, PipelineError
 
 SUITE_ROOT = 2010_0009  # first entropy word of every suite seed
 TRAIN_STREAM, HELDOUT_STREAM = 0, 1
@@ -242,7 +242,7 @@ def parse_random_spec(spec) -> Suite | None:
 
 def resolve_training(spec) -> Pipeline | Suite:
     """A fixed pipeline (built-in name, JSON file) or a training family (``random[:NAME]``)."""
-    from pipefollow.pipeline import resolve
+    from pipefollow.sim.pipeline import resolve
 
     family = parse_random_spec(spec)
     return family if family is not None else resolve(spec)

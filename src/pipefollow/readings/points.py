@@ -3,9 +3,8 @@
 Where the paper can be read in more than one way and the choice can change a verdict, each way
 is a *reading* with a name. A reading id is ``key=value`` (``skew_step=weights``); several join
 with ``,`` (``skew_step=weights,start_speed=cruise``). :class:`Readings` holds one value per open
-point; the defaults are the project's readings. The functions at the end turn a :class:`Readings`
-into the parameter records of the layers below (learners, features, simulation), so every path —
-the compiled trainer, the Gymnasium environment, the report — applies a reading the same way.
+point; the defaults are the project's readings. :mod:`pipefollow.readings.apply` turns a :class:`Readings`
+into the parameter records of the layers below.
 """
 
 from __future__ import annotations
@@ -15,11 +14,7 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from pipefollow import cacla
-from pipefollow.cacla import CaclaParams
-from pipefollow.exploration import skew_step_to_gamma
-from pipefollow.rbf import ACTION_CENTRES, FORMS, STATE_CENTRES, WIDTHS, RBFGrid
-from pipefollow.simulation import PAPER_SIM, SimParams
+from pipefollow.learners.rbf import FORMS, WIDTHS
 
 # The AUV's steady surge speed with the waypoint straight ahead (action 0), with the paper's
 # model and gains: the start speed of the ``cruise`` reading (m/s). Measured by simulation and
@@ -237,57 +232,6 @@ def parse(ids: Iterable[str] | str, base: Readings = DEFAULT, source: str = "rea
                 raise ReadingError(f"{source} '{rid}': unknown key '{key}'; known: {', '.join(POINTS)}")
             changes[key] = _value(POINTS[key], text, f"{source} '{rid}'")
     return dataclasses.replace(base, **changes)
-
-
-# ---------------------------------------------------------------------------------------------
-# What a reading means for the layers below
-
-
-def skew_gamma(skew_deg: float, r: Readings = DEFAULT) -> float:
-    """Δγ of eq. 15 from degrees to units of γ under the ``skew_unit`` reading.
-
-    Raises:
-        ValueError: ``skew_deg`` negative or not finite.
-    """
-    gamma = skew_step_to_gamma(skew_deg)  # 45° is one unit of γ; checks the value
-    return math.radians(skew_deg) if r.skew_unit == "rad" else gamma
-
-
-def cacla_params(r: Readings = DEFAULT, skew_deg: float = 0.0, **fields) -> CaclaParams:
-    """CACLA's parameter record under ``r``, with Δγ from degrees and other ``fields`` as given."""
-    return CaclaParams(
-        skew=skew_gamma(skew_deg, r),
-        gamma_max=r.gamma_max,
-        skew_sample={
-            "location": cacla.SAMPLE_LOCATION,
-            "centred": cacla.SAMPLE_CENTRED,
-            "moments": cacla.SAMPLE_MOMENTS,
-        }[r.skew_sample],
-        skew_step=cacla.STEP_GAMMA if r.skew_step == "gamma" else cacla.STEP_WEIGHTS,
-        k_update=cacla.K_EVERY if r.k_update == "every" else cacla.K_POSITIVE,
-        k_step=cacla.STEP_GAMMA if r.k_step == "k" else cacla.STEP_WEIGHTS,
-        **fields,
-    )
-
-
-def state_grid(r: Readings = DEFAULT) -> RBFGrid:
-    """The 1,764-feature state grid under the ``rbf`` and ``rbf_width`` readings."""
-    return RBFGrid(STATE_CENTRES, form=r.rbf, width=r.rbf_width)
-
-
-def action_grid(r: Readings = DEFAULT) -> RBFGrid:
-    """SARSA's 13-centre action grid under the ``rbf`` and ``rbf_width`` readings."""
-    return RBFGrid((ACTION_CENTRES,), form=r.rbf, width=r.rbf_width)
-
-
-def sim_params(r: Readings = DEFAULT, base: SimParams = PAPER_SIM) -> SimParams:
-    """The simulation's parameters under the ``start_speed`` reading."""
-    return base._replace(start_speed=CRUISE_SPEED if r.start_speed == "cruise" else 0.0)
-
-
-def sigma_scale(r: Readings = DEFAULT) -> float:
-    """Factor from the paper's σ to normalized action units: 1, or 1/(π/2) for σ in radians."""
-    return 2.0 / math.pi if r.sigma_unit == "rad" else 1.0
 
 
 def table_markdown() -> str:

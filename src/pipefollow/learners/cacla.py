@@ -7,7 +7,7 @@ All four heads are linear in the same RBF state features φ(s) (paper §4):
 * supervisor trust ``k(s) = w_k·φ(s)`` (eq. 13, only when ``supervised``).
 
 The update rules are compiled functions of plain arrays, so that the agent class below and the
-compiled training loop (:mod:`pipefollow.training`) run the very same code. Random numbers are
+compiled training loop (:mod:`pipefollow.training.compiled`) run the very same code. Random numbers are
 drawn by the caller from a ``numpy.random.Generator`` and passed in as standard normals.
 """
 
@@ -20,10 +20,10 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from pipefollow.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals
-from pipefollow.heuristic import heuristic_action
-from pipefollow.linear import dot
-from pipefollow.rbf import STATE_GRID, RBFGrid, features_if_finite
+from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals
+from pipefollow.learners.heuristic import heuristic_action
+from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite
+from pipefollow.learners.sums import dot
 
 V, A, G, K = 0, 1, 2, 3  # rows of the weight matrix: critic, actor, skew, supervisor trust
 

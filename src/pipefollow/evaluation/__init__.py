@@ -1,0 +1,7 @@
+"""Evaluation of controllers on suites of pipes.
+
+``benchmark`` (every suite pipe, beside the heuristic), ``stats`` (IQM, bootstrap confidence
+intervals, paired differences) and ``plot``.
+
+May import every layer below: ``files``, ``sim``, ``learners``, ``readings``, ``envs``, ``training``.
+"""
