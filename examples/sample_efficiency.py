@@ -71,6 +71,8 @@ def _deep(algorithm: str) -> Callable[[int, int], tuple[object, int]]:
 VARIANTS: dict[str, tuple[str, Callable[[int, int], tuple[object, int]]]] = {
     "cacla": ("CACLA (paper)", _paper(False)),
     "supervised-cacla": ("supervised CACLA (paper)", _paper(True)),
+    "cacla-sigma0.3": ("CACLA, σ from 0.3", _paper(False, sigma_start=0.3)),
+    "supervised-cacla-sigma0.3": ("supervised CACLA, σ from 0.3", _paper(True, sigma_start=0.3)),
     "ppo": ("PPO", _deep("ppo")),
     "sac": ("SAC", _deep("sac")),
 }
@@ -198,6 +200,7 @@ def main() -> None:
     if not args.table:
         run_all(args.out, args.variants, args.budgets, args.seeds)
     rows = summaries(args.out)
+    write_text_atomic(args.out / "summary.json", json.dumps(rows, indent=1) + "\n")
     print(table(rows, args.out))
     if args.plot:
         plot(rows, args.out, args.plot)
