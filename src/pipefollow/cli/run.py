@@ -19,7 +19,6 @@ from pipefollow.cli.common import (
     finite,
     guard,
     load_controller,
-    main,
     reading_option,
     writable_folder,
 )
@@ -54,7 +53,7 @@ def _summary(stats) -> dict:
     }
 
 
-@main.command()
+@click.command()
 @controller_options
 @click.option(
     "--pipeline",
@@ -190,7 +189,7 @@ def evaluate(
         click.echo(f"animation: {animate_path}")
 
 
-@main.command()
+@click.command()
 @click.option(
     "--algorithm",
     type=click.Choice(["sarsa", "cacla", "ppo", "sac"]),

@@ -16,7 +16,6 @@ from pipefollow.cli.common import (
     finite,
     guard,
     load_controller,
-    main,
     reading_option,
     writable_folder,
 )
@@ -39,7 +38,7 @@ def _pipe_count(suite, pipes: int | None) -> int:
     return n
 
 
-@main.group(invoke_without_command=True)
+@click.group(invoke_without_command=True)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @click.pass_context
 def suites(ctx, as_json):
@@ -93,7 +92,7 @@ def suites_export(name, out_dir, pipes, seconds, as_json):
     click.echo(f"wrote {len(paths)} pipes of '{name}' to {out}")
 
 
-@main.command()
+@click.command()
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
 def pipelines(as_json):
     """List the named pipelines.
@@ -111,7 +110,7 @@ def pipelines(as_json):
     click.echo(table(rows, [*columns, ("description", "description")]))
 
 
-@main.command()
+@click.command()
 @controller_options
 @click.option(
     "--suite", "suite_name", default="heldout", show_default=True, help="Suite (see 'pipefollow suites')."
