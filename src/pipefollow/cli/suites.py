@@ -113,7 +113,12 @@ def pipelines(as_json):
 @click.command()
 @controller_options
 @click.option(
-    "--suite", "suite_name", default="heldout", show_default=True, help="Suite (see 'pipefollow suites')."
+    "--suite",
+    "suite_specs",
+    multiple=True,
+    metavar="SUITE|PATH",
+    help="A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
+    "(repeatable; what 'suites export' writes) [default: heldout].",
 )
 @click.option(
     "--seconds",
@@ -144,7 +149,7 @@ def pipelines(as_json):
 @disturbance_options
 @guard
 def benchmark(
-    controller, lookahead, suite_name, seconds, pipes, seed, plot_path, readings, as_json, disturbance
+    controller, lookahead, suite_specs, seconds, pipes, seed, plot_path, readings, as_json, disturbance
 ):
     """Run a controller deterministically on every pipe of a suite, beside the heuristic.
 
@@ -155,10 +160,10 @@ def benchmark(
     from pipefollow.evaluation.benchmark import benchmark as run_benchmark
     from pipefollow.evaluation.benchmark import format_summary
     from pipefollow.readings import sim_params
-    from pipefollow.sim.suites import get_suite
+    from pipefollow.sim.pipe_names import resolve_suite
 
     check_plot_path(plot_path)
-    suite = get_suite(suite_name)
+    suite = resolve_suite(suite_specs or ["heldout"])
     _pipe_count(suite, pipes)
     agent = load_controller(controller, seed, lookahead)
     reading = apply_readings(readings, getattr(agent, "readings", "default"))
