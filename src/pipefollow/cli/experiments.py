@@ -11,7 +11,6 @@ import click
 from pipefollow.cli.common import (
     SEED,
     guard,
-    main,
     reading_option,
 )
 
@@ -32,7 +31,7 @@ def _write_figures(run_dir: Path, required: bool) -> list[Path]:
     return [Path(p) for p in report.write_outputs(run_dir)]
 
 
-@main.command()
+@click.command()
 @click.option(
     "--out",
     "out_dir",
@@ -196,7 +195,7 @@ def _echo_sensitivity(run_dir: Path, outputs: list[Path]) -> None:
         click.echo(f"wrote {p}")
 
 
-@main.command()
+@click.command()
 @click.argument("run_dir", type=click.Path(file_okay=False))
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object: the files written.")
 @guard
@@ -213,7 +212,7 @@ def plot(run_dir, as_json):
         click.echo(f"wrote {p}")
 
 
-@main.command()
+@click.command()
 @click.option(
     "--experiment",
     default="paper",

@@ -19,7 +19,6 @@ from pipefollow.cli.common import (
     finite,
     guard,
     load_controller,
-    main,
     reading_option,
     writable_folder,
 )
@@ -54,13 +53,14 @@ def _summary(stats) -> dict:
     }
 
 
-@main.command()
+@click.command()
 @controller_options
 @click.option(
     "--pipeline",
     default="paper-left",
     show_default=True,
-    help="Built-in name (paper-left, paper-right, paper-validation) or a JSON file.",
+    help="Built-in name (paper-left, paper-right, paper-validation), a JSON file, a pipe of a suite "
+    "(e.g. heldout-003, as 'suites export' names it) or random[:FAMILY] for a new pipe every episode.",
 )
 @click.option("--episodes", default=1, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
 @click.option(
@@ -123,7 +123,8 @@ def evaluate(
     """Evaluate a controller deterministically (σ = 0) on a pipeline."""
     from pipefollow.envs.env import PipelineFollowingEnv
     from pipefollow.readings import sim_params
-    from pipefollow.sim.pipeline import resolve
+    from pipefollow.sim.pipe_names import resolve_pipeline
+    from pipefollow.sim.suites import Suite
     from pipefollow.training.compiled import run_episode
 
     check_plot_path(plot_path)
@@ -131,12 +132,13 @@ def evaluate(
         from pipefollow.envs.animation import check_animation_path
 
         check_animation_path(animate_path, "--animate")
-    pipe = resolve(pipeline)
+    seconds = _default_seconds(pipeline, seconds)
+    pipe = resolve_pipeline(pipeline, seconds)  # a Pipeline, or a Suite for random[:FAMILY]
     agent = load_controller(controller, seed, lookahead)
     reading = apply_readings(readings, getattr(agent, "readings", "default"))
     env = PipelineFollowingEnv(
-        pipe,
-        _default_seconds(pipeline, seconds),
+        pipeline if isinstance(pipe, Suite) else pipe,  # a family: the env draws a pipe every episode
+        seconds,
         start_noise,
         heading_noise,
         params=sim_params(reading)._replace(disturbance=disturbance),
@@ -151,6 +153,8 @@ def evaluate(
             frames = recorder.frames
         else:
             stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
+        if e == 0:
+            pipe = env.pipeline  # the first episode's pipe, for the plot and the animation
     result = {
         "controller": controller,
         "pipeline": pipeline,
@@ -190,7 +194,7 @@ def evaluate(
         click.echo(f"animation: {animate_path}")
 
 
-@main.command()
+@click.command()
 @click.option(
     "--algorithm",
     type=click.Choice(["sarsa", "cacla", "ppo", "sac"]),
