@@ -118,8 +118,8 @@ def make_setup(
     check(params.disturbance)
     cam = params.camera
     observation_space = spaces.Box(
-        low=np.array([-cam.half_width, 0.0, -cam.half_width, -1.0]),
-        high=np.array([cam.half_width, cam.depth, cam.half_width, 1.0]),
+        low=np.array([-cam.half_width, 0.0, -cam.half_width, -1.0], dtype=dtype),
+        high=np.array([cam.half_width, cam.depth, cam.half_width, 1.0], dtype=dtype),
         dtype=dtype,
     )
     return Setup(
@@ -154,7 +154,7 @@ def pipeline_source(spec) -> tuple[Suite | None, Pipeline]:
     ...]`` (m), or ``random[:FAMILY]`` (a new pipe from the family at every reset).
     """
     if is_points(spec):
-        return None, Pipeline(np.asarray(spec, dtype=np.float64), name="points")
+        return None, Pipeline(np.asarray(spec, dtype=np.float64), name="pipeline points")
     suite = parse_random_spec(spec)
     # until the first reset, a family shows its first pipe
     return suite, (resolve(spec) if suite is None else suite.pipe(0))

@@ -344,6 +344,6 @@ class PipelineFollowingVectorEnv(VectorEnv):
                 self._decisions, self._seen, self._sum_e2, self.states[:, sim.PROGRESS_MAX]
             )
             for key, value in summary.items():
-                infos[key] = np.where(ended, value, 0.0 if key != "episode_rms_e_dist" else np.nan)
+                infos[key] = np.where(ended, value, 0.0)  # 0 where masked out, as Gymnasium's SyncVectorEnv
                 infos["_" + key] = ended.copy()
         return infos
