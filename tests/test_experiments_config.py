@@ -103,7 +103,7 @@ def test_unknown_key_names_it_and_the_allowed_keys(tmp_path, table, line, names)
 
 
 def test_invalid_choice_names_the_key_and_the_allowed_values(tmp_path):
-    with pytest.raises(ConfigError, match=r"'algorithm' must be one of sarsa, cacla, got 'ppo'"):
+    with pytest.raises(ConfigError, match=r"'algorithm' must be one of sarsa, cacla, ac, got 'ppo'"):
         load_experiment(write_toml(tmp_path, MINIMAL + 'algorithm = "ppo"\n'))
     with pytest.raises(ConfigError, match=r"'rbf' must be one of normalized, literal"):
         load_experiment(write_toml(tmp_path, MINIMAL + 'readings = ["rbf=cosine"]\n'))
@@ -144,7 +144,7 @@ def test_wrong_experiment_value(tmp_path, line, pattern):
         ('figures = "fig5"', r"'figures' must be a list of strings"),
         (
             'algorithm = "sarsa"\nskew_deg = 22.5',
-            r"skew_deg and supervised apply to algorithm 'cacla' only",
+            r"skew_deg applies to algorithm cacla only",
         ),
     ],
 )

@@ -13,6 +13,7 @@ drawn by the caller from a ``numpy.random.Generator`` and passed in as standard 
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Callable
 from typing import NamedTuple
@@ -20,10 +21,13 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals
+from pipefollow.learners import episodes as ep
+from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals, skew_step_to_gamma
 from pipefollow.learners.heuristic import heuristic_action
-from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite
+from pipefollow.learners.protocol import LearnerKind
+from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite, grid_features, state_grid
 from pipefollow.learners.sums import dot
+from pipefollow.sim import decision as sim
 
 V, A, G, K = 0, 1, 2, 3  # rows of the weight matrix: critic, actor, skew, supervisor trust
 
@@ -136,17 +140,23 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p):
                 inc = inc / norm2 if norm2 > 0.0 else 0.0
             for i in range(phi.shape[0]):
                 w[G, i] += inc * phi[i]
-    if p.supervised:  # eq. 13
-        if p.forgetting > 0.0:
-            w[K] *= 1.0 - p.forgetting
-        if (p.k_update == K_EVERY or delta > 0.0) and dot(w[K], phi) < p.k_max:
-            inc = p.delta_k
-            if p.k_step == STEP_GAMMA:  # k(s) itself moves by Δk
-                norm2 = dot(phi, phi)
-                inc = inc / norm2 if norm2 > 0.0 else 0.0
-            for i in range(phi.shape[0]):
-                w[K, i] += inc * phi[i]
+    if p.supervised:
+        trust_step(w, phi, delta, p)
     return delta
+
+
+@njit(cache=True)
+def trust_step(w, phi, delta, p):
+    """Eq. 13: k(s) grows by Δk (capped at k_max), after the optional forgetting of its weights."""
+    if p.forgetting > 0.0:
+        w[K] *= 1.0 - p.forgetting
+    if (p.k_update == K_EVERY or delta > 0.0) and dot(w[K], phi) < p.k_max:
+        inc = p.delta_k
+        if p.k_step == STEP_GAMMA:  # k(s) itself moves by Δk
+            norm2 = dot(phi, phi)
+            inc = inc / norm2 if norm2 > 0.0 else 0.0
+        for i in range(phi.shape[0]):
+            w[K, i] += inc * phi[i]
 
 
 @njit(cache=True)
@@ -220,11 +230,19 @@ class Cacla:
         self._phi_cache: tuple[bytes, np.ndarray] | None = None  # φ(s') of the last update
 
     algorithm = "cacla"
+    # the compiled update entry points (a learner with CACLA's policy and another rule overrides them)
+    update_packed = staticmethod(update_packed)
+    update_next_packed = staticmethod(update_next_packed)
 
     @property
     def name(self) -> str:
         """Short algorithm label."""
         return cacla_label(self.params)
+
+    @property
+    def supervised(self) -> bool:
+        """Whether a supervisor shares the actions (eq. 10)."""
+        return bool(self.params.supervised)
 
     @property
     def discount(self) -> float:
@@ -290,13 +308,13 @@ class Cacla:
         next_key = next_obs.tobytes()
         cache = self._phi_cache
         if cache is not None and cache[0] == next_key:
-            return update_packed(
+            return self.update_packed(
                 self.weights, phi, a_rl, a_sup, float(reward), float(discount), cache[1], self._packed
             )
         if next_obs.shape != (self.grid.ndim,):
             raise ValueError(f"next_obs must have {self.grid.ndim} entries, got shape {next_obs.shape}")
         phi_next = np.empty(self.grid.n_features)
-        delta, finite = update_next_packed(
+        delta, finite = self.update_next_packed(
             self.weights,
             phi,
             a_rl,
@@ -329,3 +347,165 @@ def cacla_label(p: CaclaParams) -> str:
     if p.skew > 0.0:
         name += f", skew {p.skew * DEGREES_PER_GAMMA:g}°" + SAMPLE_SUFFIX[p.skew_sample]
     return name
+
+
+def skew_in_gamma_units(skew_deg: float, unit: str = "deg45") -> float:
+    """Δγ of eq. 15 from degrees to units of γ under the ``skew_unit`` reading (``deg45`` or ``rad``).
+
+    Raises:
+        ValueError: ``skew_deg`` negative or not finite.
+    """
+    gamma = skew_step_to_gamma(skew_deg)  # 45° is one unit of γ; checks the value
+    return math.radians(skew_deg) if unit == "rad" else gamma
+
+
+def params_under(r, skew_deg: float = 0.0, **fields) -> CaclaParams:
+    """CACLA's parameter record under the readings ``r``, with Δγ from degrees and other ``fields``.
+
+    ``r`` is a :class:`pipefollow.readings.Readings` (its ``skew_unit``, ``gamma_max``,
+    ``skew_sample``, ``skew_step``, ``k_update`` and ``k_step``).
+    """
+    return CaclaParams(
+        skew=skew_in_gamma_units(skew_deg, r.skew_unit),
+        gamma_max=r.gamma_max,
+        skew_sample={"location": SAMPLE_LOCATION, "centred": SAMPLE_CENTRED, "moments": SAMPLE_MOMENTS}[
+            r.skew_sample
+        ],
+        skew_step=STEP_GAMMA if r.skew_step == "gamma" else STEP_WEIGHTS,
+        k_update=K_EVERY if r.k_update == "every" else K_POSITIVE,
+        k_step=STEP_GAMMA if r.k_step == "k" else STEP_WEIGHTS,
+        **fields,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# The compiled episodes (pipefollow.learners.episodes) and what the layers above need
+
+
+@njit(cache=True)
+def episodes(w, hp, tracks, run, grid, rng, env_rng, dz, stats, poses):
+    """CACLA's episodes in compiled code: the same numbers as its agent in the environment.
+
+    ``rng`` draws the exploration, ``env_rng`` the disturbances (:mod:`pipefollow.learners.episodes`).
+    """
+    p = unpack(hp)
+    ps = sim.unpack_params(run.sim)
+    decision_s = ps.dt * ps.substeps
+    nf = w.shape[1]
+    s = np.empty(sim.STATE_SIZE)
+    phi, phi_pend, phi_next = np.empty(nf), np.empty(nf), np.empty(nf)
+    book, totals = np.empty(ep.BOOK_SIZE), np.empty(ep.TALLY_SIZE)
+    skewed = p.skew > 0.0
+    n = run.n_decisions
+    for e in range(run.sigmas.shape[0]):
+        sigma = run.sigmas[e]
+        points, cum, start = ep.pipe_of(tracks, e)
+        ep.start_episode(s, points, cum, start, ps, env_rng, dz, book, totals, poses, e)
+        have_phi = False  # phi already holds φ(s) of the current state (computed for the last update)
+        a_rl_p = a_sup_p = 0.0
+        for t in range(n):
+            visible = s[sim.IN_VIEW] != 0.0
+            a = a_rl = a_sup = 0.0
+            if visible:
+                if not have_phi:
+                    grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi)
+                z0 = z1 = 0.0
+                if sigma > 0.0:
+                    z0 = rng.standard_normal()
+                    z1 = rng.standard_normal() if skewed else z0
+                a_sup = heuristic_action(s[sim.X1], s[sim.Y1]) if p.supervised else 0.0
+                a, a_rl = act(w, phi, sigma, z0, z1, a_sup, p)
+            have_phi = False
+            r = ep.decide(s, a, points, cum, ps, env_rng, dz, totals, poses, e, t)
+            if not run.learn:
+                continue
+            ep.carry(book, visible, r, p.discount)
+            if visible:
+                phi, phi_pend = phi_pend, phi  # keep φ(s) for the update; no copy
+                a_rl_p, a_sup_p = a_rl, a_sup
+            if ep.due(book, s[sim.IN_VIEW] != 0.0, t == n - 1):
+                grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
+                update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p)
+                book[ep.PENDING] = 0.0
+                phi, phi_next = phi_next, phi  # φ(s') is the next decision's φ(s)
+                have_phi = True
+        ep.close_episode(stats, e, s, totals, n, decision_s)
+
+
+def check_compiled(agent: Cacla) -> None:
+    """Refuse what the compiled loop cannot run: a supervisor other than the paper's heuristic.
+
+    Raises:
+        TypeError: a custom supervisor.
+    """
+    if agent.params.supervised and not agent.default_supervisor:
+        raise TypeError(
+            "the compiled loop supervises with the heuristic only; use train() for other supervisors"
+        )
+
+
+def run_compiled(agent: Cacla, tracks, run, env_rng, dz, stats, poses) -> None:
+    """:func:`episodes` for ``agent``."""
+    episodes(agent.weights, pack(agent.params), tracks, run, ep.features_of(agent.grid), agent.rng, env_rng,
+             dz, stats, poses)  # fmt: skip
+
+
+def policy_fields(agent: Cacla) -> dict:
+    """The arrays of a policy file: parameters and grid as JSON, the weights."""
+    params = {k: (bool(v) if isinstance(v, bool) else v) for k, v in agent.params._asdict().items()}
+    return {
+        "params": np.array(json.dumps(params)),
+        "grid": np.array(json.dumps(agent.grid.to_dict())),
+        "weights": agent.weights,
+    }
+
+
+def from_policy(data: dict, version: int, seed: int | None = None, agent_class: type = None):
+    """An agent and its weights from a policy file's arrays (see :func:`policy_fields`).
+
+    Files before format 3 had a boolean ``skew_centred`` and were trained with eq. 15 moving the
+    weights by Δγ·φ(s): they load with ``skew_step=weights``.
+    """
+    params = json.loads(str(data["params"]))
+    grid = RBFGrid.from_dict(json.loads(str(data["grid"])))
+    weights = np.asarray(data["weights"], dtype=np.float64)
+    trained = str(data.get("readings", "default"))
+    if version < 3 and isinstance(params, dict):
+        centred = params.pop("skew_centred", False)
+        params["skew_sample"] = SAMPLE_CENTRED if centred else SAMPLE_LOCATION
+        params["skew_step"] = STEP_WEIGHTS
+        if params.get("skew", 0.0) > 0.0:
+            trained = "skew_step=weights" + (",skew_sample=centred" if centred else "")
+    agent = (agent_class or Cacla)(CaclaParams(**params), grid=grid, seed=seed)
+    agent.readings = trained
+    return agent, weights
+
+
+def make(r, rng: np.random.Generator | None = None, *, skew_deg: float = 0.0, supervised: bool = False,
+         **fields) -> Cacla:  # fmt: skip
+    """A fresh CACLA agent under the readings ``r`` (fields: those of :class:`CaclaParams`)."""
+    params = params_under(r, skew_deg, supervised=supervised, **fields)
+    agent = Cacla(params, grid=state_grid(r.rbf, r.rbf_width), rng=rng)
+    agent.readings = r.id
+    return agent
+
+
+LEARNER = LearnerKind(
+    name="cacla",
+    title="CACLA",
+    summary="CACLA (eqs. 5-8; skew-normal exploration eqs. 14-15; supervised eqs. 10-13)",
+    agent_class=Cacla,
+    options=frozenset({"skew_deg", "supervised"}),
+    step_sizes={
+        "alpha_v": "alpha_v",
+        "alpha_pi": "alpha_pi",
+        "discount": "discount",
+        "delta_k": "delta_k",
+        "forgetting": "forgetting",
+    },  # fmt: skip
+    make=make,
+    check=check_compiled,
+    run=run_compiled,
+    policy_fields=policy_fields,
+    from_policy=from_policy,
+)
