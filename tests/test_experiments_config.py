@@ -134,7 +134,7 @@ def test_wrong_experiment_value(tmp_path, line, pattern):
         ("episode_seconds = nan", r"'episode_seconds' must be a finite number"),
         ("episode_seconds = 1e308", r"'episode_seconds' must be from 1 to 86400"),
         ('readings = ["gamma_max=-1"]', r"'gamma_max' must be a number in \(0, 100\]"),
-        ("readings = \"skew_step=weights\"", r"'readings' must be a list of strings"),
+        ('readings = "skew_step=weights"', r"'readings' must be a list of strings"),
         ('phases = [{ pipeline = "paper-left", episodes = 0 }]', r"'episodes' must be from 1 to 10,000,000"),
         (
             'phases = [{ pipeline = "paper-left", epsiodes = 3 }]',
