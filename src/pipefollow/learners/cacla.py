@@ -20,6 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from pipefollow.learners import episodes as ep
 from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals, skew_step_to_gamma
@@ -28,6 +29,7 @@ from pipefollow.learners.protocol import LearnerKind
 from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite, grid_features, state_grid
 from pipefollow.learners.sums import dot
 from pipefollow.sim import decision as sim
+from pipefollow.sim import records
 
 V, A, G, K = 0, 1, 2, 3  # rows of the weight matrix: critic, actor, skew, supervisor trust
 
@@ -58,16 +60,18 @@ class CaclaParams(NamedTuple):
 PAPER_CACLA = CaclaParams()
 
 
+_N_PARAMS = records.size(PAPER_CACLA)
+
+
 def pack(p: CaclaParams) -> np.ndarray:
     """``p`` as a float array for compiled code (a NamedTuple argument costs µs per call)."""
-    return np.array(p, dtype=np.float64)
+    return records.pack(p)
 
 
 @njit(cache=True)
 def unpack(a):
-    """Inverse of :func:`pack` inside compiled code."""
-    flags = int(a[9]), int(a[10]), int(a[11]), int(a[12])
-    return CaclaParams(a[0], a[1], a[2], a[3], a[4], a[5] != 0.0, a[6], a[7], a[8], *flags)
+    """Inverse of :func:`pack` inside compiled code: the record, its flags and codes as floats."""
+    return CaclaParams(*to_fixed_tuple(a, _N_PARAMS))
 
 
 @njit(cache=True)
