@@ -19,15 +19,18 @@ that does not scale with δ (the sign term). The critic (eqs. 5–6), the Gaussi
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from numba import njit
 
 from pipefollow.learners import cacla
 from pipefollow.learners import episodes as ep
-from pipefollow.learners.cacla import A, Cacla, CaclaParams, K, V, act, trust_step, unpack
+from pipefollow.learners.actor_agent import A, ActorAgent, K, V
+from pipefollow.learners.cacla import CaclaParams, act, trust_step, unpack
 from pipefollow.learners.heuristic import heuristic_action
 from pipefollow.learners.protocol import LearnerKind
-from pipefollow.learners.rbf import features_if_finite, grid_features, state_grid
+from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite, grid_features, state_grid
 from pipefollow.learners.sums import dot
 from pipefollow.sim import decision as sim
 
@@ -71,7 +74,7 @@ def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, no
     return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp)), True
 
 
-class ActorCritic(Cacla):
+class ActorCritic(ActorAgent):
     """An actor-critic agent (eq. 9; eq. 11 when supervised) on CACLA's features and Gaussian policy.
 
     Args:
@@ -83,13 +86,23 @@ class ActorCritic(Cacla):
     """
 
     algorithm = "ac"
+    pack = staticmethod(cacla.pack)
+    act_packed = staticmethod(cacla.act_packed)  # CACLA's policy: eq. 8, and eq. 10 when supervised
+    act_heuristic_packed = staticmethod(cacla.act_heuristic_packed)
     update_packed = staticmethod(update_packed)
     update_next_packed = staticmethod(update_next_packed)
 
-    def __init__(self, params: CaclaParams = PAPER_AC, *args, **kwargs) -> None:
+    def __init__(
+        self,
+        params: CaclaParams = PAPER_AC,
+        grid: RBFGrid = STATE_GRID,
+        rng: np.random.Generator | None = None,
+        seed: int | None = None,
+        supervisor: Callable[[np.ndarray], float] | None = None,
+    ) -> None:
         if params.skew != 0.0:
             raise ValueError(f"the actor-critic explores with eq. 8 only: skew must be 0, got {params.skew}")
-        super().__init__(params, *args, **kwargs)
+        super().__init__(params, grid, rng, seed, supervisor)
 
     @property
     def name(self) -> str:

@@ -23,6 +23,7 @@ from numba import njit
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from pipefollow.learners import episodes as ep
+from pipefollow.learners.actor_agent import A, ActorAgent, G, K, V, clip1
 from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals, skew_step_to_gamma
 from pipefollow.learners.heuristic import heuristic_action
 from pipefollow.learners.protocol import LearnerKind
@@ -30,8 +31,6 @@ from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite, gri
 from pipefollow.learners.sums import dot
 from pipefollow.sim import decision as sim
 from pipefollow.sim import records
-
-V, A, G, K = 0, 1, 2, 3  # rows of the weight matrix: critic, actor, skew, supervisor trust
 
 # Readings of open points (docs/design.md, "Readings"); codes as stored in CaclaParams.
 SAMPLE_LOCATION, SAMPLE_CENTRED, SAMPLE_MOMENTS = 0, 1, 2  # skew sample: location/scale, centred, mean/s.d.
@@ -72,12 +71,6 @@ def pack(p: CaclaParams) -> np.ndarray:
 def unpack(a):
     """Inverse of :func:`pack` inside compiled code: the record, its flags and codes as floats."""
     return CaclaParams(*to_fixed_tuple(a, _N_PARAMS))
-
-
-@njit(cache=True)
-def clip1(x):
-    """Clip to the action range [-1, 1]."""
-    return min(1.0, max(-1.0, x))
 
 
 @njit(cache=True)
@@ -192,12 +185,7 @@ def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, no
     return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp)), True
 
 
-def _draw_count(p: CaclaParams) -> int:
-    """Standard normals per exploring decision: skew-normal samples take two."""
-    return 2 if p.skew > 0.0 else 1
-
-
-class Cacla:
+class Cacla(ActorAgent):
     """A CACLA agent on RBF features; works on any Gymnasium env with a Box observation.
 
     Args:
@@ -207,6 +195,13 @@ class Cacla:
         supervisor: ``obs -> a_sup`` for supervised CACLA (default: the paper's heuristic).
     """
 
+    algorithm = "cacla"
+    pack = staticmethod(pack)
+    act_packed = staticmethod(act_packed)
+    act_heuristic_packed = staticmethod(act_heuristic_packed)
+    update_packed = staticmethod(update_packed)
+    update_next_packed = staticmethod(update_next_packed)
+
     def __init__(
         self,
         params: CaclaParams = PAPER_CACLA,
@@ -215,131 +210,12 @@ class Cacla:
         seed: int | None = None,
         supervisor: Callable[[np.ndarray], float] | None = None,
     ) -> None:
-        self.params = params
-        self.grid = grid
-        self.readings = "default"  # id of the readings it learns under (set by make_agent)
-        self.rng = rng if rng is not None else np.random.default_rng(seed)
-        self.weights = np.zeros((4, grid.n_features))
-        self.sigma = 1.0
-        self._packed = pack(params)
-        self._draws = _draw_count(params)
-        self.default_supervisor = supervisor is None  # the compiled training loop knows only this one
-        if supervisor is None:
-
-            def supervisor(obs):
-                return heuristic_action(float(obs[0]), float(obs[1]))
-
-        self.supervisor = supervisor
-        self._pending = None
-        self._phi_cache: tuple[bytes, np.ndarray] | None = None  # φ(s') of the last update
-
-    algorithm = "cacla"
-    # the compiled update entry points (a learner with CACLA's policy and another rule overrides them)
-    update_packed = staticmethod(update_packed)
-    update_next_packed = staticmethod(update_next_packed)
+        super().__init__(params, grid, rng, seed, supervisor)
 
     @property
     def name(self) -> str:
         """Short algorithm label."""
         return cacla_label(self.params)
-
-    @property
-    def supervised(self) -> bool:
-        """Whether a supervisor shares the actions (eq. 10)."""
-        return bool(self.params.supervised)
-
-    @property
-    def discount(self) -> float:
-        """The discount factor γ_d."""
-        return self.params.discount
-
-    def begin_episode(self, sigma: float) -> None:
-        """Set the exploration σ for the coming episode."""
-        self.sigma = float(sigma)
-        self._pending = None
-
-    def features(self, obs) -> np.ndarray:
-        """φ(obs)."""
-        return self.grid.features(obs)
-
-    def _cached_features(self, obs, key: bytes) -> np.ndarray:
-        """φ(obs), reusing φ(s') of the last update when ``obs`` is that s' (the usual case)."""
-        cache = self._phi_cache
-        if cache is not None and cache[0] == key:
-            return cache[1]
-        phi = self.features(obs)
-        self._phi_cache = (key, phi)
-        return phi
-
-    def act(self, obs, explore: bool = True) -> float:
-        """Executed action for ``obs``; with ``explore`` it samples with the current ``sigma``."""
-        key = _key(obs)
-        phi = self._cached_features(obs, key)
-        sigma = self.sigma if explore else 0.0
-        z0 = z1 = 0.0
-        if sigma > 0.0:
-            z0 = z1 = self.rng.standard_normal()
-            if self._draws == 2:
-                z1 = self.rng.standard_normal()
-        if self.default_supervisor:
-            x = np.asarray(obs, dtype=np.float64)
-            a, a_rl, a_sup = act_heuristic_packed(self.weights, phi, sigma, z0, z1, x[0], x[1], self._packed)
-        else:
-            a_sup = self.supervisor(obs) if self.params.supervised else 0.0
-            a, a_rl = act_packed(self.weights, phi, sigma, z0, z1, a_sup, self._packed)
-        self._pending = (key, phi, a_rl, a_sup)
-        return a
-
-    def actor(self, obs) -> float:
-        """The pure actor's deterministic action clip(A(s)), without the supervisor."""
-        return clip1(dot(self.weights[A], self.features(obs)))
-
-    def update(self, obs, action, reward: float, next_obs, discount: float) -> float:
-        """Learn from ``obs`` → ``next_obs``; ``discount`` is γ_d^n (0 if terminal). Returns δ.
-
-        Uses the learner's own action of the last :meth:`act` call on ``obs``; without one,
-        ``action`` is taken as the learner's action.
-        """
-        key = _key(obs)
-        if self._pending is not None and self._pending[0] == key:
-            _, phi, a_rl, a_sup = self._pending
-        else:
-            phi = self._cached_features(obs, key)
-            a_rl = float(action)
-            a_sup = self.supervisor(obs) if self.params.supervised else 0.0
-        self._pending = None
-        next_obs = np.asarray(next_obs, dtype=np.float64)
-        next_key = next_obs.tobytes()
-        cache = self._phi_cache
-        if cache is not None and cache[0] == next_key:
-            return self.update_packed(
-                self.weights, phi, a_rl, a_sup, float(reward), float(discount), cache[1], self._packed
-            )
-        if next_obs.shape != (self.grid.ndim,):
-            raise ValueError(f"next_obs must have {self.grid.ndim} entries, got shape {next_obs.shape}")
-        phi_next = np.empty(self.grid.n_features)
-        delta, finite = self.update_next_packed(
-            self.weights,
-            phi,
-            a_rl,
-            a_sup,
-            float(reward),
-            float(discount),
-            next_obs,
-            self.grid.packed,
-            self.grid.form == "normalized",
-            phi_next,
-            self._packed,
-        )
-        if not finite:
-            raise ValueError(f"next_obs must be finite, got {next_obs}")
-        self._phi_cache = (next_key, phi_next)
-        return delta
-
-
-def _key(obs) -> bytes:
-    """An observation's identity for the caches: its float64 bytes."""
-    return np.asarray(obs, dtype=np.float64).tobytes()
 
 
 SAMPLE_SUFFIX = {SAMPLE_LOCATION: "", SAMPLE_CENTRED: " centred", SAMPLE_MOMENTS: " mean/s.d."}
