@@ -158,6 +158,10 @@ def run_episodes(
         return results, poses
     run = Run(sim.pack_params(params), np.zeros(1), n_decisions, False)
     k = noise_count(params.disturbance)
+    if learner is not None and k == 0:  # one call over all pipes, episode e on pipe e
+        run = run._replace(sigmas=np.zeros(len(pipes)))
+        learner.run(agent, tracks_of(pipes), run, np.random.default_rng(0), np.zeros(0), out, poses)
+        return out[:, _COLUMNS], poses
     if learner is not None:  # pipe by pipe: each with its own disturbance generator
         for e, pipe in enumerate(pipes):
             learner.run(agent, tracks_of([pipe]), run, _noise_rng(noise_seed, e), np.zeros(k), out[e : e + 1],
