@@ -301,3 +301,17 @@ def test_relative_pipeline_paths_are_relative_to_the_experiment_file(tmp_path, m
     from pipefollow.sim.pipeline import resolve
 
     assert resolve(trial.phases[0].pipeline).length == 5.0
+
+
+def test_the_reference_learners_experiment_sets_the_actor_critics_beside_cacla():
+    from pipefollow.experiments.config import shipped_experiments
+
+    assert "reference-learners" in shipped_experiments()
+    exp = load_experiment("reference-learners")
+    assert exp.repeats == 5
+    setups = {(t.algorithm, t.supervised) for t in exp.trials}
+    assert setups == {("cacla", False), ("ac", False), ("cacla", True), ("ac", True)}
+    for t in exp.trials:  # the paper's step sizes, training pipe and schedule (§4, §4.1)
+        assert (t.alpha_v, t.alpha_pi, t.discount, t.delta_k) == (0.4, 0.2, 0.8, 0.05)
+        assert [(p.pipeline, p.episodes) for p in t.phases] == [("paper-left", 500)]
+        assert (t.sigma_start, t.sigma_end, t.skew_deg, t.readings) == (1.0, 0.01, 0.0, ())
