@@ -76,7 +76,7 @@ def _write_figures(run_dir: Path, required: bool) -> list[Path]:
     default="paper",
     show_default=True,
     help="A shipped experiment ('paper'; 'readings': the claims under each reading of the paper's open "
-    "points) or an experiment TOML file.",
+    "points; 'reference-learners': CACLA beside the actor-critic of eq. 9) or an experiment TOML file.",
 )
 @click.option(
     "--trial",
@@ -217,7 +217,7 @@ def plot(run_dir, as_json):
     "--experiment",
     default="paper",
     show_default=True,
-    help="A shipped experiment ('paper', 'readings') or an experiment TOML file.",
+    help="A shipped experiment ('paper', 'readings', 'reference-learners') or an experiment TOML file.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
 @guard
