@@ -54,6 +54,12 @@ INFO_FIELDS = (
     ("current", sim.CURRENT_SPEED, sim.CURRENT_DIR + 1, False),
 )
 INFO_KEYS = tuple(f[0] for f in INFO_FIELDS)
+# (key, first slot, boolean, index into the last axis): indexing with Ellipsis gives a 0-d array
+_INFO_INDEX = tuple(
+    (key, first, boolean, (Ellipsis, first if stop is None else slice(first, stop)))
+    for key, first, stop, boolean in INFO_FIELDS
+)
+
 
 # The summary added to the info of an episode's last step.
 SUMMARY_KEYS = ("episode_pipe_in_view", "episode_progress_m", "episode_rms_e_dist")
@@ -237,16 +243,24 @@ def start_episode(
 
 def observation(states: np.ndarray, setup: Setup) -> np.ndarray:
     """Observations ``(x1, y1, x2, v_x)`` of one state or a batch: a new array of the setup's dtype."""
-    return states[..., :4].astype(setup.obs_dtype)
+    return (states[:4] if states.ndim == 1 else states[:, :4]).astype(setup.obs_dtype)
 
 
 def state_infos(states: np.ndarray) -> dict[str, np.ndarray]:
-    """The info of one state (0-d and 1-d arrays) or of a batch (arrays with the batch dimension first)."""
-    info = {}
-    for key, first, stop, boolean in INFO_FIELDS:
-        col = states[..., first] if stop is None else states[..., first:stop]
-        info[key] = np.asarray(col != 0.0) if boolean else np.array(col)
-    return info
+    """The info of one state (0-d and 1-d arrays) or of a batch (arrays with the batch dimension first).
+
+    The numbers are views of one copy of ``states``: a step's info stays as it was when later
+    steps change the state, and shares no object with another step's (as Gymnasium's checker
+    demands), at a fraction of the cost of an array per key.
+    """
+    snap = np.array(states)
+    if snap.ndim == 1:  # one state: a comparison of the whole state would cost more than three
+        return {
+            key: np.array(snap[first] != 0.0) if boolean else snap[index]
+            for key, first, boolean, index in _INFO_INDEX
+        }
+    flags = snap != 0.0
+    return {key: (flags if boolean else snap)[index] for key, _, boolean, index in _INFO_INDEX}
 
 
 def episode_summary(decisions, seen, sum_e2, progress_m) -> dict[str, np.ndarray]:
