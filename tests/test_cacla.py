@@ -216,8 +216,10 @@ def test_same_seed_gives_identical_weights():
 def test_make_agent_validation():
     with pytest.raises(ValueError, match="algorithm"):
         make_agent("qlearning")
-    with pytest.raises(ValueError, match="CACLA only"):
+    with pytest.raises(ValueError, match="supervised applies to algorithm cacla and ac only"):
         make_agent("sarsa", supervised=True)
+    with pytest.raises(ValueError, match="skew_deg applies to algorithm cacla only"):
+        make_agent("ac", skew_deg=22.5)
     assert make_agent("cacla", skew_deg=22.5).params.skew == pytest.approx(0.5)
     assert math.isclose(make_agent("cacla", skew_deg=45).params.skew, 1.0)
 

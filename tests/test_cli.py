@@ -269,12 +269,12 @@ def test_train_refuses_to_replace_a_policy_unless_forced(runner, tmp_path):
 
 
 def test_ctrl_c_during_train_exits_130_and_leaves_nothing(runner, tmp_path, monkeypatch):
-    import pipefollow.training.compiled
+    import pipefollow.training.phases
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(pipefollow.training.compiled, "train_compiled", interrupted)
+    monkeypatch.setattr(pipefollow.training.phases, "train_compiled", interrupted)
     out = tmp_path / "new" / "runs" / "run"
     res = runner.invoke(main, [*TRAIN, "--out", str(out)])
     assert res.exit_code == 130, res.output

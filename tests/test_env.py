@@ -185,3 +185,97 @@ def test_gym_make_keeps_the_envs_own_episode_length(seconds):
     a, b = _episode(made, seed=3), _episode(direct, seed=3)
     assert len(a) - 1 == (seconds or 20)  # decisions until truncation
     np.testing.assert_array_equal(np.array(a[1:]), np.array(b[1:]))
+
+
+def test_every_info_value_is_an_array_that_gymnasiums_vector_env_batches_with_its_dtype():
+    env = PipelineFollowingEnv(episode_seconds=2)
+    _, info = env.reset(seed=0)
+    assert all(isinstance(v, np.ndarray) for v in info.values())
+    assert info["pipe_in_view"].shape == () and info["pipe_in_view"].dtype == bool
+    assert info["current"].shape == (2,)
+    vec = gym.vector.SyncVectorEnv([lambda: PipelineFollowingEnv(episode_seconds=2) for _ in range(3)])
+    _, batched = vec.reset(seed=0)
+    for key, value in info.items():
+        assert batched[key].dtype == value.dtype and batched[key].shape == (3, *value.shape), key
+    vec.step(np.zeros((3, 1)))
+    _, _, _, trunc, batched = vec.step(np.zeros((3, 1)))
+    assert trunc.all() and batched["episode_rms_e_dist"].dtype == np.float64
+
+
+def test_the_current_info_is_the_disturbances_current():
+    from pipefollow.sim.disturbance import make_disturbance
+
+    env = PipelineFollowingEnv(disturbance=make_disturbance(0.15, 60.0))
+    _, info = env.reset(seed=0)
+    np.testing.assert_allclose(info["current"], [0.15, np.pi / 3], rtol=1e-15)
+    np.testing.assert_array_equal(PipelineFollowingEnv().reset()[1]["current"], [0.0, 0.0])
+
+
+def test_float32_observations_are_the_float64_ones_rounded():
+    check_env(gym.make(pipefollow.ENV_ID, obs_dtype="float32").unwrapped)
+    env32 = PipelineFollowingEnv("random:hard", obs_dtype="float32", start_lateral_noise=0.5)
+    env64 = PipelineFollowingEnv("random:hard", start_lateral_noise=0.5)
+    assert env32.observation_space.dtype == np.float32 and env32.observation_space.low.dtype == np.float32
+    o32, o64 = env32.reset(seed=4)[0], env64.reset(seed=4)[0]
+    for t in range(20):
+        assert o32.dtype == np.float32 and o32 in env32.observation_space
+        np.testing.assert_array_equal(o32, o64.astype(np.float32))
+        o32, o64 = env32.step([np.sin(t)])[0], env64.step([np.sin(t)])[0]
+    with pytest.raises(ValueError, match="obs_dtype must be one of float64, float32, got 'int8'"):
+        PipelineFollowingEnv(obs_dtype="int8")
+
+
+def test_gym_make_takes_a_pipeline_of_points():
+    env = gym.make(pipefollow.ENV_ID, pipeline=[[0, 0], [5, 0], [5, 5]])
+    obs, _ = env.reset(seed=0)
+    assert env.unwrapped.pipeline.length == 10.0
+    # on the first point heading north along the first segment: the pipe runs up the frame's centre
+    np.testing.assert_allclose(obs, [0.0, 3.0, 0.0, 0.0], atol=1e-12)
+    _, info = env.reset(options={"pipeline": [[0, 0], [0, 4]], "lateral_offset": 0.5})
+    np.testing.assert_allclose(info["pose"], [-0.5, 0.0, np.pi / 2], atol=1e-12)  # heading east, offset south
+    with pytest.raises(ValueError, match="pipeline points: needs at least two distinct points, got 1"):
+        PipelineFollowingEnv([[0, 0]])
+
+
+def test_stepping_after_the_end_says_to_reset():
+    from gymnasium.error import ResetNeeded
+
+    env = PipelineFollowingEnv(episode_seconds=2)
+    with pytest.raises(ResetNeeded, match=r"call reset\(\) before the first step"):
+        env.step([0.0])
+    env.reset(seed=0)
+    env.step([0.0])
+    assert env.step([0.0])[3]
+    with pytest.raises(ResetNeeded, match=r"the episode has ended: call reset\(\)"):
+        env.step([0.0])
+    env.reset()
+    assert not env.step([0.0])[3]
+
+
+def test_bad_reset_offsets_are_refused():
+    env = PipelineFollowingEnv()
+    with pytest.raises(ValueError, match="reset option lateral_offset must be a finite number, got nan"):
+        env.reset(options={"lateral_offset": float("nan")})
+
+
+@pytest.mark.parametrize("copier", ["pickle", "deepcopy"])
+def test_pickle_and_deepcopy_after_render_continue_with_the_same_numbers(copier):
+    import copy
+    import pickle
+
+    from pipefollow.sim.disturbance import make_disturbance
+
+    env = PipelineFollowingEnv(
+        "random:mixed", render_mode="rgb_array", disturbance=make_disturbance(0.0, 0.0, camera_noise=0.05)
+    )
+    env.reset(seed=2)
+    env.step([0.3])
+    env.render()
+    twin = pickle.loads(pickle.dumps(env)) if copier == "pickle" else copy.deepcopy(env)
+    for a in (0.1, -0.4, 0.8):
+        mine, theirs = env.step([a]), twin.step([a])
+        np.testing.assert_array_equal(mine[0], theirs[0])
+        assert mine[1] == theirs[1]
+    np.testing.assert_array_equal(twin.render(), env.render())  # the copy draws its own figure
+    env.close()
+    twin.close()

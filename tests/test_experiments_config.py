@@ -103,7 +103,7 @@ def test_unknown_key_names_it_and_the_allowed_keys(tmp_path, table, line, names)
 
 
 def test_invalid_choice_names_the_key_and_the_allowed_values(tmp_path):
-    with pytest.raises(ConfigError, match=r"'algorithm' must be one of sarsa, cacla, got 'ppo'"):
+    with pytest.raises(ConfigError, match=r"'algorithm' must be one of sarsa, cacla, ac, got 'ppo'"):
         load_experiment(write_toml(tmp_path, MINIMAL + 'algorithm = "ppo"\n'))
     with pytest.raises(ConfigError, match=r"'rbf' must be one of normalized, literal"):
         load_experiment(write_toml(tmp_path, MINIMAL + 'readings = ["rbf=cosine"]\n'))
@@ -134,7 +134,7 @@ def test_wrong_experiment_value(tmp_path, line, pattern):
         ("episode_seconds = nan", r"'episode_seconds' must be a finite number"),
         ("episode_seconds = 1e308", r"'episode_seconds' must be from 1 to 86400"),
         ('readings = ["gamma_max=-1"]', r"'gamma_max' must be a number in \(0, 100\]"),
-        ("readings = \"skew_step=weights\"", r"'readings' must be a list of strings"),
+        ('readings = "skew_step=weights"', r"'readings' must be a list of strings"),
         ('phases = [{ pipeline = "paper-left", episodes = 0 }]', r"'episodes' must be from 1 to 10,000,000"),
         (
             'phases = [{ pipeline = "paper-left", epsiodes = 3 }]',
@@ -144,7 +144,7 @@ def test_wrong_experiment_value(tmp_path, line, pattern):
         ('figures = "fig5"', r"'figures' must be a list of strings"),
         (
             'algorithm = "sarsa"\nskew_deg = 22.5',
-            r"skew_deg and supervised apply to algorithm 'cacla' only",
+            r"skew_deg applies to algorithm cacla only",
         ),
     ],
 )
@@ -301,3 +301,17 @@ def test_relative_pipeline_paths_are_relative_to_the_experiment_file(tmp_path, m
     from pipefollow.sim.pipeline import resolve
 
     assert resolve(trial.phases[0].pipeline).length == 5.0
+
+
+def test_the_reference_learners_experiment_sets_the_actor_critics_beside_cacla():
+    from pipefollow.experiments.config import shipped_experiments
+
+    assert "reference-learners" in shipped_experiments()
+    exp = load_experiment("reference-learners")
+    assert exp.repeats == 5
+    setups = {(t.algorithm, t.supervised) for t in exp.trials}
+    assert setups == {("cacla", False), ("ac", False), ("cacla", True), ("ac", True)}
+    for t in exp.trials:  # the paper's step sizes, training pipe and schedule (§4, §4.1)
+        assert (t.alpha_v, t.alpha_pi, t.discount, t.delta_k) == (0.4, 0.2, 0.8, 0.05)
+        assert [(p.pipeline, p.episodes) for p in t.phases] == [("paper-left", 500)]
+        assert (t.sigma_start, t.sigma_end, t.skew_deg, t.readings) == (1.0, 0.01, 0.0, ())

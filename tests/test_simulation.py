@@ -10,7 +10,7 @@ from scipy.integrate import solve_ivp
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams
 from pipefollow.sim.controller import PAPER_CONTROLLER, ControllerParams, pd_force
-from pipefollow.sim.disturbance import Disturbance
+from pipefollow.sim.disturbance import PACKED_SIZE, Disturbance
 from pipefollow.sim.dynamics import PAPER_AUV, AUVParams, acceleration, kinematics
 from pipefollow.sim.pipeline import Pipeline
 
@@ -221,10 +221,14 @@ def test_pack_unpack_round_trip():
         assert all(a != b for a, b in zip(group, default, strict=True))
     assert all(a != b for a, b in zip(p[3:8], defaults[3:8], strict=True))
     assert all(a != b for a, b in zip(p.disturbance, defaults.disturbance, strict=True))
-    assert len(set(sim.pack_params(p)[37:52])) == 15  # no two disturbance slots alike
+    start = sim.OFFSETS["disturbance"]
+    slots = sim.pack_params(p)[start : start + PACKED_SIZE]
+    assert len(set(slots)) == PACKED_SIZE == 15  # no two disturbance slots alike
     assert p.start_speed != defaults.start_speed
     packed = sim.pack_params(p)
-    assert packed.dtype == np.float64 and packed.shape == (53,)
+    assert packed.dtype == np.float64 and packed.shape == (sim.OFFSETS["start_speed"] + 1,)
+    for name in ("dt", "substeps", "lost_reward", "progress_back", "progress_ahead", "start_speed"):
+        assert packed[sim.OFFSETS[name]] == getattr(p, name)  # each scalar where its name says
     back = sim.unpack_params(packed)
     assert back == p
     assert isinstance(back.substeps, int)

@@ -111,7 +111,7 @@ class ScriptedEnv:
     def step(self, action):
         r = self.rewards[self.t]
         self.t += 1
-        info = {"pipe_in_view": self.visible[self.t], "progress_m": float(self.t)}
+        info = {"pipe_in_view": self.visible[self.t], "progress_m": float(self.t), "e_dist": 0.1 * self.t}
         return np.array([float(self.t)]), r, False, self.t == len(self.rewards), info
 
 
@@ -148,6 +148,7 @@ def test_semi_markov_updates_while_the_pipe_is_lost_by_hand():
     ]
     assert ep.ret == sum(rewards)
     assert ep.pipe_in_view == pytest.approx(2 / 7)  # decisions ending with the pipe in view: s1, s4
+    assert ep.n_in_view == 2 and ep.sum_e_dist2 == pytest.approx(0.1**2 + 0.4**2)
     assert ep.time_lost_s == pytest.approx(5.0)
 
 

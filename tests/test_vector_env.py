@@ -153,3 +153,174 @@ def test_make_vec_takes_the_registered_upper_bound_and_refuses_a_shorter_limit()
             vectorization_mode="vector_entry_point",
             max_episode_steps=5,
         )
+
+
+def assert_same_infos(native, reference):
+    """Same keys, masks, dtypes and shapes; the same values wherever the reference's mask is set."""
+    assert set(native) == set(reference), set(native) ^ set(reference)
+    for key, value in reference.items():
+        if key.startswith("_"):
+            np.testing.assert_array_equal(native[key], value, err_msg=key)
+        elif isinstance(value, dict):
+            assert_same_infos(native[key], value)
+        elif key == "final_obs":
+            for i in np.flatnonzero(reference["_final_obs"]):
+                np.testing.assert_allclose(native[key][i], value[i], rtol=0, atol=1e-12)
+        else:
+            mask = reference["_" + key]
+            assert (native[key].dtype, native[key].shape) == (value.dtype, value.shape), key
+            if value.dtype == bool:
+                np.testing.assert_array_equal(native[key][mask], value[mask], err_msg=key)
+            else:
+                np.testing.assert_allclose(native[key][mask], value[mask], rtol=0, atol=1e-12, err_msg=key)
+
+
+def assert_same_step(native_out, reference_out):
+    *native, native_info = native_out
+    *reference, reference_info = reference_out
+    for a, b in zip(native, reference, strict=True):
+        assert a.dtype == b.dtype and a.shape == b.shape
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+    assert_same_infos(native_info, reference_info)
+
+
+@pytest.mark.parametrize("mode", list(AutoresetMode))
+def test_every_autoreset_mode_equals_gymnasiums_sync_vector_env_of_single_environments(mode):
+    from gymnasium.error import ResetNeeded
+
+    kwargs = dict(
+        pipeline="random:mixed", episode_seconds=4, start_lateral_noise=0.3,
+        disturbance=make_disturbance(0.1, 45.0, camera_noise=0.05, miss_prob=0.05),
+    )  # fmt: skip
+    native = make_vec(3, autoreset_mode=mode, **kwargs)
+    reference = gym.make_vec(
+        ID, num_envs=3, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode}, **kwargs
+    )
+    assert native.autoreset_mode == mode and native.metadata["autoreset_mode"] == mode
+    assert reference.metadata["autoreset_mode"] == mode
+    assert_same_step(native.reset(seed=5), reference.reset(seed=5))
+    rng = np.random.default_rng(0)
+    ended = np.zeros(3, dtype=bool)
+    ends = 0
+    for t in range(15):
+        if t == 2:  # sub-environment 1 starts again, out of step with the others
+            mask = np.array([False, True, False])
+            both = [e.reset(options={"reset_mask": mask}) for e in (native, reference)]
+            assert_same_step(*both)
+        act = rng.uniform(-1.2, 1.2, (3, 1)).astype(np.float32)
+        if mode == AutoresetMode.DISABLED and ended.any():
+            with pytest.raises(ResetNeeded, match=r"reset them with reset\(options=\{'reset_mask'"):
+                native.step(act)
+            both = [e.reset(options={"reset_mask": ended.copy()}) for e in (native, reference)]
+            assert_same_step(*both)
+        out = native.step(act)
+        assert_same_step(out, reference.step(act))
+        ended = out[3]
+        ends += int(ended.sum())
+        if mode == AutoresetMode.SAME_STEP and ended.any():
+            assert set(out[4]["final_info"]) >= {"episode_pipe_in_view", "episode_progress_m", "current"}
+    assert ends >= 8
+
+
+def test_same_step_gives_the_last_observation_and_the_summary_of_the_single_environment():
+    vec = make_vec(2, pipeline="random:easy", episode_seconds=3, autoreset_mode=AutoresetMode.SAME_STEP)
+    singles = [PipelineFollowingEnv("random:easy", episode_seconds=3) for _ in range(2)]
+    vec.reset(seed=9)
+    for i, e in enumerate(singles):
+        e.reset(seed=9 + i)
+    act = np.array([[0.4], [-0.2]], dtype=np.float32)
+    for _ in range(3):
+        obs, rew, _, trunc, info = vec.step(act)
+        single = [e.step(act[i]) for i, e in enumerate(singles)]
+    assert trunc.all()
+    for i, (o, r, _, tr, s_info) in enumerate(single):
+        assert tr and rew[i] == r
+        np.testing.assert_array_equal(info["final_obs"][i], o)
+        for key in ("episode_pipe_in_view", "episode_progress_m", "episode_rms_e_dist", "pose"):
+            np.testing.assert_array_equal(info["final_info"][key][i], s_info[key])
+        np.testing.assert_array_equal(obs[i], singles[i].reset()[0])  # already the next episode's start
+
+
+def test_info_keys_and_values_are_those_of_the_single_environment():
+    dist = make_disturbance(0.2, 30.0)
+    vec = make_vec(2, disturbance=dist, episode_seconds=2)
+    single = PipelineFollowingEnv(disturbance=dist, episode_seconds=2)
+    _, v_info = vec.reset(seed=0)
+    _, s_info = single.reset(seed=0)
+    assert {k for k in v_info if not k.startswith("_")} == set(s_info)
+    for key, value in s_info.items():
+        assert isinstance(value, np.ndarray) and v_info[key].shape == (2, *value.shape), key
+        assert v_info[key].dtype == value.dtype, key
+    # the current: 0.2 m/s towards 30° in both
+    np.testing.assert_allclose(v_info["current"], [[0.2, np.radians(30.0)]] * 2, rtol=1e-15)
+    vec.step(np.zeros((2, 1)))
+    single.step([0.0])
+    _, _, _, trunc, v_info = vec.step(np.zeros((2, 1)))
+    s_info = single.step([0.0])[4]
+    assert trunc.all() and "episode_rms_e_dist" in s_info
+    assert {k for k in v_info if not k.startswith("_")} == set(s_info)
+
+
+def test_autoreset_mode_is_chosen_as_gymnasium_make_vec_passes_arguments():
+    vec = gym.make_vec(ID, num_envs=2, autoreset_mode="SameStep")
+    assert vec.autoreset_mode == AutoresetMode.SAME_STEP == vec.metadata["autoreset_mode"]
+    assert PipelineFollowingVectorEnv.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP  # not shared
+    # Gymnasium passes vector_kwargs to its own vector wrappers only; for a vector entry point it refuses them
+    with pytest.raises(gym.error.Error, match="vector_kwargs"):
+        gym.make_vec(ID, num_envs=2, vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP})
+    sync = gym.make_vec(
+        ID, num_envs=2, vectorization_mode="sync", vector_kwargs={"autoreset_mode": "Disabled"}
+    )
+    assert sync.autoreset_mode == AutoresetMode.DISABLED
+    with pytest.raises(ValueError, match="autoreset_mode must be one of 'NextStep', 'SameStep', 'Disabled'"):
+        make_vec(2, autoreset_mode="same-step")
+    with pytest.raises(TypeError, match=r"unknown argument\(s\) \['episode_secs'\]"):
+        make_vec(2, episode_secs=5)
+
+
+def test_reset_mask_is_checked_as_gymnasium_checks_it():
+    from gymnasium.error import ResetNeeded
+
+    vec = make_vec(3)
+    with pytest.raises(ResetNeeded, match="call reset"):
+        vec.step(np.zeros((3, 1)))
+    with pytest.raises(ValueError, match="first reset must reset every sub-environment"):
+        vec.reset(options={"reset_mask": np.array([True, False, False])})
+    vec.reset(seed=0)
+    with pytest.raises(TypeError, match="reset_mask must be a numpy bool array"):
+        vec.reset(options={"reset_mask": [True, False, True]})
+    with pytest.raises(ValueError, match=r"must have shape \(3,\)"):
+        vec.reset(options={"reset_mask": np.ones(2, dtype=bool)})
+    with pytest.raises(ValueError, match="marks no sub-environment"):
+        vec.reset(options={"reset_mask": np.zeros(3, dtype=bool)})
+    with pytest.raises(ValueError, match=r"unknown reset option\(s\) \['bogus'\]; allowed: .*reset_mask"):
+        vec.reset(options={"bogus": 1})
+
+
+def test_pickle_and_deepcopy_continue_with_the_same_numbers():
+    import copy
+    import pickle
+
+    vec = make_vec(3, pipeline="random:hard", episode_seconds=3, start_heading_noise_deg=10,
+                   disturbance=make_disturbance(0.0, 0.0, camera_noise=0.05))  # fmt: skip
+    vec.reset(seed=1)
+    vec.step(np.full((3, 1), 0.3))
+    copies = [pickle.loads(pickle.dumps(vec)), copy.deepcopy(vec)]
+    act = np.linspace(-1, 1, 3)[:, None]
+    for _ in range(5):  # across an autoreset: the pipes and the noise come from the copied generators
+        out = vec.step(act)
+        for c in copies:
+            assert_same_step(c.step(act), out)
+
+
+def test_points_as_pipeline_and_float32_observations():
+    vec = make_vec(2, pipeline=[[0, 0], [5, 0], [5, 5]], obs_dtype="float32")
+    assert [p.length for p in vec.unwrapped.pipelines] == [10.0, 10.0]
+    obs, _ = vec.reset(seed=0)
+    assert obs.dtype == np.float32 == vec.observation_space.dtype and obs in vec.observation_space
+    ref = make_vec(2, pipeline=[[0, 0], [5, 0], [5, 5]])
+    ref.reset(seed=0)
+    a = np.full((2, 1), 0.1)
+    np.testing.assert_array_equal(vec.step(a)[0], ref.step(a)[0].astype(np.float32))
+    two = make_vec(2, pipeline=[[[0, 0], [5, 0]], [[0, 0], [0, 5]]])  # one list of points each
+    assert [p.start_heading for p in two.unwrapped.pipelines] == [0.0, np.pi / 2]

@@ -1,64 +1,19 @@
 """pipefollow: learning pipeline-following controllers for AUVs with reinforcement learning.
 
-Importing the package registers the Gymnasium environment ``pipefollow/PipelineFollowing-v0``.
+Importing the package registers the Gymnasium environment ``pipefollow/PipelineFollowing-v0``:
+at once if Gymnasium is loaded, else as soon as it is. Importing the package loads neither
+Gymnasium nor NumPy nor numba, so that ``pipefollow --help`` starts in a blink; numba's cache
+folder is set by the packages that hold compiled code (:mod:`pipefollow.files.compile_cache`).
 """
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
+import sys
 
-try:
-    __version__ = version("pipefollow")
-except PackageNotFoundError:  # running from a source tree
-    __version__ = "0.0.0"
+# the one source of the version: pyproject.toml reads it from here (setuptools, without importing)
+__version__ = "0.1.0"
 
 ENV_ID = "pipefollow/PipelineFollowing-v0"
-
-
-def _configure_numba_cache() -> None:
-    """Keep numba's on-disk cache in step with all of the package's sources.
-
-    Numba revalidates a cached function against its own file only, not against the files of
-    the functions compiled into it: after an edit of ``sim/controller.py`` a cached
-    ``sim.decision.decide`` would still run the old controller. A cache folder named after a
-    hash of every module that holds compiled code rules that out; edits elsewhere (the command
-    line, the report) keep the cache. It lives under
-    ``$NUMBA_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/pipefollow`` (``~/.cache/pipefollow``);
-    if that is not writable, numba's default (``__pycache__``) is left in place.
-    """
-    import os
-    import shutil
-    from pathlib import Path
-
-    import numba
-
-    from pipefollow.files.sources import compiled_modules, source_hash
-
-    base = Path(
-        os.environ.get("NUMBA_CACHE_DIR")
-        or Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "pipefollow"
-    )
-    target = base / f"numba-{source_hash(compiled_modules())}"
-    try:
-        target.mkdir(parents=True, exist_ok=True)
-        probe = target / f".probe-{os.getpid()}"
-        probe.touch()
-        probe.unlink()
-    except OSError:
-        return
-    numba.config.CACHE_DIR = str(target)
-    # keep the three most recently used caches of earlier source versions, drop the rest
-    try:
-        others = sorted(
-            (p for p in base.glob("numba-*") if p != target), key=lambda p: p.stat().st_mtime, reverse=True
-        )
-    except OSError:  # another process is pruning at the same time
-        return
-    for old in others[3:]:
-        shutil.rmtree(old, ignore_errors=True)
-
-
-_configure_numba_cache()
 
 
 def register_envs() -> None:
@@ -76,4 +31,39 @@ def register_envs() -> None:
         )
 
 
-register_envs()
+class _RegisterOnGymnasiumImport:
+    """A post-import hook: registers the environments once Gymnasium's registry module has run.
+
+    A finder on ``sys.meta_path`` that answers only for ``gymnasium.envs.registration``: it
+    takes the spec the other finders give and wraps its loader, so the registry is filled the
+    moment it exists, whichever of ``import gymnasium`` and ``import pipefollow`` comes first.
+    """
+
+    NAME = "gymnasium.envs.registration"
+
+    def find_spec(self, fullname, path=None, target=None):  # noqa: D102
+        if fullname != self.NAME:
+            return None
+        sys.meta_path.remove(self)  # one-shot, and so that the real finders answer below
+        for finder in sys.meta_path:
+            spec = finder.find_spec(fullname, path, target) if hasattr(finder, "find_spec") else None
+            if spec is not None:
+                break
+        else:
+            return None
+        if spec.loader is None or not hasattr(spec.loader, "exec_module"):
+            return spec
+        exec_module = spec.loader.exec_module
+
+        def exec_and_register(module):
+            exec_module(module)
+            register_envs()
+
+        spec.loader.exec_module = exec_and_register
+        return spec
+
+
+if "gymnasium.envs.registration" in sys.modules:
+    register_envs()
+else:
+    sys.meta_path.insert(0, _RegisterOnGymnasiumImport())

@@ -1,8 +1,9 @@
-"""What every command of the ``pipefollow`` command line shares: the group, errors, options.
+"""What the commands of the ``pipefollow`` command line share: errors, options, checks.
 
 Bad input is a one-line error naming the input (``pipefollow: error: …``) with exit status 2
-(:class:`UserError`, :func:`guard`); click's own usage errors are printed the same way
-(:class:`OneLineErrors`). The commands live in the modules beside this one, by subject.
+(:class:`~pipefollow.cli.group.UserError`, :func:`guard`); click's own usage errors are printed the
+same way by the group (:mod:`pipefollow.cli.group`). The commands live in the modules beside this
+one, by subject.
 """
 
 from __future__ import annotations
@@ -12,34 +13,27 @@ from pathlib import Path
 
 import click
 
-from pipefollow.experiments.config import ConfigError
-from pipefollow.experiments.store import StoreError
-from pipefollow.files.output_paths import OutputError
-from pipefollow.sim import disturbance as _disturbance
-from pipefollow.sim.disturbance import DisturbanceError
-from pipefollow.sim.pipeline import PipelineError
-from pipefollow.training.policy_files import PolicyError
+from pipefollow.cli.group import UserError, main  # noqa: F401 - main: for modules that register on it
 
-USER_ERRORS: tuple[type[Exception], ...] = (
-    PipelineError,
-    PolicyError,
-    ConfigError,
-    StoreError,
-    DisturbanceError,
-    OutputError,
+# The library's input errors, by module: an error can only be raised once its module is imported,
+# so the check needs (and imports) none of them
+_USER_ERRORS = (
+    ("pipefollow.sim.pipeline", "PipelineError"),
+    ("pipefollow.training.policy_files", "PolicyError"),
+    ("pipefollow.experiments.config", "ConfigError"),
+    ("pipefollow.experiments.store", "StoreError"),
+    ("pipefollow.sim.disturbance", "DisturbanceError"),
+    ("pipefollow.files.output_paths", "OutputError"),
 )
+
+
+def user_errors() -> tuple[type[Exception], ...]:
+    """The classes of the library's input errors whose modules are loaded."""
+    return tuple(getattr(sys.modules[m], name) for m, name in _USER_ERRORS if m in sys.modules)
+
 
 # Seeds: what NumPy's SeedSequence takes, any non-negative integer (no upper bound).
 SEED = click.IntRange(min=0)
-
-
-class UserError(click.ClickException):
-    """A one-line error about the user's input, exit status 2."""
-
-    exit_code = 2
-
-    def show(self, file=None) -> None:  # noqa: D102
-        click.echo(f"pipefollow: error: {self.message}", err=True)
 
 
 def is_path_error(e: OSError) -> bool:
@@ -58,7 +52,7 @@ def guard(fn):
     def wrapper(*args, **kwargs):
         try:
             return fn(*args, **kwargs)
-        except USER_ERRORS as e:
+        except user_errors() as e:
             raise UserError(str(e)) from None
         except OSError as e:
             if not is_path_error(e):
@@ -70,33 +64,6 @@ def guard(fn):
     return wrapper
 
 
-# click ≥ 8.2 raises this for a bare group; older versions print the help and exit 0 themselves
-_NO_ARGS_IS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())
-
-
-class OneLineErrors(click.Group):
-    """Click's own usage errors (a bad option value, a missing option) on one line, exit 2."""
-
-    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):  # noqa: D102
-        if not standalone_mode:
-            return super().main(args, prog_name, complete_var, standalone_mode, **extra)
-        try:
-            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
-        except click.exceptions.Abort:  # Ctrl-C: the shell's convention, 128 + SIGINT
-            click.echo("pipefollow: interrupted", err=True)
-            sys.exit(130)
-        except _NO_ARGS_IS_HELP as e:  # the bare command asks for help; it is not an error
-            click.echo(e.ctx.get_help() if e.ctx else self.get_help(click.Context(self)))
-            sys.exit(0)
-        except click.ClickException as e:
-            if isinstance(e, UserError):
-                e.show()
-            else:
-                click.echo(f"pipefollow: error: {e.format_message()}", err=True)
-            sys.exit(e.exit_code)
-        sys.exit(rv if isinstance(rv, int) else 0)
-
-
 def finite(ctx, param, value):
     """Reject NaN and infinity, which click's ranges let through."""
     import math
@@ -104,15 +71,6 @@ def finite(ctx, param, value):
     if value is not None and not math.isfinite(value):
         raise click.BadParameter(f"{value} is not a finite number", ctx=ctx, param=param)
     return value
-
-
-@click.group(
-    cls=OneLineErrors,
-    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
-)
-@click.version_option(package_name="pipefollow")
-def main() -> None:
-    """Learn and evaluate AUV pipeline-following controllers (Fjerdingen et al., 2010)."""
 
 
 def writable_folder(path: str, option: str) -> Path:
@@ -153,7 +111,7 @@ def load_controller(spec: str, seed: int, lookahead: float | None = None):
     try:
         return load(spec, seed, lookahead)
     except ValueError as e:
-        if isinstance(e, USER_ERRORS):
+        if isinstance(e, user_errors()):
             raise
         raise UserError(str(e)) from None
 
@@ -184,21 +142,25 @@ def disturbance_options(fn):
     """
     import functools
 
-    def checked(convert):
+    def checked(name):
         def callback(ctx, param, value):
             if value is None:
                 return None
+            from pipefollow.sim import disturbance
+
             try:
-                return convert(value)
-            except DisturbanceError as e:
+                return getattr(disturbance, name)(value)
+            except disturbance.DisturbanceError as e:
                 raise click.BadParameter(str(e), ctx=ctx, param=param) from None
 
         return callback
 
     @functools.wraps(fn)
     def wrapper(*args, current, camera_noise, miss_prob, **kwargs):
+        from pipefollow.sim.disturbance import make_disturbance
+
         speed, direction = current if current is not None else (0.0, 0.0)
-        d = _disturbance.make_disturbance(
+        d = make_disturbance(
             speed, direction, camera_noise=camera_noise or 0.0, miss_prob=miss_prob or 0.0
         )
         return fn(*args, disturbance=d, **kwargs)
@@ -208,7 +170,7 @@ def disturbance_options(fn):
             "--current",
             metavar="SPEED,DIR_DEG",
             default=None,
-            callback=checked(_disturbance.parse_current),
+            callback=checked("parse_current"),
             help="Ocean current: SPEED m/s flowing towards DIR_DEG degrees clockwise from north.",
         ),
         click.option(
@@ -216,7 +178,7 @@ def disturbance_options(fn):
             type=float,
             default=None,
             metavar="M",
-            callback=checked(_disturbance.check_camera_noise),
+            callback=checked("check_camera_noise"),
             help="Standard deviation (m) of Gaussian noise on the camera's pipe end points. [default: 0]",
         ),
         click.option(
@@ -224,7 +186,7 @@ def disturbance_options(fn):
             type=float,
             default=None,
             metavar="P",
-            callback=checked(_disturbance.check_miss_prob),
+            callback=checked("check_miss_prob"),
             help="Probability per decision that the camera misses the pipe. [default: 0]",
         ),
     ]

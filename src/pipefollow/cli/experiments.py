@@ -11,7 +11,6 @@ import click
 from pipefollow.cli.common import (
     SEED,
     guard,
-    main,
     reading_option,
 )
 
@@ -32,7 +31,7 @@ def _write_figures(run_dir: Path, required: bool) -> list[Path]:
     return [Path(p) for p in report.write_outputs(run_dir)]
 
 
-@main.command()
+@click.command()
 @click.option(
     "--out",
     "out_dir",
@@ -77,7 +76,7 @@ def _write_figures(run_dir: Path, required: bool) -> list[Path]:
     default="paper",
     show_default=True,
     help="A shipped experiment ('paper'; 'readings': the claims under each reading of the paper's open "
-    "points) or an experiment TOML file.",
+    "points; 'reference-learners': CACLA beside the actor-critic of eq. 9) or an experiment TOML file.",
 )
 @click.option(
     "--trial",
@@ -196,7 +195,7 @@ def _echo_sensitivity(run_dir: Path, outputs: list[Path]) -> None:
         click.echo(f"wrote {p}")
 
 
-@main.command()
+@click.command()
 @click.argument("run_dir", type=click.Path(file_okay=False))
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object: the files written.")
 @guard
@@ -213,12 +212,12 @@ def plot(run_dir, as_json):
         click.echo(f"wrote {p}")
 
 
-@main.command()
+@click.command()
 @click.option(
     "--experiment",
     default="paper",
     show_default=True,
-    help="A shipped experiment ('paper', 'readings') or an experiment TOML file.",
+    help="A shipped experiment ('paper', 'readings', 'reference-learners') or an experiment TOML file.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
 @guard

@@ -13,7 +13,6 @@ from pipefollow.cli.common import (
     finite,
     guard,
     load_controller,
-    main,
     writable_folder,
 )
 from pipefollow.cli.suites import _pipe_count, pipes_option
@@ -45,7 +44,7 @@ def _controllers(specs, seed: int) -> dict[str, list]:
     return out
 
 
-@main.command()
+@click.command()
 @click.option(
     "--controller",
     "controllers",

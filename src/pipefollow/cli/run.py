@@ -19,11 +19,11 @@ from pipefollow.cli.common import (
     finite,
     guard,
     load_controller,
-    main,
     reading_option,
     writable_folder,
 )
 from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS
+from pipefollow.learners.registry import NAMES as LEARNER_NAMES
 from pipefollow.sim import disturbance as _disturbance
 
 
@@ -33,7 +33,8 @@ def _default_seconds(pipeline: str, seconds: float | None) -> float:
     return 60.0 if pipeline == "paper-validation" else 20.0
 
 
-_LEARNING_RATES = ("alpha_v", "alpha_pi", "discount", "delta_k", "k_max", "forgetting")  # not train options
+# step sizes of a policy that --init continues with, not train options
+_LEARNING_RATES = ("alpha", "alpha_v", "alpha_pi", "discount", "delta_k", "k_max", "forgetting")
 
 
 def _summary(stats) -> dict:
@@ -54,13 +55,14 @@ def _summary(stats) -> dict:
     }
 
 
-@main.command()
+@click.command()
 @controller_options
 @click.option(
     "--pipeline",
     default="paper-left",
     show_default=True,
-    help="Built-in name (paper-left, paper-right, paper-validation) or a JSON file.",
+    help="Built-in name (paper-left, paper-right, paper-validation), a JSON file, a pipe of a suite "
+    "(e.g. heldout-003, as 'suites export' names it) or random[:FAMILY] for a new pipe every episode.",
 )
 @click.option("--episodes", default=1, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
 @click.option(
@@ -123,7 +125,8 @@ def evaluate(
     """Evaluate a controller deterministically (σ = 0) on a pipeline."""
     from pipefollow.envs.env import PipelineFollowingEnv
     from pipefollow.readings import sim_params
-    from pipefollow.sim.pipeline import resolve
+    from pipefollow.sim.pipe_names import resolve_pipeline
+    from pipefollow.sim.suites import Suite
     from pipefollow.training.compiled import run_episode
 
     check_plot_path(plot_path)
@@ -131,12 +134,13 @@ def evaluate(
         from pipefollow.envs.animation import check_animation_path
 
         check_animation_path(animate_path, "--animate")
-    pipe = resolve(pipeline)
+    seconds = _default_seconds(pipeline, seconds)
+    pipe = resolve_pipeline(pipeline, seconds)  # a Pipeline, or a Suite for random[:FAMILY]
     agent = load_controller(controller, seed, lookahead)
     reading = apply_readings(readings, getattr(agent, "readings", "default"))
     env = PipelineFollowingEnv(
-        pipe,
-        _default_seconds(pipeline, seconds),
+        pipeline if isinstance(pipe, Suite) else pipe,  # a family: the env draws a pipe every episode
+        seconds,
         start_noise,
         heading_noise,
         params=sim_params(reading)._replace(disturbance=disturbance),
@@ -151,6 +155,8 @@ def evaluate(
             frames = recorder.frames
         else:
             stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
+        if e == 0:
+            pipe = env.pipeline  # the first episode's pipe, for the plot and the animation
     result = {
         "controller": controller,
         "pipeline": pipeline,
@@ -190,12 +196,13 @@ def evaluate(
         click.echo(f"animation: {animate_path}")
 
 
-@main.command()
+@click.command()
 @click.option(
     "--algorithm",
-    type=click.Choice(["sarsa", "cacla", "ppo", "sac"]),
+    type=click.Choice([*LEARNER_NAMES, "ppo", "sac"]),
     required=True,
-    help="The paper's learners, or PPO / SAC from Stable-Baselines3 (extra 'deep').",
+    help="The paper's learners (sarsa, cacla; ac: the general actor-critic of eq. 9), or PPO / SAC "
+    "from Stable-Baselines3 (extra 'deep').",
 )
 @click.option(
     "--skew",
@@ -205,7 +212,11 @@ def evaluate(
     show_default=True,
     help="CACLA skew step Δγ in degrees (eq. 15): 11.25, 22.5 or 45 in the paper; 0 = Gaussian.",
 )
-@click.option("--supervised", is_flag=True, help="Supervised CACLA with the heuristic as supervisor.")
+@click.option(
+    "--supervised",
+    is_flag=True,
+    help="The heuristic as supervisor: supervised CACLA (eq. 12) or actor-critic (eq. 11).",
+)
 @click.option(
     "--pipeline",
     default="paper-left",
@@ -281,16 +292,17 @@ def train(
         return _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance)
     if steps is not None:
         raise UserError("--steps applies to --algorithm ppo and sac only (use --episodes)")
-    from pipefollow.readings import cacla_params, sigma_scale, sim_params
-    from pipefollow.sim.suites import Suite, resolve_training
+    from pipefollow.learners.registry import learner, taking
+    from pipefollow.sim.suites import resolve_training
     from pipefollow.training.agents import make_agent
-    from pipefollow.training.compiled import STAT_NAMES, train_compiled
-    from pipefollow.training.random_pipes import train_random_compiled
+    from pipefollow.training.compiled import STAT_NAMES
+    from pipefollow.training.phases import agent_rng, train_phases
 
-    if algorithm == "sarsa" and (skew or supervised):
-        raise UserError("--skew and --supervised apply to --algorithm cacla only")
+    for option, flag, value in (("skew_deg", "--skew", skew), ("supervised", "--supervised", supervised)):
+        if value and option not in learner(algorithm).options:
+            raise UserError(f"{flag} applies to --algorithm {' and '.join(taking(option))} only")
     pipe = resolve_training(pipeline)  # a Pipeline, or a Suite for random[:FAMILY]
-    rng = np.random.default_rng(seed)
+    rng = agent_rng(seed)
     if init_policy:
         from pipefollow.training.policy_files import load_policy
 
@@ -298,14 +310,15 @@ def train(
         reading = apply_readings(readings, agent.readings)
         if agent.algorithm != algorithm:
             raise UserError(f"--init {init_policy}: holds a {agent.name} policy, not {algorithm}")
-        if algorithm == "cacla":
-            wanted = cacla_params(reading, skew, supervised=supervised)
-            held = agent.params._replace(**{k: getattr(wanted, k) for k in _LEARNING_RATES})
-            if held != wanted:
-                raise UserError(
-                    f"--init {init_policy}: holds a {agent.name} policy under readings "
-                    f"'{agent.readings}'; its options differ from these"
-                )
+        wanted = make_agent(algorithm, skew_deg=skew, supervised=supervised, readings=reading).params
+        held = agent.params._replace(
+            **{k: getattr(wanted, k) for k in wanted._fields if k in _LEARNING_RATES}
+        )
+        if held != wanted:
+            raise UserError(
+                f"--init {init_policy}: holds a {agent.name} policy under readings "
+                f"'{agent.readings}'; its options differ from these"
+            )
         agent.readings = reading.id
         agent.rng = rng
     else:
@@ -327,19 +340,15 @@ def train(
                 bar.update(n - done[0])
                 done[0] = n
 
-            scale = sigma_scale(reading)
-            schedule = dict(
+            (stats,) = train_phases(
+                agent,
+                [(pipeline, episodes)],
+                seed=seed,
+                readings=reading,
+                disturbance=disturbance,
                 episode_seconds=seconds,
-                sigma_start=scale,
-                sigma_end=0.01 * scale,
-                params=sim_params(reading)._replace(disturbance=disturbance),
-                env_rng=np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0]),
                 progress=progress,
             )
-            if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the seed's generator
-                stats = train_random_compiled(agent, pipe, episodes, pipe_rng=rng.spawn(1)[0], **schedule)
-            else:
-                stats = train_compiled(agent, pipe, episodes, **schedule)
         policy_path, curve_path = write_training_outputs(
             out, agent, stats, episodes, pipeline=pipe.name, seed=seed
         )

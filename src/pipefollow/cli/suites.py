@@ -16,7 +16,6 @@ from pipefollow.cli.common import (
     finite,
     guard,
     load_controller,
-    main,
     reading_option,
     writable_folder,
 )
@@ -39,7 +38,7 @@ def _pipe_count(suite, pipes: int | None) -> int:
     return n
 
 
-@main.group(invoke_without_command=True)
+@click.group(invoke_without_command=True)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @click.pass_context
 def suites(ctx, as_json):
@@ -93,7 +92,7 @@ def suites_export(name, out_dir, pipes, seconds, as_json):
     click.echo(f"wrote {len(paths)} pipes of '{name}' to {out}")
 
 
-@main.command()
+@click.command()
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
 def pipelines(as_json):
     """List the named pipelines.
@@ -111,10 +110,15 @@ def pipelines(as_json):
     click.echo(table(rows, [*columns, ("description", "description")]))
 
 
-@main.command()
+@click.command()
 @controller_options
 @click.option(
-    "--suite", "suite_name", default="heldout", show_default=True, help="Suite (see 'pipefollow suites')."
+    "--suite",
+    "suite_specs",
+    multiple=True,
+    metavar="SUITE|PATH",
+    help="A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
+    "(repeatable; what 'suites export' writes) [default: heldout].",
 )
 @click.option(
     "--seconds",
@@ -145,7 +149,7 @@ def pipelines(as_json):
 @disturbance_options
 @guard
 def benchmark(
-    controller, lookahead, suite_name, seconds, pipes, seed, plot_path, readings, as_json, disturbance
+    controller, lookahead, suite_specs, seconds, pipes, seed, plot_path, readings, as_json, disturbance
 ):
     """Run a controller deterministically on every pipe of a suite, beside the heuristic.
 
@@ -156,10 +160,10 @@ def benchmark(
     from pipefollow.evaluation.benchmark import benchmark as run_benchmark
     from pipefollow.evaluation.benchmark import format_summary
     from pipefollow.readings import sim_params
-    from pipefollow.sim.suites import get_suite
+    from pipefollow.sim.pipe_names import resolve_suite
 
     check_plot_path(plot_path)
-    suite = get_suite(suite_name)
+    suite = resolve_suite(suite_specs or ["heldout"])
     _pipe_count(suite, pipes)
     agent = load_controller(controller, seed, lookahead)
     reading = apply_readings(readings, getattr(agent, "readings", "default"))

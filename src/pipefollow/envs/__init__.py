@@ -5,3 +5,7 @@
 
 They compose the simulator's stages; they know no learner. May import ``files`` and ``sim``.
 """
+
+from pipefollow.files.compile_cache import configure_numba_cache
+
+configure_numba_cache()  # before any compiled module of this package is decorated

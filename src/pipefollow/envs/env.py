@@ -4,20 +4,28 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Sequence
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
+from gymnasium.error import ResetNeeded
 
+from pipefollow.envs.shell import (
+    MAX_EPISODE_SECONDS,
+    episode_summary,
+    make_setup,
+    observation,
+    parse_reset_options,
+    pipeline_source,
+    start_episode,
+    state_infos,
+)
 from pipefollow.sim import decision as sim
-from pipefollow.sim.disturbance import Disturbance, check, disturbance_from_dict, noise_count
-from pipefollow.sim.pipeline import Pipeline, resolve
-from pipefollow.sim.suites import min_length_for, parse_random_spec
+from pipefollow.sim.disturbance import Disturbance
+from pipefollow.sim.pipeline import Pipeline
 
-# The longest episode the environment runs (a day of 1-s decisions): the registered
-# ``max_episode_steps``, which must not cut any episode shorter than its ``episode_seconds``.
-MAX_EPISODE_SECONDS = 86_400.0
+__all__ = ["MAX_EPISODE_SECONDS", "PipelineFollowingEnv"]
 
 class PipelineFollowingEnv(gym.Env):
     """An AUV following a subsea pipeline with a downward camera (Fjerdingen et al., 2010).
@@ -41,7 +49,8 @@ class PipelineFollowingEnv(gym.Env):
 
     ## Observation Space
 
-    ``Box(4,)`` of float64, in camera coordinates (x lateral, positive to starboard; y forward):
+    ``Box(4,)`` of float64 (``obs_dtype="float32"`` for float32), in camera coordinates (x lateral,
+    positive to starboard; y forward):
 
     | index | observation                                   | min   | max  | unit |
     |-------|-----------------------------------------------|-------|------|------|
@@ -72,11 +81,13 @@ class PipelineFollowingEnv(gym.Env):
     paper's training), at most :data:`MAX_EPISODE_SECONDS`. There is no terminal state: agents
     should bootstrap from the last state. The registered spec's ``max_episode_steps`` is that
     upper bound, so the ``TimeLimit`` wrapper of ``gym.make`` never ends an episode early.
+    ``step`` after the episode's last decision raises :class:`gymnasium.error.ResetNeeded`.
 
     ## Arguments
 
     * ``pipeline``: built-in name (``paper-left``, ``paper-right``, ``paper-validation``), path of a
-      JSON file ``{"points": [[x, y], ...]}`` or a :class:`~pipefollow.sim.pipeline.Pipeline`.
+      JSON file ``{"points": [[x, y], ...]}``, the points themselves (``[[0, 0], [5, 0], [5, 5]]``,
+      m, x north, y east) or a :class:`~pipefollow.sim.pipeline.Pipeline`.
       ``reset(options={"pipeline": ...})`` switches it. ``random`` or ``random:NAME`` (a training
       family of :mod:`pipefollow.sim.suites`; ``random`` is ``mixed``) draws a new pipe from the
       environment's generator at every reset, so auto-resetting vector environments train on a
@@ -90,14 +101,18 @@ class PipelineFollowingEnv(gym.Env):
       noise, missed detections, buried stretches) or a dict of its user-unit keys
       (:func:`~pipefollow.sim.disturbance.disturbance_from_dict`), replacing ``params.disturbance``;
       none by default. Its random parts draw from the environment's seeded ``np_random``.
+    * ``obs_dtype``: ``"float64"`` (default; the simulator's own numbers) or ``"float32"`` (what
+      most neural-network policies take; the observation rounded to float32).
 
     ## Info
 
+    Every value is a NumPy array (0-d for a number), so vector wrappers batch them with their
+    dtype; the vector environment gives the same keys with the batch dimension first.
     ``pipe_in_view``, ``overridden`` (the search behaviour acted), ``e_dist``, ``e_angl``,
     ``progress_m`` (arc length reached along the pipe), ``pose`` (x north, y east, ψ),
     ``nu`` (u, v, r) relative to the water (ν_r; equal to ν without a current), ``waypoint``,
     ``executed_action``, ``time_s``, ``y_near`` (forward position of the near end of the pipe in
-    view, m), ``camera_missed`` (a missed detection hid the pipe), ``current`` (V_c m/s, β_c rad).
+    view, m), ``camera_missed`` (a missed detection hid the pipe), ``current`` ((V_c m/s, β_c rad)).
     Like the observation, ``e_dist``, ``e_angl`` and ``y_near`` hold the last sighting's values
     while the pipe is lost. At the episode's last step also its summary:
     ``episode_pipe_in_view`` (share of decisions ending with the pipe in view),
@@ -109,54 +124,35 @@ class PipelineFollowingEnv(gym.Env):
 
     def __init__(
         self,
-        pipeline: str | os.PathLike | Pipeline = "paper-left",
+        pipeline: str | os.PathLike | Pipeline | Sequence[Sequence[float]] = "paper-left",
         episode_seconds: float = 20.0,
         start_lateral_noise: float = 0.0,
         start_heading_noise_deg: float = 0.0,
         render_mode: str | None = None,
         params: sim.SimParams = sim.PAPER_SIM,
         disturbance: Disturbance | dict[str, Any] | None = None,
+        obs_dtype: str | type = "float64",
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None, 'human' or 'rgb_array', got {render_mode!r}")
-        decision_seconds = params.dt * params.substeps
-        longest = MAX_EPISODE_SECONDS
-        if not (math.isfinite(episode_seconds) and decision_seconds <= episode_seconds <= longest):
-            raise ValueError(
-                f"episode_seconds must be from {decision_seconds:g} to {MAX_EPISODE_SECONDS:g}, "
-                f"got {episode_seconds}"
-            )
-        for name, value in (
-            ("start_lateral_noise", start_lateral_noise),
-            ("start_heading_noise_deg", start_heading_noise_deg),
-        ):
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"{name} must be a finite number ≥ 0, got {value}")
-        if isinstance(disturbance, dict):
-            disturbance = disturbance_from_dict(disturbance)
-        if disturbance is not None:
-            params = params._replace(disturbance=disturbance)
-        check(params.disturbance)
-        self.episode_seconds = float(episode_seconds)
-        self._set_pipeline(pipeline)
-        self.max_decisions = int(round(self.episode_seconds / decision_seconds))
-        self.start_lateral_noise = float(start_lateral_noise)
-        self.start_heading_noise_deg = float(start_heading_noise_deg)
-        self.render_mode = render_mode
-        self.params = params
-        self._packed = sim.pack_params(params)
-        # standard normals of one camera reading (empty without random disturbances)
-        self._z = np.zeros(noise_count(params.disturbance))
-        cam = params.camera
-        self.observation_space = spaces.Box(
-            low=np.array([-cam.half_width, 0.0, -cam.half_width, -1.0]),
-            high=np.array([cam.half_width, cam.depth, cam.half_width, 1.0]),
-            dtype=np.float64,
+        setup = make_setup(
+            episode_seconds, start_lateral_noise, start_heading_noise_deg, params, disturbance, obs_dtype
         )
-        self.action_space = spaces.Box(-1.0, 1.0, (1,), dtype=np.float32)
+        self.setup = setup
+        self.suite, self.pipeline = pipeline_source(pipeline)
+        self.episode_seconds = setup.episode_seconds
+        self.max_decisions = setup.max_decisions
+        self.start_lateral_noise = setup.start_lateral_noise
+        self.start_heading_noise_deg = setup.start_heading_noise_deg
+        self.render_mode = render_mode
+        self.params = setup.params
+        self.observation_space = setup.observation_space
+        self.action_space = setup.action_space
         self.state = np.zeros(sim.STATE_SIZE)
+        self._z = np.zeros(setup.noise_count)  # standard normals of one camera reading
         self._decisions = 0
         self._seen, self._sum_e2 = 0, 0.0
+        self._needs_reset = True
         self.trail: list[tuple[float, float, float]] = []
         self.last_reward: float | None = None  # shown by render()
         self.episode_return = 0.0
@@ -165,53 +161,31 @@ class PipelineFollowingEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         """Start an episode; see the class docstring for the options."""
         super().reset(seed=seed)
-        options = dict(options or {})
-        if "pipeline" in options:
-            self._set_pipeline(options.pop("pipeline"))
-        lateral = options.pop("lateral_offset", None)
-        heading_deg = options.pop("heading_offset_deg", None)
-        if options:
-            raise ValueError(
-                f"unknown reset option(s) {sorted(options)}; "
-                "allowed: pipeline, lateral_offset, heading_offset_deg"
-            )
-        if self.suite is not None:  # a new pipe of the training family every episode
-            self.pipeline = self.suite.draw(self.np_random, min_length_for(self.episode_seconds))
-        # without start noise no number is drawn: the generator then serves the random pipes alone
-        if lateral is None:
-            noise = self.start_lateral_noise
-            lateral = self.np_random.uniform(-1.0, 1.0) * noise if noise > 0.0 else 0.0
-        if heading_deg is None:
-            noise = self.start_heading_noise_deg
-            heading_deg = self.np_random.uniform(-1.0, 1.0) * noise if noise > 0.0 else 0.0
-        p0 = self.pipeline.points[0]
-        h = self.pipeline.start_heading
-        # positive lateral offset = to starboard of the pipe's direction
-        x = p0[0] - math.sin(h) * float(lateral)
-        y = p0[1] + math.cos(h) * float(lateral)
-        psi = h + math.radians(float(heading_deg))
-        z = self._z
-        if z.size:
-            self.np_random.standard_normal(out=z)
-        sim.init_state_packed(
-            self.state, self.pipeline.points, self.pipeline.cumulative, x, y, psi, self._packed, z
-        )
+        opts = parse_reset_options(options)
+        if opts.switches_pipeline:
+            self.suite, self.pipeline = pipeline_source(opts.pipeline)
+        self.pipeline = start_episode(
+            self.state, self.suite, self.pipeline, self.np_random, self.setup, self._z,
+            opts.lateral_offset, opts.heading_offset_deg,
+        )  # fmt: skip
         self._decisions = 0
         self._seen, self._sum_e2 = 0, 0.0
-        self.trail = [(x, y, psi)]
+        self._needs_reset = False
+        s = self.state
+        self.trail = [(s[sim.X], s[sim.Y], s[sim.PSI])]
         self.last_reward, self.episode_return = None, 0.0
         if self.render_mode == "human":
             self.render()
-        return self.state[:4].copy(), self._info()
-
-    def _set_pipeline(self, spec) -> None:
-        """A fixed pipeline, or a training family (``random[:NAME]``) to draw from at every reset."""
-        self.suite = parse_random_spec(spec)
-        # until the first reset, a family shows its first pipe
-        self.pipeline = resolve(spec) if self.suite is None else self.suite.pipe(0)
+        return observation(s, self.setup), state_infos(s)
 
     def step(self, action):
         """One 1-s decision; see the class docstring."""
+        if self._needs_reset:
+            raise ResetNeeded(
+                "the episode has ended: call reset() before step()"
+                if self._decisions
+                else "call reset() before the first step()"
+            )
         arr = np.asarray(action, dtype=np.float64)
         if arr.shape not in ((1,), ()):  # a wrong shape is a caller's bug, not an action
             raise ValueError(f"action must have shape (1,) (or be a number), got shape {arr.shape}")
@@ -222,41 +196,28 @@ class PipelineFollowingEnv(gym.Env):
         s, z = self.state, self._z
         if z.size:
             self.np_random.standard_normal(out=z)
-        r = sim.decide_packed(s, a, self.pipeline.points, self.pipeline.cumulative, self._packed, z)
+        r = sim.decide_packed(s, a, self.pipeline.points, self.pipeline.cumulative, self.setup.packed, z)
         self._decisions += 1
         self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
         if s[sim.IN_VIEW] != 0.0:
             self._seen += 1
             self._sum_e2 += s[sim.E_DIST] ** 2
         truncated = self._decisions >= self.max_decisions
+        self._needs_reset = truncated
         self.last_reward = r
         self.episode_return += r
         if self.render_mode == "human":
             self.render()
-        info = self._info()
+        info = state_infos(s)
         if truncated:  # the episode's summary, for clients that log per episode
-            info["episode_pipe_in_view"] = self._seen / self._decisions
-            info["episode_progress_m"] = s[sim.PROGRESS_MAX]
-            info["episode_rms_e_dist"] = math.sqrt(self._sum_e2 / self._seen) if self._seen else math.nan
-        return s[:4].copy(), r, False, truncated, info
+            info.update(episode_summary(self._decisions, self._seen, self._sum_e2, s[sim.PROGRESS_MAX]))
+        return observation(s, self.setup), r, False, truncated, info
 
-    def _info(self) -> dict[str, Any]:
-        s = self.state
-        return {
-            "pipe_in_view": bool(s[sim.IN_VIEW]),
-            "overridden": bool(s[sim.OVERRIDDEN]),
-            "e_dist": s[sim.E_DIST],
-            "e_angl": s[sim.E_ANGL],
-            "progress_m": s[sim.PROGRESS_MAX],
-            "pose": s[sim.X : sim.PSI + 1].copy(),
-            "nu": s[sim.U : sim.R + 1].copy(),
-            "waypoint": s[sim.WP_X : sim.WP_Y + 1].copy(),
-            "executed_action": s[sim.A_PREV],
-            "time_s": s[sim.TIME],
-            "y_near": s[sim.Y_NEAR],
-            "camera_missed": bool(s[sim.MISSED]),
-            "current": (s[sim.CURRENT_SPEED], s[sim.CURRENT_DIR]),
-        }
+    def __getstate__(self) -> dict[str, Any]:
+        """The environment without its rendering's figure (a copy draws a new one when it renders)."""
+        state = self.__dict__.copy()
+        state["_scene"] = None
+        return state
 
     def render(self):
         """The paper's Fig. 2 view: an RGB array (``"rgb_array"``) or a Matplotlib window (``"human"``).

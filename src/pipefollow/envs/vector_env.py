@@ -8,18 +8,36 @@ for its random pipes, start perturbation and random disturbances, drawn in the s
 single environment draws them.
 
 * **Pipelines**: ``pipeline`` is one spec for all sub-environments or a list of N specs (names,
-  files, :class:`~pipefollow.sim.pipeline.Pipeline` objects, ``random[:FAMILY]``); a random family
-  draws a new pipe from the sub-environment's generator at each of its resets.
-* **Autoreset**: Gymnasium's next-step mode (``metadata["autoreset_mode"]``): the step after an
-  episode's last one resets that sub-environment and returns its first observation, reward 0 and
-  no termination or truncation; the action given to it is ignored.
-  :meth:`~PipelineFollowingVectorEnv.reset_done` resets the finished sub-environments at once
-  instead (the same draws), for clients that reset within the step (Stable-Baselines3).
-* **Infos**: a dict of arrays with Gymnasium's ``_key`` masks: the single environment's scalar
-  entries, ``pose``, ``nu`` and ``waypoint`` as (N, 3) / (N, 2) arrays, and the episode summary
-  (``episode_pipe_in_view``, ``episode_progress_m``, ``episode_rms_e_dist``) where an episode ends.
+  files, points ``[[x, y], ...]``, :class:`~pipefollow.sim.pipeline.Pipeline` objects,
+  ``random[:FAMILY]``); a random family draws a new pipe from the sub-environment's generator at
+  each of its resets.
+* **Autoreset** (``autoreset_mode``, also in ``metadata``), Gymnasium 1.x's three modes:
+
+  - ``NEXT_STEP`` (default): the step after an episode's last one resets that sub-environment
+    and returns its first observation, reward 0 and no termination or truncation; the action
+    given to it is ignored. :meth:`~PipelineFollowingVectorEnv.reset_done` resets the finished
+    sub-environments at once instead (the same draws), for Stable-Baselines3.
+  - ``SAME_STEP``: the step that ends an episode resets the sub-environment and returns its
+    first observation; the last observation and info are in ``info["final_obs"]`` (an object
+    array, ``None`` where no episode ended) and ``info["final_info"]`` (a dict of arrays, with
+    the episode summary), with the masks ``_final_obs`` and ``_final_info``.
+  - ``DISABLED``: nothing resets by itself; ``reset(options={"reset_mask": m})`` resets the
+    sub-environments that ``m`` marks, and stepping one whose episode has ended raises
+    :class:`gymnasium.error.ResetNeeded`.
+
+  ``gymnasium.make_vec`` passes its keyword arguments to this class, so the mode is chosen with
+  ``make_vec(ID, num_envs=N, autoreset_mode=AutoresetMode.SAME_STEP)``; Gymnasium refuses
+  ``vector_kwargs`` for a vector entry point (they are for ``vectorization_mode="sync"`` or
+  ``"async"``, whose wrappers take ``autoreset_mode`` the same way).
+* **Infos**: the single environment's keys, each an array with the batch dimension first
+  (``pose`` (N, 3), ``current`` (N, 2), ...), with Gymnasium's ``_key`` masks, and the episode
+  summary (``episode_pipe_in_view``, ``episode_progress_m``, ``episode_rms_e_dist``) where an
+  episode ends.
+* **Observations**: float64 by default, ``obs_dtype="float32"`` as in the single environment.
 * **Disturbances**: supported, as in the single environment (each sub-environment draws its
   camera reading's normals from its own generator).
+* **Copies**: ``pickle`` and ``copy.deepcopy`` work at any time and the copy continues with the
+  same numbers.
 """
 
 from __future__ import annotations
@@ -30,15 +48,25 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from gymnasium.error import ResetNeeded
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numba import njit
 
-from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.envs.shell import (
+    SHARED_ARGUMENTS,
+    episode_summary,
+    is_points,
+    make_setup,
+    observation,
+    parse_reset_options,
+    pipeline_source,
+    start_episode,
+    state_infos,
+)
 from pipefollow.sim import decision as sim
-from pipefollow.sim.pipeline import Pipeline, resolve
-from pipefollow.sim.suites import min_length_for, parse_random_spec
+from pipefollow.sim.pipeline import Pipeline
 
 
 @njit(cache=True)
@@ -71,29 +99,18 @@ def step_batch(
     return True
 
 
-_SCALARS = (
-    ("pipe_in_view", sim.IN_VIEW, bool),
-    ("overridden", sim.OVERRIDDEN, bool),
-    ("e_dist", sim.E_DIST, float),
-    ("e_angl", sim.E_ANGL, float),
-    ("progress_m", sim.PROGRESS_MAX, float),
-    ("executed_action", sim.A_PREV, float),
-    ("time_s", sim.TIME, float),
-    ("y_near", sim.Y_NEAR, float),
-    ("camera_missed", sim.MISSED, bool),
-)
-_SUMMARY = ("episode_pipe_in_view", "episode_progress_m", "episode_rms_e_dist")
-
-
 class PipelineFollowingVectorEnv(VectorEnv):
     """N pipeline-following AUVs in one batch (module docstring).
 
     Args:
         num_envs: number of sub-environments.
-        pipeline: one pipeline spec for all, or a sequence of ``num_envs`` specs.
+        pipeline: one pipeline spec for all (a name, a file, a :class:`Pipeline`, points
+            ``[[x, y], ...]``, ``random[:FAMILY]``), or a list of ``num_envs`` specs.
+        autoreset_mode: a :class:`gymnasium.vector.AutoresetMode` or its value (``"NextStep"``,
+            ``"SameStep"``, ``"Disabled"``); next-step by default.
         **kwargs: the single environment's arguments (``episode_seconds``, ``start_lateral_noise``,
-            ``start_heading_noise_deg``, ``params``, ``disturbance``), shared by all; rendering is
-            not offered (``render_mode`` must be ``None``).
+            ``start_heading_noise_deg``, ``params``, ``disturbance``, ``obs_dtype``), shared by all;
+            rendering is not offered (``render_mode`` must be ``None``).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
@@ -101,45 +118,57 @@ class PipelineFollowingVectorEnv(VectorEnv):
     def __init__(
         self,
         num_envs: int = 1,
-        pipeline: str | os.PathLike | Pipeline | Sequence[str | os.PathLike | Pipeline] = "paper-left",
+        pipeline: str | os.PathLike | Pipeline | Sequence[Any] = "paper-left",
         render_mode: str | None = None,
         max_episode_steps: int | None = None,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         **kwargs: Any,
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be an integer ≥ 1, got {num_envs!r}")
         if render_mode is not None:
             raise ValueError("the vector environment does not render; use PipelineFollowingEnv")
+        try:
+            mode = AutoresetMode(autoreset_mode)
+        except ValueError:
+            allowed = ", ".join(repr(m.value) for m in AutoresetMode)
+            raise ValueError(f"autoreset_mode must be one of {allowed}, got {autoreset_mode!r}") from None
+        unknown = sorted(set(kwargs) - set(SHARED_ARGUMENTS))
+        if unknown:
+            raise TypeError(
+                f"unknown argument(s) {unknown} of the vector environment; "
+                f"allowed: num_envs, pipeline, autoreset_mode, {', '.join(SHARED_ARGUMENTS)}"
+            )
         n = int(num_envs)
-        specs = list(pipeline) if isinstance(pipeline, list | tuple) else [pipeline] * n
+        one = is_points(pipeline) or not isinstance(pipeline, list | tuple)
+        specs = [pipeline] * n if one else list(pipeline)
         if len(specs) != n:
             raise ValueError(f"pipeline lists {len(specs)} specs for {n} sub-environments")
-        # the single environment checks the arguments and fixes spaces and parameters
-        proto = PipelineFollowingEnv(specs[0], **kwargs)
+        setup = make_setup(**kwargs)
         # gymnasium.make_vec passes the registered spec's max_episode_steps, an upper bound; the
         # episodes end after episode_seconds, as in the single environment
-        if max_episode_steps is not None and max_episode_steps < proto.max_decisions:
+        if max_episode_steps is not None and max_episode_steps < setup.max_decisions:
             raise ValueError(
                 f"max_episode_steps {max_episode_steps} is shorter than the episodes "
-                f"({proto.max_decisions} decisions): set episode_seconds instead"
+                f"({setup.max_decisions} decisions): set episode_seconds instead"
             )
+        self.setup = setup
         self.num_envs = n
         self.render_mode = None
-        self.episode_seconds = proto.episode_seconds
-        self.max_decisions = proto.max_decisions
-        self.start_lateral_noise = proto.start_lateral_noise
-        self.start_heading_noise_deg = proto.start_heading_noise_deg
-        self.params = proto.params
-        self._packed = proto._packed
-        self.single_observation_space = proto.observation_space
-        self.single_action_space = proto.action_space
+        self.autoreset_mode = mode
+        self.metadata = {**type(self).metadata, "autoreset_mode": mode}
+        self.episode_seconds = setup.episode_seconds
+        self.max_decisions = setup.max_decisions
+        self.start_lateral_noise = setup.start_lateral_noise
+        self.start_heading_noise_deg = setup.start_heading_noise_deg
+        self.params = setup.params
+        self.single_observation_space = setup.observation_space
+        self.single_action_space = setup.action_space
         self.observation_space = batch_space(self.single_observation_space, n)
         self.action_space = batch_space(self.single_action_space, n)
-        self._min_length = min_length_for(self.episode_seconds)
-        self.suites = [parse_random_spec(s) for s in specs]
-        self.pipelines = [
-            resolve(s) if f is None else f.pipe(0) for s, f in zip(specs, self.suites, strict=True)
-        ]
+        sources = [pipeline_source(s) for s in specs]
+        self.suites = [suite for suite, _ in sources]
+        self.pipelines = [pipe for _, pipe in sources]
         cap = max(len(p.points) for p in self.pipelines)
         self._points = np.zeros((n, cap, 2))
         self._cum = np.zeros((n, cap))
@@ -147,12 +176,14 @@ class PipelineFollowingVectorEnv(VectorEnv):
         for i, pipe in enumerate(self.pipelines):
             self._load_pipe(i, pipe)
         self.states = np.zeros((n, sim.STATE_SIZE))
-        self._z = np.zeros((n, proto._z.size))
+        self._z = np.zeros((n, setup.noise_count))
         self._rngs: list[np.random.Generator] | None = None
         self._decisions = np.zeros(n, dtype=np.int64)
         self._seen = np.zeros(n, dtype=np.int64)
         self._sum_e2 = np.zeros(n)
-        self._autoreset = np.zeros(n, dtype=bool)
+        # sub-environments whose episode ended (next-step: reset at the next step; disabled: must be reset)
+        self._ended_before = np.zeros(n, dtype=bool)
+        self._started = False
         self._rewards = np.zeros(n)
         self._no_skip = np.zeros(n, dtype=bool)
         self._ended = np.zeros(n, dtype=bool)
@@ -178,96 +209,118 @@ class PipelineFollowingVectorEnv(VectorEnv):
         return self._rngs
 
     def reset(self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None):
-        """Reset every sub-environment; ``seed`` (int: ``seed + i`` for sub-environment i, or a list).
+        """Reset the sub-environments; ``seed`` (int: ``seed + i`` for sub-environment i, or a list).
 
         ``options`` takes the single environment's reset options (``pipeline``,
-        ``lateral_offset``, ``heading_offset_deg``), applied to every sub-environment.
+        ``lateral_offset``, ``heading_offset_deg``), applied to every sub-environment reset, and
+        Gymnasium's ``reset_mask`` (a bool array of shape ``(num_envs,)``): only the sub-environments
+        it marks are reset (and seeded); the others keep their episode. The infos' ``_key`` masks
+        mark the sub-environments reset.
         """
         n = self.num_envs
+        options = dict(options or {})
+        mask = self._reset_mask(options.pop("reset_mask", None))
+        opts = parse_reset_options(options, extra=("reset_mask",))
         seeds = (
             [None if seed is None else seed + i for i in range(n)]
             if not isinstance(seed, list | tuple)
-            else seed
+            else list(seed)
         )
         if len(seeds) != n:
             raise ValueError(f"reset got {len(seeds)} seeds for {n} sub-environments")
         rngs = self.np_random_generators
-        for i, s in enumerate(seeds):
-            if s is not None:
-                rngs[i] = seeding.np_random(s)[0]
-        options = dict(options or {})
-        if "pipeline" in options:
-            spec = options.pop("pipeline")
-            self.suites = [parse_random_spec(spec)] * n
-            for i in range(n):
-                self._load_pipe(i, resolve(spec) if self.suites[i] is None else self.suites[i].pipe(0))
-        lateral = options.pop("lateral_offset", None)
-        heading = options.pop("heading_offset_deg", None)
-        if options:
-            raise ValueError(
-                f"unknown reset option(s) {sorted(options)}; "
-                "allowed: pipeline, lateral_offset, heading_offset_deg"
-            )
-        for i in range(n):
-            self._reset_one(i, lateral, heading)
-        self._autoreset[:] = False
-        return self.states[:, :4].copy(), self._infos(np.zeros(n, dtype=bool))
+        chosen = np.flatnonzero(mask)
+        for i in chosen:
+            if seeds[i] is not None:
+                rngs[i] = seeding.np_random(seeds[i])[0]
+        if opts.switches_pipeline:
+            source = pipeline_source(opts.pipeline)
+            for i in chosen:
+                self.suites[i] = source[0]
+                self._load_pipe(i, source[1])
+        for i in chosen:
+            self._reset_one(int(i), opts.lateral_offset, opts.heading_offset_deg)
+        self._ended_before[mask] = False
+        self._started = True
+        return observation(self.states, self.setup), self._infos(mask)
+
+    def _reset_mask(self, mask) -> np.ndarray:
+        """Gymnasium's ``reset_mask`` checked (as its ``SyncVectorEnv`` checks it); None: all."""
+        n = self.num_envs
+        if mask is None:
+            return np.ones(n, dtype=bool)
+        if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_:
+            raise TypeError(f"reset option reset_mask must be a numpy bool array, got {mask!r}")
+        if mask.shape != (n,):
+            raise ValueError(f"reset option reset_mask must have shape ({n},), got {mask.shape}")
+        if not mask.any():
+            raise ValueError("reset option reset_mask marks no sub-environment")
+        if not self._started and not mask.all():
+            raise ValueError("the first reset must reset every sub-environment (reset_mask all True)")
+        return mask
 
     def _reset_one(self, i: int, lateral=None, heading_deg=None) -> None:
         """Sub-environment ``i``'s reset, with the single environment's draws in its order."""
-        rng = self.np_random_generators[i]
-        if self.suites[i] is not None:
-            self._load_pipe(i, self.suites[i].draw(rng, self._min_length))
-        if lateral is None:
-            noise = self.start_lateral_noise
-            lateral = rng.uniform(-1.0, 1.0) * noise if noise > 0.0 else 0.0
-        if heading_deg is None:
-            noise = self.start_heading_noise_deg
-            heading_deg = rng.uniform(-1.0, 1.0) * noise if noise > 0.0 else 0.0
-        pipe = self.pipelines[i]
-        p0, h = pipe.points[0], pipe.start_heading
-        x = p0[0] - math.sin(h) * float(lateral)
-        y = p0[1] + math.cos(h) * float(lateral)
-        psi = h + math.radians(float(heading_deg))
-        z = self._z[i]
-        if z.size:
-            rng.standard_normal(out=z)
-        m = self._n_points[i]
-        sim.init_state_packed(
-            self.states[i], self._points[i, :m], self._cum[i, :m], x, y, psi, self._packed, z
-        )
+        pipe = start_episode(
+            self.states[i], self.suites[i], self.pipelines[i], self.np_random_generators[i], self.setup,
+            self._z[i], lateral, heading_deg,
+        )  # fmt: skip
+        if pipe is not self.pipelines[i]:
+            self._load_pipe(i, pipe)
         self._decisions[i] = 0
         self._seen[i] = 0
         self._sum_e2[i] = 0.0
 
     def step(self, actions):
-        """One 1-s decision of every sub-environment (next-step autoreset; module docstring)."""
+        """One 1-s decision of every sub-environment, autoresetting by :attr:`autoreset_mode`."""
+        if not self._started:
+            raise ResetNeeded("call reset() before the first step()")
         a = np.asarray(actions, dtype=np.float64).reshape(-1)
         if a.size != self.num_envs:
             raise ValueError(f"expected {self.num_envs} actions (one per sub-environment), got {a.size}")
-        resetting = self._autoreset
+        mode = self.autoreset_mode
+        resetting = self._ended_before
         any_reset = bool(resetting.any())
+        if any_reset and mode == AutoresetMode.DISABLED:
+            raise ResetNeeded(
+                f"the episodes of sub-environment(s) {np.flatnonzero(resetting).tolist()} have ended: "
+                "reset them with reset(options={'reset_mask': mask}) before step()"
+            )
         if self._z.shape[1]:
             rngs = self.np_random_generators
             for i in range(self.num_envs):
                 if not resetting[i]:
                     rngs[i].standard_normal(out=self._z[i])
         skip = resetting if any_reset else self._no_skip
-        rewards, truncated = self._rewards, self._ended
+        rewards, ended = self._rewards, self._ended
         ok = step_batch(
-            self.states, a, self._points, self._cum, self._n_points, self._packed, self._z, skip, rewards,
-            self._decisions, self._seen, self._sum_e2, self.max_decisions, truncated,
+            self.states, a, self._points, self._cum, self._n_points, self.setup.packed, self._z, skip,
+            rewards, self._decisions, self._seen, self._sum_e2, self.max_decisions, ended,
         )  # fmt: skip
         if not ok:
             raise ValueError("action is NaN")
-        if any_reset:
+        if any_reset:  # next-step autoreset
             for i in np.flatnonzero(resetting):
                 self._reset_one(int(i))
-        truncated = truncated.copy()
-        terminated = np.zeros(self.num_envs, dtype=bool)
-        infos = self._infos(truncated)
-        self._autoreset = truncated.copy()  # no terminal states: only truncations end episodes
-        return self.states[:, :4].copy(), rewards.copy(), terminated, truncated, infos
+        truncated = ended.copy()
+        terminated = np.zeros(self.num_envs, dtype=bool)  # no terminal states: only truncations end episodes
+        every = np.ones(self.num_envs, dtype=bool)
+        if mode == AutoresetMode.SAME_STEP and truncated.any():
+            final_obs = np.full(self.num_envs, None, dtype=object)
+            last = observation(self.states, self.setup)
+            for i in np.flatnonzero(truncated):
+                final_obs[i] = last[i]
+            final_info = self._infos(truncated, truncated)
+            for i in np.flatnonzero(truncated):
+                self._reset_one(int(i))
+            infos = self._infos(every)
+            infos["final_obs"], infos["_final_obs"] = final_obs, truncated.copy()
+            infos["final_info"], infos["_final_info"] = final_info, truncated.copy()
+            self._ended_before = np.zeros(self.num_envs, dtype=bool)
+        else:
+            infos = self._infos(every, truncated)
+            self._ended_before = truncated.copy()
+        return observation(self.states, self.setup), rewards.copy(), terminated, truncated, infos
 
     def reset_done(self) -> np.ndarray:
         """Reset the sub-environments whose episode ended at the last step, now; their first observations.
@@ -275,30 +328,22 @@ class PipelineFollowingVectorEnv(VectorEnv):
         The draws are those the next step's autoreset would make; that step then steps them.
         Returns the observations (k, 4) of the k reset sub-environments, in index order.
         """
-        done = np.flatnonzero(self._autoreset)
+        done = np.flatnonzero(self._ended_before)
         for i in done:
             self._reset_one(int(i))
-        self._autoreset[:] = False
-        return self.states[done, :4].copy()
+        self._ended_before[:] = False
+        return observation(self.states[done], self.setup)
 
-    def _infos(self, ended: np.ndarray) -> dict[str, np.ndarray]:
-        s = self.states
-        n = self.num_envs
-        every = np.ones(n, dtype=bool)
+    def _infos(self, present: np.ndarray, ended: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """The infos of all sub-environments, ``_key`` masks ``present``; the summary where ``ended``."""
         infos: dict[str, np.ndarray] = {}
-        for key, slot, kind in _SCALARS:
-            col = s[:, slot]
-            infos[key] = col != 0.0 if kind is bool else col.copy()
-            infos["_" + key] = every
-        infos["pose"], infos["_pose"] = s[:, sim.X : sim.PSI + 1].copy(), every
-        infos["nu"], infos["_nu"] = s[:, sim.U : sim.R + 1].copy(), every
-        infos["waypoint"], infos["_waypoint"] = s[:, sim.WP_X : sim.WP_Y + 1].copy(), every
-        if ended.any():
-            dec = np.maximum(self._decisions, 1)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                rms = np.where(self._seen > 0, np.sqrt(self._sum_e2 / np.maximum(self._seen, 1)), np.nan)
-            values = (self._seen / dec, s[:, sim.PROGRESS_MAX].copy(), rms)
-            for key, v in zip(_SUMMARY, values, strict=True):
-                infos[key] = np.where(ended, v, 0.0 if key != "episode_rms_e_dist" else np.nan)
+        for key, value in state_infos(self.states).items():
+            infos[key], infos["_" + key] = value, present.copy()
+        if ended is not None and ended.any():
+            summary = episode_summary(
+                self._decisions, self._seen, self._sum_e2, self.states[:, sim.PROGRESS_MAX]
+            )
+            for key, value in summary.items():
+                infos[key] = np.where(ended, value, 0.0)  # 0 where masked out, as Gymnasium's SyncVectorEnv
                 infos["_" + key] = ended.copy()
         return infos

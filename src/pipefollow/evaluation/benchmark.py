@@ -1,10 +1,12 @@
 """Benchmark a controller on a suite of pipes: one deterministic episode per pipe, beside the heuristic.
 
-The episodes of the built-in controllers (heuristic, line-of-sight guidance), of CACLA and SARSA
-policies and of exported network policies (:class:`~pipefollow.learners.mlp.MLPPolicy`: PPO, SAC) run in
-one compiled call over all pipes, their points concatenated into one array with offsets; other controllers
-(anything with ``act(obs, explore)``) run through the Gymnasium environment. Both give the same
-numbers (tested). The summary has bootstrap confidence intervals (:mod:`pipefollow.evaluation.stats`).
+The episodes of the built-in controllers (heuristic, line-of-sight guidance) and of exported network
+policies (:class:`~pipefollow.learners.mlp.MLPPolicy`: PPO, SAC) run in one compiled call over all
+pipes, their points concatenated into one array with offsets; the policies of the learner registry
+(SARSA, CACLA, the actor-critic) run in their learner's own compiled loop with σ = 0 and no learning;
+other controllers (anything with ``act(obs, explore)``) run through the environment's episode
+function. All give the same numbers (tested). The summary has bootstrap confidence intervals
+(:mod:`pipefollow.evaluation.stats`).
 
 Definitions:
 
@@ -30,24 +32,26 @@ import numpy as np
 from numba import njit
 
 from pipefollow.evaluation.stats import bootstrap_ci, iqm, paired_difference
-from pipefollow.learners import cacla as cacla_mod
+from pipefollow.learners import episodes as ep
 from pipefollow.learners import mlp as mlp_mod
-from pipefollow.learners import sarsa as sarsa_mod
+from pipefollow.learners.episodes import STAT_NAMES, Run, tracks_of
 from pipefollow.learners.heuristic import Heuristic, heuristic_action
 from pipefollow.learners.los import LOS, los_action
-from pipefollow.learners.rbf import STATE_GRID, grid_features
+from pipefollow.learners.registry import learner_of
 from pipefollow.sim import decision as sim
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.suites import Suite, min_length_for
+from pipefollow.training.compiled import run_episode
 
 SUCCESS_IN_VIEW = 0.95
-HEURISTIC, CACLA, SARSA, MLP, LOS_KIND = 0, 1, 2, 3, 4  # controller kinds of the compiled episodes
+HEURISTIC, MLP, LOS_KIND = 0, 1, 2  # fixed controllers of the compiled episodes
 
-# Columns of the per-episode results.
-RET, IN_VIEW, PROGRESS, SUM_E2, N_SEEN = 0, 1, 2, 3, 4
+# Columns of the per-episode results: those of the episode protocol's statistics, without the time lost.
+_COLUMNS = [ep.RETURN, ep.IN_VIEW, ep.PROGRESS, ep.SUM_E2, ep.N_SEEN]
+RET, IN_VIEW, PROGRESS, SUM_E2, N_SEEN = range(len(_COLUMNS))
 
 # Built-in controllers by name: a factory of an agent with ``act``/``begin_episode``. A controller
-# without a compiled kind (see :func:`_compiled_kind`) runs through the environment.
+# without a compiled loop runs through the environment.
 CONTROLLERS: dict[str, Callable[[], object]] = {
     "heuristic": Heuristic,
     "los": LOS,
@@ -74,103 +78,44 @@ def load_controller(spec: str, seed: int = 0, lookahead: float | None = None):
 
 
 @njit(cache=True)
-def _suite_episodes(
-    kind,
-    w,
-    hp,
-    search_actions,
-    search_psi,
-    points_all,
-    cum_all,
-    offsets,
-    simp,
-    n_decisions,
-    centres,
-    grid_offsets,
-    widths,
-    normalized,
-    theta,
-    layout,
-    z_all,
-    out,
-    poses,
-    lookahead,
-):
-    ps = sim.unpack_params(simp)
-    p = cacla_mod.unpack(hp)
+def _controller_episodes(kind, tracks, run, net, lookahead, z_all, out, poses):
+    """Deterministic episodes of a fixed controller (heuristic, LOS, network), pipe ``e`` in episode ``e``."""
+    ps = sim.unpack_params(run.sim)
+    decision_s = ps.dt * ps.substeps
     s = np.empty(sim.STATE_SIZE)
-    phi = np.empty(w.shape[1])
+    theta, layout = net
     h0, h1 = np.empty(layout[0, 3]), np.empty(layout[0, 3])
     a_out = np.empty(layout[0, 1])
-    for e in range(offsets.shape[0] - 1):
-        pts = points_all[offsets[e] : offsets[e + 1]]
-        cum = cum_all[offsets[e] : offsets[e + 1]]
-        psi0 = math.atan2(pts[1, 1] - pts[0, 1], pts[1, 0] - pts[0, 0])
-        sim.init_state(s, pts, cum, pts[0, 0], pts[0, 1], psi0, ps, z_all[e, 0])
-        poses[e, 0, 0], poses[e, 0, 1], poses[e, 0, 2] = s[sim.X], s[sim.Y], s[sim.PSI]
-        total = 0.0
-        seen = 0
-        sum_e2 = 0.0
-        for t in range(n_decisions):
+    totals = np.empty(ep.TALLY_SIZE)
+    for e in range(tracks.starts.shape[0]):
+        pts, cum, start = ep.pipe_of(tracks, e)
+        sim.init_state(s, pts, cum, start[0], start[1], start[2], ps, z_all[e, 0])
+        totals[:] = 0.0
+        ep.record_pose(poses, e, 0, s)
+        for t in range(run.n_decisions):
             a = 0.0
             if s[sim.IN_VIEW] != 0.0:
                 if kind == HEURISTIC:
                     a = heuristic_action(s[sim.X1], s[sim.Y1])
                 elif kind == MLP:
                     a = mlp_mod.action1(theta, layout, s[:4], h0, h1, a_out)
-                elif kind == LOS_KIND:  # from the observation alone, as the LOS agent (y_near = 0)
+                else:  # LOS from the observation alone, as the LOS agent (y_near = 0)
                     a = los_action(s[sim.X1], s[sim.Y1], s[sim.X2], 0.0, lookahead)
-                else:
-                    grid_features(s[:4], centres, grid_offsets, widths, normalized, phi)
-                    if kind == CACLA:
-                        a_sup = heuristic_action(s[sim.X1], s[sim.Y1]) if p.supervised else 0.0
-                        a, _ = cacla_mod.act(w, phi, 0.0, 0.0, 0.0, a_sup, p)
-                    else:
-                        a = sarsa_mod.choose(w, phi, search_actions, search_psi, 0.0, 0.0)
-            total += sim.decide(s, a, pts, cum, ps, z_all[e, t + 1])
-            if s[sim.IN_VIEW] != 0.0:
-                seen += 1
-                sum_e2 += s[sim.E_DIST] * s[sim.E_DIST]
-            poses[e, t + 1, 0], poses[e, t + 1, 1], poses[e, t + 1, 2] = s[sim.X], s[sim.Y], s[sim.PSI]
-        out[e, RET] = total
-        out[e, IN_VIEW] = seen / n_decisions
-        out[e, PROGRESS] = s[sim.PROGRESS_MAX]
-        out[e, SUM_E2] = sum_e2
-        out[e, N_SEEN] = seen
+            z = z_all[e, t + 1]
+            ep.tally(totals, s, sim.decide(s, a, pts, cum, ps, z))
+            ep.record_pose(poses, e, t + 1, s)
+        ep.close_episode(out, e, s, totals, run.n_decisions, decision_s)
 
 
-def _compiled_kind(agent):
-    """``(kind, weights, packed params, search actions, search ψ)`` for the compiled episodes, or None."""
-    empty = np.zeros((1, 1))
-    if isinstance(agent, mlp_mod.MLPPolicy):
-        return MLP, np.zeros((4, 1)), cacla_mod.pack(cacla_mod.PAPER_CACLA), np.zeros(1), empty
-    if isinstance(agent, Heuristic):
-        return HEURISTIC, np.zeros((4, 1)), cacla_mod.pack(cacla_mod.PAPER_CACLA), np.zeros(1), empty
-    if isinstance(agent, LOS):
-        return LOS_KIND, np.zeros((4, 1)), cacla_mod.pack(cacla_mod.PAPER_CACLA), np.zeros(1), empty
-    if isinstance(agent, cacla_mod.Cacla) and agent.default_supervisor:
-        return CACLA, agent.weights, cacla_mod.pack(agent.params), np.zeros(1), empty
-    if isinstance(agent, sarsa_mod.Sarsa):
-        return (
-            SARSA,
-            agent.weights,
-            cacla_mod.pack(cacla_mod.PAPER_CACLA),
-            agent.search_actions,
-            agent.search_psi,
-        )
-    return None
-
-
+# Fixed controllers with a compiled kind; learners run their own loop (pipefollow.learners.registry).
+_FIXED_KINDS = {Heuristic: HEURISTIC, mlp_mod.MLPPolicy: MLP, LOS: LOS_KIND}
 _NO_NET = (np.zeros(1), np.ones((1, 4), dtype=np.int64))  # theta, layout of "no network"
 
 
 def concatenate(pipes: Sequence[Pipeline]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Points and arc lengths of all pipes in two arrays, pipe ``i`` at ``offsets[i]:offsets[i + 1]``."""
-    offsets = np.zeros(len(pipes) + 1, dtype=np.int64)
-    offsets[1:] = np.cumsum([len(p.points) for p in pipes])
-    points = np.ascontiguousarray(np.concatenate([p.points for p in pipes]))
-    cum = np.ascontiguousarray(np.concatenate([p.cumulative for p in pipes]))
-    return points, cum, offsets
+    tracks = tracks_of(pipes)
+    return tracks.points, tracks.cum, tracks.offsets
 
 
 def _noise_rng(noise_seed: int, k: int) -> np.random.Generator:
@@ -187,59 +132,62 @@ def run_episodes(
 ) -> tuple[np.ndarray, np.ndarray]:
     """One deterministic episode (σ = 0) of ``agent`` per pipe.
 
-    ``noise_seed`` seeds the random disturbances, if any (module docstring).
+    ``noise_seed`` seeds the random disturbances, if any (module docstring). Learners of the
+    registry run their own compiled loop without learning, the heuristic, LOS and exported networks
+    one compiled loop here; other controllers (and learners the compiled loop cannot run, such as
+    a custom supervisor) run through the environment's episode function.
 
     Returns ``(results, poses)``: (pipes, 5) columns return, pipe_in_view, progress_m, Σ e_dist²
     and number of decisions in view; (pipes, decisions + 1, 3) poses (x, y, ψ).
     """
-    n_decisions = int(round(seconds / (params.dt * params.substeps)))
-    out = np.zeros((len(pipes), 5))
-    poses = np.zeros((len(pipes), n_decisions + 1, 3))
-    compiled = _compiled_kind(agent)
-    if compiled is None:
-        _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed)
-        return out, poses
     from pipefollow.sim.disturbance import noise_count
 
+    n_decisions = int(round(seconds / (params.dt * params.substeps)))
+    out = np.zeros((len(pipes), len(STAT_NAMES)))
+    poses = np.zeros((len(pipes), n_decisions + 1, 3))
+    learner = learner_of(agent)
+    fixed = _FIXED_KINDS.get(type(agent))
+    if learner is not None:
+        try:
+            learner.check(agent)
+        except TypeError:
+            learner = None
+    if learner is None and fixed is None:
+        results = np.zeros((len(pipes), len(_COLUMNS)))
+        _env_episodes(agent, pipes, seconds, params, results, poses, noise_seed)
+        return results, poses
+    run = Run(sim.pack_params(params), np.zeros(1), n_decisions, False)
     k = noise_count(params.disturbance)
+    if learner is not None and k == 0:  # one call over all pipes, episode e on pipe e
+        run = run._replace(sigmas=np.zeros(len(pipes)))
+        learner.run(agent, tracks_of(pipes), run, np.random.default_rng(0), np.zeros(0), out, poses)
+        return out[:, _COLUMNS], poses
+    if learner is not None:  # pipe by pipe: each with its own disturbance generator
+        for e, pipe in enumerate(pipes):
+            learner.run(agent, tracks_of([pipe]), run, _noise_rng(noise_seed, e), np.zeros(k), out[e : e + 1],
+                        poses[e : e + 1])  # fmt: skip
+        return out[:, _COLUMNS], poses
     z_all = np.zeros((len(pipes), n_decisions + 1, k))
     if k:
         for e in range(len(pipes)):
             z_all[e] = _noise_rng(noise_seed, e).standard_normal((n_decisions + 1, k))
-    kind, w, hp, sa, spsi = compiled
-    # the heuristic, LOS and the networks compute no features
-    grid = STATE_GRID if kind in (HEURISTIC, MLP, LOS_KIND) else agent.grid
-    grid_arrays, normalized = grid.packed, grid.form == "normalized"
-    theta, layout = (agent.theta, agent.layout) if kind == MLP else _NO_NET
-    points, cum, offsets = concatenate(pipes)
-    _suite_episodes(
-        kind, w, hp, sa, spsi, points, cum, offsets, sim.pack_params(params), n_decisions,
-        *grid_arrays, normalized, theta, layout, z_all, out, poses, getattr(agent, "lookahead", 0.0),
-    )  # fmt: skip
-    return out, poses
+    net = (agent.theta, agent.layout) if fixed == MLP else _NO_NET
+    _controller_episodes(
+        fixed, tracks_of(pipes), run, net, getattr(agent, "lookahead", 0.0), z_all, out, poses
+    )
+    return out[:, _COLUMNS], poses
 
 
 def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0) -> None:
-    """:func:`run_episodes` through the Gymnasium environment, for controllers without a compiled kind."""
+    """:func:`run_episodes` through the environment's episode function, for any controller."""
     from pipefollow.envs.env import PipelineFollowingEnv
 
     for i, pipe in enumerate(pipes):
         env = PipelineFollowingEnv(pipe, seconds, params=params)
         env.np_random = _noise_rng(noise_seed, i)
-        agent.begin_episode(0.0)
-        obs, info = env.reset()
-        done = False
-        seen, total, sum_e2 = 0, 0.0, 0.0
-        while not done:
-            a = agent.act(obs, explore=False) if info["pipe_in_view"] else 0.0
-            obs, r, terminated, truncated, info = env.step([a])
-            total += r
-            if info["pipe_in_view"]:
-                seen += 1
-                sum_e2 += info["e_dist"] ** 2
-            done = terminated or truncated
-        out[i] = (total, seen / env.max_decisions, info["progress_m"], sum_e2, seen)
-        poses[i] = np.array(env.trail)
+        stats = run_episode(env, agent)
+        out[i] = np.asarray(stats.as_full_row())[_COLUMNS]
+        poses[i] = stats.poses
 
 
 @dataclass(frozen=True)

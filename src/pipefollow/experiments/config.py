@@ -17,7 +17,8 @@ from typing import Any
 
 from pipefollow import readings as rd
 from pipefollow.files.atomic import read_text_file
-from pipefollow.training.agents import ALGORITHMS
+from pipefollow.learners.registry import NAMES as ALGORITHMS
+from pipefollow.learners.registry import check_options
 
 # Bounds that keep a run finite (a day of simulated time per episode is far beyond any use).
 MAX_EPISODES = 10_000_000
@@ -53,19 +54,25 @@ class TrialConfig:
 
     name: str = _f("trial", "identifier, used in file names (letters, digits, '-', '_', '.')")
     label: str = _f("", "label in figures and the report (default: the name)")
-    algorithm: str = _f("cacla", "learner: sarsa (eq. 3) or cacla (eqs. 5-7)", choices=ALGORITHMS)
+    algorithm: str = _f(
+        "cacla",
+        "learner: sarsa (eq. 3), cacla (eqs. 5-7) or ac (the general actor-critic, eq. 9)",
+        choices=ALGORITHMS,
+    )
     skew_deg: float = _f(0.0, "CACLA skew step Δγ (deg, eq. 15); 0 = Gaussian exploration (paper §4.1)")
-    supervised: bool = _f(False, "supervised CACLA with the heuristic as supervisor (eqs. 10-13)")
+    supervised: bool = _f(
+        False, "the heuristic as supervisor: supervised CACLA (eqs. 10-13) or actor-critic (eq. 11)"
+    )
     phases: tuple[Phase, ...] = _f((Phase(),), "training phases in order (paper §4.2: left, then right)")
     episode_seconds: float = _f(20.0, "episode length (s); one decision per second (paper §4.1)")
     sigma_start: float = _f(1.0, "exploration σ of the first episode, normalized action units (paper §4)")
     sigma_end: float = _f(0.01, "exploration σ of the last episode of each phase (paper §4)")
-    alpha_v: float = _f(0.4, "CACLA critic step size α_V (paper §4)")
-    alpha_pi: float = _f(0.2, "CACLA actor step size α_π (paper §4)")
+    alpha_v: float = _f(0.4, "CACLA and actor-critic: critic step size α_V (paper §4)")
+    alpha_pi: float = _f(0.2, "CACLA and actor-critic: actor step size α_π (paper §4)")
     alpha_q: float = _f(0.4, "SARSA step size α (paper §4)")
     discount: float = _f(0.8, "discount factor γ_d (paper §4)")
-    delta_k: float = _f(0.05, "supervised CACLA: increment Δk of k(s) per visit (paper §4.1)")
-    forgetting: float = _f(0.0, "supervised CACLA: per-update decay of k's weights; the paper uses none")
+    delta_k: float = _f(0.05, "supervised learners: increment Δk of k(s) per visit (paper §4.1)")
+    forgetting: float = _f(0.0, "supervised learners: per-update decay of k's weights; the paper uses none")
     readings: tuple[str, ...] = _f(
         (), "readings of the paper's open points, as key=value ids (docs/design.md); later ones win"
     )
@@ -218,8 +225,10 @@ def validate(obj, where: str) -> None:
 
         if not re.fullmatch(NAME_PATTERN, obj.name):
             raise bad("name", "letters, digits and any of - _ . @ = , +", obj.name)
-        if obj.algorithm == "sarsa" and (obj.skew_deg or obj.supervised):
-            raise ConfigError(f"{where}: skew_deg and supervised apply to algorithm 'cacla' only")
+        try:
+            check_options(obj.algorithm, skew_deg=obj.skew_deg, supervised=obj.supervised)
+        except ValueError as e:
+            raise ConfigError(f"{where}: {e}") from None
         _check_readings(obj.readings, f"{where}: key 'readings'")
         for key in ("alpha_v", "alpha_pi", "alpha_q", "discount"):
             v = getattr(obj, key)
@@ -290,7 +299,7 @@ def parse_experiment(data: dict, source: str) -> ExperimentConfig:
 
 
 def shipped_experiments() -> list[str]:
-    """Names of the experiments shipped with the package (``paper``, ``readings``)."""
+    """Names of the experiments shipped with the package (``paper``, ``readings``, ``reference-learners``)."""
     folder = resources.files("pipefollow.experiments")
     return sorted(p.name[: -len(".toml")] for p in folder.iterdir() if p.name.endswith(".toml"))
 

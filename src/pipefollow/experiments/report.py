@@ -41,6 +41,7 @@ from pipefollow.experiments.summary import (
     read_rows,
     read_training,
 )
+from pipefollow.learners.registry import learner as learner_of_name
 
 FIGURES = {
     "fig5": "Fig. 5: SARSA versus CACLA and supervised CACLA",
@@ -76,7 +77,7 @@ def _setup_lines(f: Findings) -> list[str]:
         "|---|---|---|---|---|",
     ]
     for t in cfg.trials:
-        learner = "SARSA" if t.algorithm == "sarsa" else ("supervised " if t.supervised else "") + "CACLA"
+        learner = ("supervised " if t.supervised else "") + learner_of_name(t.algorithm).title
         if t.skew_deg:
             learner += f", Δγ = {t.skew_deg:g}°"
         phases = ", then ".join(f"`{p.pipeline}` × {p.episodes}" for p in t.phases)

@@ -9,15 +9,14 @@ import numpy as np
 
 from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.experiments.config import TrialConfig
-from pipefollow.learners.cacla import Cacla
 from pipefollow.learners.exploration import linear_sigma
 from pipefollow.learners.heuristic import Heuristic
-from pipefollow.readings import sigma_scale, sim_params
-from pipefollow.sim.disturbance import disturbance_from_dict
+from pipefollow.learners.registry import learner
+from pipefollow.readings import sigma_scale
+from pipefollow.sim.disturbance import NO_DISTURBANCE, disturbance_from_dict
 from pipefollow.sim.suites import Suite, min_length_for, resolve_training
-from pipefollow.training.agents import make_agent
-from pipefollow.training.compiled import run_episode, train_compiled
-from pipefollow.training.random_pipes import train_random_compiled
+from pipefollow.training.compiled import run_episode
+from pipefollow.training.phases import agent_rng, sim_under, train_phases
 
 
 @dataclass(frozen=True)
@@ -52,28 +51,19 @@ class TrialResult:
 
 
 def build_agent(config: TrialConfig, rng: np.random.Generator | None = None):
-    """A fresh agent for ``config`` under its readings."""
-    kw = {"rng": rng, "readings": config.reading, "discount": config.discount}
-    if config.algorithm == "sarsa":
-        return make_agent("sarsa", alpha=config.alpha_q, **kw)
-    return make_agent(
-        "cacla",
-        skew_deg=config.skew_deg,
-        supervised=config.supervised,
-        alpha_v=config.alpha_v,
-        alpha_pi=config.alpha_pi,
-        delta_k=config.delta_k,
-        forgetting=config.forgetting,
-        **kw,
-    )
+    """A fresh agent for ``config`` under its readings: its learner's options and step sizes."""
+    kind = learner(config.algorithm)
+    options = {name: getattr(config, name) for name in kind.options}
+    steps = {param: getattr(config, field) for field, param in kind.step_sizes.items()}
+    return kind.make(config.reading, rng, **options, **steps)
 
 
 class ActorOnly:
-    """A supervised CACLA agent's pure actor, clip(A(s)), as a deterministic controller."""
+    """A supervised agent's pure actor, clip(A(s)), as a deterministic controller."""
 
     name = "actor"
 
-    def __init__(self, agent: Cacla) -> None:
+    def __init__(self, agent) -> None:
         self.agent = agent
 
     def begin_episode(self, sigma: float) -> None:  # noqa: D102
@@ -86,33 +76,26 @@ class ActorOnly:
 def run_trial(config: TrialConfig, seed: int) -> TrialResult:
     """Train the learner of ``config`` with ``seed`` (compiled path) and evaluate it deterministically."""
     t0 = time.perf_counter()
-    rng = np.random.default_rng(seed)
-    agent = build_agent(config, rng)
-    params = sim_params(config.reading)
-    if config.disturbance:
-        params = params._replace(disturbance=disturbance_from_dict(config.disturbance))
-    # random disturbances draw from a stream of their own, as `pipefollow train` does
-    env_rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
-    scale = sigma_scale(config.reading)  # σ in normalized action units
+    agent = build_agent(config, agent_rng(seed))
+    disturbance = disturbance_from_dict(config.disturbance) if config.disturbance else NO_DISTURBANCE
+    params = sim_under(config.reading, disturbance)
+    stats = train_phases(
+        agent,
+        [(ph.pipeline, ph.episodes) for ph in config.phases],
+        seed=seed,
+        readings=config.reading,
+        disturbance=disturbance,
+        episode_seconds=config.episode_seconds,
+        sigma_start=config.sigma_start,
+        sigma_end=config.sigma_end,
+    )
+    scale = sigma_scale(config.reading)  # σ in normalized action units, as train_phases runs it
     sigma_start, sigma_end = config.sigma_start * scale, config.sigma_end * scale
-    stats, phase, sigma = [], [], []
-    pipe_rng = None
-    for i, ph in enumerate(config.phases):
-        pipe = resolve_training(ph.pipeline)
-        schedule = dict(
-            episode_seconds=config.episode_seconds,
-            sigma_start=sigma_start,
-            sigma_end=sigma_end,
-            params=params,
-            env_rng=env_rng,
-        )
-        if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the trial's generator
-            pipe_rng = pipe_rng if pipe_rng is not None else rng.spawn(1)[0]
-            stats.append(train_random_compiled(agent, pipe, ph.episodes, pipe_rng=pipe_rng, **schedule))
-        else:
-            stats.append(train_compiled(agent, pipe, ph.episodes, **schedule))
-        phase.append(np.full(ph.episodes, i))
-        sigma.append([linear_sigma(e, ph.episodes, sigma_start, sigma_end) for e in range(ph.episodes)])
+    phase = [np.full(ph.episodes, i) for i, ph in enumerate(config.phases)]
+    sigma = [
+        [linear_sigma(e, ph.episodes, sigma_start, sigma_end) for e in range(ph.episodes)]
+        for ph in config.phases
+    ]
     eval_name = config.evaluate_on or config.phases[-1].pipeline
     eval_seconds = config.evaluate_seconds if config.evaluate_on else config.episode_seconds
     eval_pipe = resolve_training(eval_name)
@@ -120,7 +103,7 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
         eval_pipe = eval_pipe.pipe(0, min_length_for(eval_seconds))
     env = PipelineFollowingEnv(eval_pipe, eval_seconds, params=params)
     controllers = {"learned": agent, "heuristic": Heuristic()}
-    if config.algorithm == "cacla" and config.supervised:
+    if agent.supervised:
         controllers["actor"] = ActorOnly(agent)
     evaluation, poses = {}, {}
     for name, controller in controllers.items():  # the same seed: the same disturbances, if any

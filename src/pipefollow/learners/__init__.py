@@ -1,6 +1,13 @@
 """Controllers and learners on the simulator's observation.
 
 ``rbf`` (eqs. 17–18), ``exploration`` (eqs. 8, 14), ``sums`` (fixed-order dot products),
-``heuristic`` and ``los`` (fixed controllers), ``cacla`` (eqs. 5–8, 10–15), ``sarsa`` (eq. 3),
-``mlp`` (an exported network policy). May import ``files`` and ``sim``.
+``heuristic`` and ``los`` (fixed controllers), ``episodes`` (the episode protocol of every compiled
+loop), ``protocol`` (what a learner module gives the layers above), ``actor_agent`` (the agent
+class of the actor-critic learners), the learners ``cacla``
+(eqs. 5–8, 10–15), ``sarsa`` (eq. 3) and ``actor_critic`` (eqs. 9, 11), ``registry`` (the learners
+by name), ``mlp`` (an exported network policy). May import ``files`` and ``sim``.
 """
+
+from pipefollow.files.compile_cache import configure_numba_cache
+
+configure_numba_cache()  # before any compiled module of this package is decorated

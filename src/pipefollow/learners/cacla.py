@@ -13,19 +13,24 @@ drawn by the caller from a ``numpy.random.Generator`` and passed in as standard 
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numba.np.unsafe.ndarray import to_fixed_tuple
 
-from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals
+from pipefollow.learners import episodes as ep
+from pipefollow.learners.actor_agent import A, ActorAgent, G, K, V, clip1
+from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals, skew_step_to_gamma
 from pipefollow.learners.heuristic import heuristic_action
-from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite
+from pipefollow.learners.protocol import LearnerKind
+from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite, grid_features, state_grid
 from pipefollow.learners.sums import dot
-
-V, A, G, K = 0, 1, 2, 3  # rows of the weight matrix: critic, actor, skew, supervisor trust
+from pipefollow.sim import decision as sim
+from pipefollow.sim import records
 
 # Readings of open points (docs/design.md, "Readings"); codes as stored in CaclaParams.
 SAMPLE_LOCATION, SAMPLE_CENTRED, SAMPLE_MOMENTS = 0, 1, 2  # skew sample: location/scale, centred, mean/s.d.
@@ -54,22 +59,18 @@ class CaclaParams(NamedTuple):
 PAPER_CACLA = CaclaParams()
 
 
+_N_PARAMS = records.size(PAPER_CACLA)
+
+
 def pack(p: CaclaParams) -> np.ndarray:
     """``p`` as a float array for compiled code (a NamedTuple argument costs µs per call)."""
-    return np.array(p, dtype=np.float64)
+    return records.pack(p)
 
 
 @njit(cache=True)
 def unpack(a):
-    """Inverse of :func:`pack` inside compiled code."""
-    flags = int(a[9]), int(a[10]), int(a[11]), int(a[12])
-    return CaclaParams(a[0], a[1], a[2], a[3], a[4], a[5] != 0.0, a[6], a[7], a[8], *flags)
-
-
-@njit(cache=True)
-def clip1(x):
-    """Clip to the action range [-1, 1]."""
-    return min(1.0, max(-1.0, x))
+    """Inverse of :func:`pack` inside compiled code: the record, its flags and codes as floats."""
+    return CaclaParams(*to_fixed_tuple(a, _N_PARAMS))
 
 
 @njit(cache=True)
@@ -136,17 +137,23 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p):
                 inc = inc / norm2 if norm2 > 0.0 else 0.0
             for i in range(phi.shape[0]):
                 w[G, i] += inc * phi[i]
-    if p.supervised:  # eq. 13
-        if p.forgetting > 0.0:
-            w[K] *= 1.0 - p.forgetting
-        if (p.k_update == K_EVERY or delta > 0.0) and dot(w[K], phi) < p.k_max:
-            inc = p.delta_k
-            if p.k_step == STEP_GAMMA:  # k(s) itself moves by Δk
-                norm2 = dot(phi, phi)
-                inc = inc / norm2 if norm2 > 0.0 else 0.0
-            for i in range(phi.shape[0]):
-                w[K, i] += inc * phi[i]
+    if p.supervised:
+        trust_step(w, phi, delta, p)
     return delta
+
+
+@njit(cache=True)
+def trust_step(w, phi, delta, p):
+    """Eq. 13: k(s) grows by Δk (capped at k_max), after the optional forgetting of its weights."""
+    if p.forgetting > 0.0:
+        w[K] *= 1.0 - p.forgetting
+    if (p.k_update == K_EVERY or delta > 0.0) and dot(w[K], phi) < p.k_max:
+        inc = p.delta_k
+        if p.k_step == STEP_GAMMA:  # k(s) itself moves by Δk
+            norm2 = dot(phi, phi)
+            inc = inc / norm2 if norm2 > 0.0 else 0.0
+        for i in range(phi.shape[0]):
+            w[K, i] += inc * phi[i]
 
 
 @njit(cache=True)
@@ -178,12 +185,7 @@ def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, no
     return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp)), True
 
 
-def _draw_count(p: CaclaParams) -> int:
-    """Standard normals per exploring decision: skew-normal samples take two."""
-    return 2 if p.skew > 0.0 else 1
-
-
-class Cacla:
+class Cacla(ActorAgent):
     """A CACLA agent on RBF features; works on any Gymnasium env with a Box observation.
 
     Args:
@@ -193,6 +195,13 @@ class Cacla:
         supervisor: ``obs -> a_sup`` for supervised CACLA (default: the paper's heuristic).
     """
 
+    algorithm = "cacla"
+    pack = staticmethod(pack)
+    act_packed = staticmethod(act_packed)
+    act_heuristic_packed = staticmethod(act_heuristic_packed)
+    update_packed = staticmethod(update_packed)
+    update_next_packed = staticmethod(update_next_packed)
+
     def __init__(
         self,
         params: CaclaParams = PAPER_CACLA,
@@ -201,123 +210,12 @@ class Cacla:
         seed: int | None = None,
         supervisor: Callable[[np.ndarray], float] | None = None,
     ) -> None:
-        self.params = params
-        self.grid = grid
-        self.readings = "default"  # id of the readings it learns under (set by make_agent)
-        self.rng = rng if rng is not None else np.random.default_rng(seed)
-        self.weights = np.zeros((4, grid.n_features))
-        self.sigma = 1.0
-        self._packed = pack(params)
-        self._draws = _draw_count(params)
-        self.default_supervisor = supervisor is None  # the compiled training loop knows only this one
-        if supervisor is None:
-
-            def supervisor(obs):
-                return heuristic_action(float(obs[0]), float(obs[1]))
-
-        self.supervisor = supervisor
-        self._pending = None
-        self._phi_cache: tuple[bytes, np.ndarray] | None = None  # φ(s') of the last update
-
-    algorithm = "cacla"
+        super().__init__(params, grid, rng, seed, supervisor)
 
     @property
     def name(self) -> str:
         """Short algorithm label."""
         return cacla_label(self.params)
-
-    @property
-    def discount(self) -> float:
-        """The discount factor γ_d."""
-        return self.params.discount
-
-    def begin_episode(self, sigma: float) -> None:
-        """Set the exploration σ for the coming episode."""
-        self.sigma = float(sigma)
-        self._pending = None
-
-    def features(self, obs) -> np.ndarray:
-        """φ(obs)."""
-        return self.grid.features(obs)
-
-    def _cached_features(self, obs, key: bytes) -> np.ndarray:
-        """φ(obs), reusing φ(s') of the last update when ``obs`` is that s' (the usual case)."""
-        cache = self._phi_cache
-        if cache is not None and cache[0] == key:
-            return cache[1]
-        phi = self.features(obs)
-        self._phi_cache = (key, phi)
-        return phi
-
-    def act(self, obs, explore: bool = True) -> float:
-        """Executed action for ``obs``; with ``explore`` it samples with the current ``sigma``."""
-        key = _key(obs)
-        phi = self._cached_features(obs, key)
-        sigma = self.sigma if explore else 0.0
-        z0 = z1 = 0.0
-        if sigma > 0.0:
-            z0 = z1 = self.rng.standard_normal()
-            if self._draws == 2:
-                z1 = self.rng.standard_normal()
-        if self.default_supervisor:
-            x = np.asarray(obs, dtype=np.float64)
-            a, a_rl, a_sup = act_heuristic_packed(self.weights, phi, sigma, z0, z1, x[0], x[1], self._packed)
-        else:
-            a_sup = self.supervisor(obs) if self.params.supervised else 0.0
-            a, a_rl = act_packed(self.weights, phi, sigma, z0, z1, a_sup, self._packed)
-        self._pending = (key, phi, a_rl, a_sup)
-        return a
-
-    def actor(self, obs) -> float:
-        """The pure actor's deterministic action clip(A(s)), without the supervisor."""
-        return clip1(dot(self.weights[A], self.features(obs)))
-
-    def update(self, obs, action, reward: float, next_obs, discount: float) -> float:
-        """Learn from ``obs`` → ``next_obs``; ``discount`` is γ_d^n (0 if terminal). Returns δ.
-
-        Uses the learner's own action of the last :meth:`act` call on ``obs``; without one,
-        ``action`` is taken as the learner's action.
-        """
-        key = _key(obs)
-        if self._pending is not None and self._pending[0] == key:
-            _, phi, a_rl, a_sup = self._pending
-        else:
-            phi = self._cached_features(obs, key)
-            a_rl = float(action)
-            a_sup = self.supervisor(obs) if self.params.supervised else 0.0
-        self._pending = None
-        next_obs = np.asarray(next_obs, dtype=np.float64)
-        next_key = next_obs.tobytes()
-        cache = self._phi_cache
-        if cache is not None and cache[0] == next_key:
-            return update_packed(
-                self.weights, phi, a_rl, a_sup, float(reward), float(discount), cache[1], self._packed
-            )
-        if next_obs.shape != (self.grid.ndim,):
-            raise ValueError(f"next_obs must have {self.grid.ndim} entries, got shape {next_obs.shape}")
-        phi_next = np.empty(self.grid.n_features)
-        delta, finite = update_next_packed(
-            self.weights,
-            phi,
-            a_rl,
-            a_sup,
-            float(reward),
-            float(discount),
-            next_obs,
-            self.grid.packed,
-            self.grid.form == "normalized",
-            phi_next,
-            self._packed,
-        )
-        if not finite:
-            raise ValueError(f"next_obs must be finite, got {next_obs}")
-        self._phi_cache = (next_key, phi_next)
-        return delta
-
-
-def _key(obs) -> bytes:
-    """An observation's identity for the caches: its float64 bytes."""
-    return np.asarray(obs, dtype=np.float64).tobytes()
 
 
 SAMPLE_SUFFIX = {SAMPLE_LOCATION: "", SAMPLE_CENTRED: " centred", SAMPLE_MOMENTS: " mean/s.d."}
@@ -329,3 +227,165 @@ def cacla_label(p: CaclaParams) -> str:
     if p.skew > 0.0:
         name += f", skew {p.skew * DEGREES_PER_GAMMA:g}°" + SAMPLE_SUFFIX[p.skew_sample]
     return name
+
+
+def skew_in_gamma_units(skew_deg: float, unit: str = "deg45") -> float:
+    """Δγ of eq. 15 from degrees to units of γ under the ``skew_unit`` reading (``deg45`` or ``rad``).
+
+    Raises:
+        ValueError: ``skew_deg`` negative or not finite.
+    """
+    gamma = skew_step_to_gamma(skew_deg)  # 45° is one unit of γ; checks the value
+    return math.radians(skew_deg) if unit == "rad" else gamma
+
+
+def params_under(r, skew_deg: float = 0.0, **fields) -> CaclaParams:
+    """CACLA's parameter record under the readings ``r``, with Δγ from degrees and other ``fields``.
+
+    ``r`` is a :class:`pipefollow.readings.Readings` (its ``skew_unit``, ``gamma_max``,
+    ``skew_sample``, ``skew_step``, ``k_update`` and ``k_step``).
+    """
+    return CaclaParams(
+        skew=skew_in_gamma_units(skew_deg, r.skew_unit),
+        gamma_max=r.gamma_max,
+        skew_sample={"location": SAMPLE_LOCATION, "centred": SAMPLE_CENTRED, "moments": SAMPLE_MOMENTS}[
+            r.skew_sample
+        ],
+        skew_step=STEP_GAMMA if r.skew_step == "gamma" else STEP_WEIGHTS,
+        k_update=K_EVERY if r.k_update == "every" else K_POSITIVE,
+        k_step=STEP_GAMMA if r.k_step == "k" else STEP_WEIGHTS,
+        **fields,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# The compiled episodes (pipefollow.learners.episodes) and what the layers above need
+
+
+@njit(cache=True)
+def episodes(w, hp, tracks, run, grid, rng, env_rng, dz, stats, poses):
+    """CACLA's episodes in compiled code: the same numbers as its agent in the environment.
+
+    ``rng`` draws the exploration, ``env_rng`` the disturbances (:mod:`pipefollow.learners.episodes`).
+    """
+    p = unpack(hp)
+    ps = sim.unpack_params(run.sim)
+    decision_s = ps.dt * ps.substeps
+    nf = w.shape[1]
+    s = np.empty(sim.STATE_SIZE)
+    phi, phi_pend, phi_next = np.empty(nf), np.empty(nf), np.empty(nf)
+    book, totals = np.empty(ep.BOOK_SIZE), np.empty(ep.TALLY_SIZE)
+    skewed = p.skew > 0.0
+    n = run.n_decisions
+    for e in range(run.sigmas.shape[0]):
+        sigma = run.sigmas[e]
+        points, cum, start = ep.pipe_of(tracks, e)
+        ep.start_episode(s, points, cum, start, ps, env_rng, dz, book, totals, poses, e)
+        have_phi = False  # phi already holds φ(s) of the current state (computed for the last update)
+        a_rl_p = a_sup_p = 0.0
+        for t in range(n):
+            visible = s[sim.IN_VIEW] != 0.0
+            a = a_rl = a_sup = 0.0
+            if visible:
+                if not have_phi:
+                    grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi)
+                z0 = z1 = 0.0
+                if sigma > 0.0:
+                    z0 = rng.standard_normal()
+                    z1 = rng.standard_normal() if skewed else z0
+                a_sup = heuristic_action(s[sim.X1], s[sim.Y1]) if p.supervised else 0.0
+                a, a_rl = act(w, phi, sigma, z0, z1, a_sup, p)
+            have_phi = False
+            r = ep.decide(s, a, points, cum, ps, env_rng, dz, totals, poses, e, t)
+            if not run.learn:
+                continue
+            ep.carry(book, visible, r, p.discount)
+            if visible:
+                phi, phi_pend = phi_pend, phi  # keep φ(s) for the update; no copy
+                a_rl_p, a_sup_p = a_rl, a_sup
+            if ep.due(book, s[sim.IN_VIEW] != 0.0, t == n - 1):
+                grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
+                update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p)
+                book[ep.PENDING] = 0.0
+                phi, phi_next = phi_next, phi  # φ(s') is the next decision's φ(s)
+                have_phi = True
+        ep.close_episode(stats, e, s, totals, n, decision_s)
+
+
+def check_compiled(agent: Cacla) -> None:
+    """Refuse what the compiled loop cannot run: a supervisor other than the paper's heuristic.
+
+    Raises:
+        TypeError: a custom supervisor.
+    """
+    if agent.params.supervised and not agent.default_supervisor:
+        raise TypeError(
+            "the compiled loop supervises with the heuristic only; use train() for other supervisors"
+        )
+
+
+def run_compiled(agent: Cacla, tracks, run, env_rng, dz, stats, poses) -> None:
+    """:func:`episodes` for ``agent``."""
+    episodes(agent.weights, pack(agent.params), tracks, run, ep.features_of(agent.grid), agent.rng, env_rng,
+             dz, stats, poses)  # fmt: skip
+
+
+def policy_fields(agent: Cacla) -> dict:
+    """The arrays of a policy file: parameters and grid as JSON, the weights."""
+    params = {k: (bool(v) if isinstance(v, bool) else v) for k, v in agent.params._asdict().items()}
+    return {
+        "params": np.array(json.dumps(params)),
+        "grid": np.array(json.dumps(agent.grid.to_dict())),
+        "weights": agent.weights,
+    }
+
+
+def from_policy(data: dict, version: int, seed: int | None = None, agent_class: type = None):
+    """An agent and its weights from a policy file's arrays (see :func:`policy_fields`).
+
+    Files before format 3 had a boolean ``skew_centred`` and were trained with eq. 15 moving the
+    weights by Δγ·φ(s): they load with ``skew_step=weights``.
+    """
+    params = json.loads(str(data["params"]))
+    grid = RBFGrid.from_dict(json.loads(str(data["grid"])))
+    weights = np.asarray(data["weights"], dtype=np.float64)
+    trained = str(data.get("readings", "default"))
+    if version < 3 and isinstance(params, dict):
+        centred = params.pop("skew_centred", False)
+        params["skew_sample"] = SAMPLE_CENTRED if centred else SAMPLE_LOCATION
+        params["skew_step"] = STEP_WEIGHTS
+        if params.get("skew", 0.0) > 0.0:
+            trained = "skew_step=weights" + (",skew_sample=centred" if centred else "")
+    agent = (agent_class or Cacla)(CaclaParams(**params), grid=grid, seed=seed)
+    agent.readings = trained
+    return agent, weights
+
+
+def make(r, rng: np.random.Generator | None = None, *, skew_deg: float = 0.0, supervised: bool = False,
+         **fields) -> Cacla:  # fmt: skip
+    """A fresh CACLA agent under the readings ``r`` (fields: those of :class:`CaclaParams`)."""
+    params = params_under(r, skew_deg, supervised=supervised, **fields)
+    agent = Cacla(params, grid=state_grid(r.rbf, r.rbf_width), rng=rng)
+    agent.readings = r.id
+    return agent
+
+
+LEARNER = LearnerKind(
+    name="cacla",
+    title="CACLA",
+    summary="CACLA (eqs. 5-8; skew-normal exploration eqs. 14-15; supervised eqs. 10-13)",
+    agent_class=Cacla,
+    options=frozenset({"skew_deg", "supervised"}),
+    step_sizes={
+        "alpha_v": "alpha_v",
+        "alpha_pi": "alpha_pi",
+        "discount": "discount",
+        "delta_k": "delta_k",
+        "forgetting": "forgetting",
+    },  # fmt: skip
+    make=make,
+    check=check_compiled,
+    run=run_compiled,
+    policy_fields=policy_fields,
+    from_policy=from_policy,
+)

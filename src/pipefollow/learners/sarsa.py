@@ -9,13 +9,25 @@ not 21 × 22,932 multiplications. The greedy action is the best of the 21-point 
 
 from __future__ import annotations
 
+import json
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from pipefollow.learners.rbf import ACTION_GRID, STATE_GRID, RBFGrid, dim_activations
+from pipefollow.learners import episodes as ep
+from pipefollow.learners.protocol import LearnerKind
+from pipefollow.learners.rbf import (
+    ACTION_GRID,
+    STATE_GRID,
+    RBFGrid,
+    action_grid,
+    dim_activations,
+    grid_features,
+    state_grid,
+)
 from pipefollow.learners.sums import dot, matvec
+from pipefollow.sim import decision as sim
 
 
 class SarsaParams(NamedTuple):
@@ -121,6 +133,7 @@ class Sarsa:
 
     algorithm = "sarsa"
     name = "SARSA"
+    supervised = False
 
     @property
     def discount(self) -> float:
@@ -180,3 +193,124 @@ class Sarsa:
         )
         self._pending = (next_obs.copy(), phi_next, a_next)
         return delta
+
+
+# ---------------------------------------------------------------------------------------------
+# The compiled episodes (pipefollow.learners.episodes) and what the layers above need
+
+
+class ActionSearch(NamedTuple):
+    """SARSA's action side, grouped for the compiled loop: the search grid and the action features."""
+
+    actions: np.ndarray  # (n_search,) actions of the one-step search
+    psi: np.ndarray  # (n_search, action features) their features
+    centres: np.ndarray  # action centres
+    width: float  # their width
+    normalized: bool  # the action grid's form
+
+
+@njit(cache=True)
+def episodes(W, alpha, discount, search, tracks, run, grid, rng, env_rng, dz, stats, poses):
+    """SARSA's episodes in compiled code: the same numbers as its agent in the environment."""
+    ps = sim.unpack_params(run.sim)
+    decision_s = ps.dt * ps.substeps
+    nf = W.shape[1]
+    s = np.empty(sim.STATE_SIZE)
+    phi, phi_pend, phi_next = np.empty(nf), np.empty(nf), np.empty(nf)
+    psi, psi_next = np.empty(search.centres.shape[0]), np.empty(search.centres.shape[0])
+    book, totals = np.empty(ep.BOOK_SIZE), np.empty(ep.TALLY_SIZE)
+    n = run.n_decisions
+    for e in range(run.sigmas.shape[0]):
+        sigma = run.sigmas[e]
+        points, cum, start = ep.pipe_of(tracks, e)
+        ep.start_episode(s, points, cum, start, ps, env_rng, dz, book, totals, poses, e)
+        has_next = False  # an on-policy action chosen by the last update for the current state
+        a_next = a_p = 0.0
+        for t in range(n):
+            visible = s[sim.IN_VIEW] != 0.0
+            a = 0.0
+            if visible:
+                if has_next:
+                    a = a_next
+                    phi[:] = phi_next
+                    has_next = False
+                else:
+                    grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi)
+                    z = rng.standard_normal() if sigma > 0.0 else 0.0
+                    a = choose(W, phi, search.actions, search.psi, sigma, z)
+            r = ep.decide(s, a, points, cum, ps, env_rng, dz, totals, poses, e, t)
+            if not run.learn:
+                continue
+            ep.carry(book, visible, r, discount)
+            if visible:
+                phi_pend[:] = phi
+                a_p = a
+            if ep.due(book, s[sim.IN_VIEW] != 0.0, t == n - 1):
+                grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
+                z = rng.standard_normal() if sigma > 0.0 else 0.0
+                a_next = choose(W, phi_next, search.actions, search.psi, sigma, z)
+                has_next = True
+                dim_activations(a_p, search.centres, search.width, search.normalized, psi)
+                dim_activations(a_next, search.centres, search.width, search.normalized, psi_next)
+                update(W, phi_pend, psi, book[ep.ACC], book[ep.DISC], phi_next, psi_next, alpha)
+                book[ep.PENDING] = 0.0
+        ep.close_episode(stats, e, s, totals, n, decision_s)
+
+
+def check_compiled(agent: Sarsa) -> None:
+    """Every SARSA agent runs in the compiled loop."""
+
+
+def run_compiled(agent: Sarsa, tracks, run, env_rng, dz, stats, poses) -> None:
+    """:func:`episodes` for ``agent``."""
+    search = ActionSearch(agent.search_actions, agent.search_psi, agent._action_centres, agent._action_width,
+                          agent._action_normalized)  # fmt: skip
+    p = agent.params
+    episodes(agent.weights, p.alpha, p.discount, search, tracks, run, ep.features_of(agent.grid), agent.rng,
+             env_rng, dz, stats, poses)  # fmt: skip
+
+
+def policy_fields(agent: Sarsa) -> dict:
+    """The arrays of a policy file: parameters, state and action grids as JSON, the weights."""
+    return {
+        "params": np.array(json.dumps(agent.params._asdict())),
+        "grid": np.array(json.dumps(agent.grid.to_dict())),
+        "action_grid": np.array(json.dumps(agent.action_grid.to_dict())),
+        "weights": agent.weights,
+    }
+
+
+def from_policy(data: dict, version: int, seed: int | None = None):
+    """An agent and its weights from a policy file's arrays; format 1 stored the weights state-major."""
+    params = json.loads(str(data["params"]))
+    grid = RBFGrid.from_dict(json.loads(str(data["grid"])))
+    weights = np.asarray(data["weights"], dtype=np.float64)
+    action = RBFGrid.from_dict(json.loads(str(data["action_grid"])))
+    agent = Sarsa(SarsaParams(**params), grid=grid, action_grid=action, seed=seed)
+    if version < 2 and weights.shape == agent.weights.shape[::-1]:
+        weights = np.ascontiguousarray(weights.T)
+    agent.readings = str(data.get("readings", "default"))
+    return agent, weights
+
+
+def make(r, rng: np.random.Generator | None = None, **fields) -> Sarsa:
+    """A fresh SARSA agent under the readings ``r`` (fields: those of :class:`SarsaParams`)."""
+    agent = Sarsa(SarsaParams(**fields), grid=state_grid(r.rbf, r.rbf_width),
+                  action_grid=action_grid(r.rbf, r.rbf_width), rng=rng)  # fmt: skip
+    agent.readings = r.id
+    return agent
+
+
+LEARNER = LearnerKind(
+    name="sarsa",
+    title="SARSA",
+    summary="SARSA with a one-step search over 21 actions (eq. 3)",
+    agent_class=Sarsa,
+    options=frozenset(),
+    step_sizes={"alpha_q": "alpha", "discount": "discount"},
+    make=make,
+    check=check_compiled,
+    run=run_compiled,
+    policy_fields=policy_fields,
+    from_policy=from_policy,
+)

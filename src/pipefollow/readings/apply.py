@@ -9,10 +9,9 @@ from __future__ import annotations
 
 import math
 
-from pipefollow.learners import cacla
+from pipefollow.learners import cacla, rbf
 from pipefollow.learners.cacla import CaclaParams
-from pipefollow.learners.exploration import skew_step_to_gamma
-from pipefollow.learners.rbf import ACTION_CENTRES, STATE_CENTRES, RBFGrid
+from pipefollow.learners.rbf import RBFGrid
 from pipefollow.readings.points import CRUISE_SPEED, DEFAULT, Readings
 from pipefollow.sim.decision import PAPER_SIM, SimParams
 
@@ -23,35 +22,22 @@ def skew_gamma(skew_deg: float, r: Readings = DEFAULT) -> float:
     Raises:
         ValueError: ``skew_deg`` negative or not finite.
     """
-    gamma = skew_step_to_gamma(skew_deg)  # 45° is one unit of γ; checks the value
-    return math.radians(skew_deg) if r.skew_unit == "rad" else gamma
+    return cacla.skew_in_gamma_units(skew_deg, r.skew_unit)
 
 
 def cacla_params(r: Readings = DEFAULT, skew_deg: float = 0.0, **fields) -> CaclaParams:
     """CACLA's parameter record under ``r``, with Δγ from degrees and other ``fields`` as given."""
-    return CaclaParams(
-        skew=skew_gamma(skew_deg, r),
-        gamma_max=r.gamma_max,
-        skew_sample={
-            "location": cacla.SAMPLE_LOCATION,
-            "centred": cacla.SAMPLE_CENTRED,
-            "moments": cacla.SAMPLE_MOMENTS,
-        }[r.skew_sample],
-        skew_step=cacla.STEP_GAMMA if r.skew_step == "gamma" else cacla.STEP_WEIGHTS,
-        k_update=cacla.K_EVERY if r.k_update == "every" else cacla.K_POSITIVE,
-        k_step=cacla.STEP_GAMMA if r.k_step == "k" else cacla.STEP_WEIGHTS,
-        **fields,
-    )
+    return cacla.params_under(r, skew_deg, **fields)
 
 
 def state_grid(r: Readings = DEFAULT) -> RBFGrid:
     """The 1,764-feature state grid under the ``rbf`` and ``rbf_width`` readings."""
-    return RBFGrid(STATE_CENTRES, form=r.rbf, width=r.rbf_width)
+    return rbf.state_grid(r.rbf, r.rbf_width)
 
 
 def action_grid(r: Readings = DEFAULT) -> RBFGrid:
     """SARSA's 13-centre action grid under the ``rbf`` and ``rbf_width`` readings."""
-    return RBFGrid((ACTION_CENTRES,), form=r.rbf, width=r.rbf_width)
+    return rbf.action_grid(r.rbf, r.rbf_width)
 
 
 def sim_params(r: Readings = DEFAULT, base: SimParams = PAPER_SIM) -> SimParams:

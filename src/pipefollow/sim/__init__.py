@@ -6,3 +6,7 @@ held-out test suites); ``dynamics`` (eq. 16), ``controller`` (the PD waypoint la
 faults); ``decision`` chains them into one 1-second decision (20 RK4 steps) with the lost-pipe
 search. Pure numba-compiled functions of arrays and immutable records. May import ``files`` only.
 """
+
+from pipefollow.files.compile_cache import configure_numba_cache
+
+configure_numba_cache()  # before any compiled module of this package is decorated

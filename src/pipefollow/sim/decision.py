@@ -21,19 +21,13 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numba.np.unsafe.ndarray import to_fixed_tuple
 
+from pipefollow.sim import records
 from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, observe, tracking_errors
 from pipefollow.sim.controller import PAPER_CONTROLLER, ControllerParams, pd_force, place_waypoint
-from pipefollow.sim.disturbance import (
-    NO_DISTURBANCE,
-    PACKED_SIZE,
-    Disturbance,
-    missed,
-    noise_layout,
-    vary_current,
-)
-from pipefollow.sim.disturbance import pack as _pack_disturbance
-from pipefollow.sim.disturbance import unpack as _unpack_disturbance
+from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance, missed, noise_layout, vary_current
+from pipefollow.sim.disturbance import unpack as unpack_disturbance
 from pipefollow.sim.dynamics import PAPER_AUV, AUVParams, acceleration, kinematics
 from pipefollow.sim.pipeline import project
 from pipefollow.sim.reward import LOST_REWARD, reward
@@ -225,8 +219,14 @@ def decide(s, action, points, cum, p, z=None):
     return r
 
 
-_DIST = 37  # where the packed Disturbance starts in pack_params' array (disturbance.PACKED_SIZE floats)
-_START_SPEED = _DIST + PACKED_SIZE  # and the start speed after it
+# Where each field of SimParams starts in pack_params' array, from the field names.
+OFFSETS = records.offsets(PAPER_SIM)
+_AUV, _N_AUV = OFFSETS["auv"], len(AUVParams._fields)
+_CONTROLLER, _N_CONTROLLER = OFFSETS["controller"], len(ControllerParams._fields)
+_CAMERA, _N_CAMERA = OFFSETS["camera"], len(CameraParams._fields)
+_DT, _SUBSTEPS, _LOST_REWARD = OFFSETS["dt"], OFFSETS["substeps"], OFFSETS["lost_reward"]
+_BACK, _AHEAD = OFFSETS["progress_back"], OFFSETS["progress_ahead"]
+_DISTURBANCE, _START_SPEED = OFFSETS["disturbance"], OFFSETS["start_speed"]
 
 
 def pack_params(p: SimParams) -> np.ndarray:
@@ -234,56 +234,21 @@ def pack_params(p: SimParams) -> np.ndarray:
 
     Passing a nested NamedTuple from Python into a numba function costs ≈7 µs of argument
     checking per call; an array costs a fraction of a microsecond. :func:`unpack_params`
-    rebuilds the record inside compiled code.
+    rebuilds the record inside compiled code; :data:`OFFSETS` says where each field starts.
     """
-    return np.array(
-        [
-            *p.auv,
-            *p.controller,
-            *p.camera,
-            p.dt,
-            p.substeps,
-            p.lost_reward,
-            p.progress_back,
-            p.progress_ahead,
-            *_pack_disturbance(p.disturbance),
-            p.start_speed,
-        ],
-        dtype=np.float64,
-    )
+    return records.pack(p)
 
 
 @njit(cache=True)
 def unpack_params(a):
     """Inverse of :func:`pack_params`, inside compiled code."""
-    auv = AUVParams(
-        a[0],
-        a[1],
-        a[2],
-        a[3],
-        a[4],
-        a[5],
-        a[6],
-        a[7],
-        a[8],
-        a[9],
-        a[10],
-        a[11],
-        a[12],
-        a[13],
-        a[14],
-        a[15],
-        a[16],
-        a[17],
-        a[18],
-        a[19],
-        a[20],
-        a[21],
+    auv = AUVParams(*to_fixed_tuple(a[_AUV : _AUV + _N_AUV], _N_AUV))
+    ctrl = ControllerParams(*to_fixed_tuple(a[_CONTROLLER : _CONTROLLER + _N_CONTROLLER], _N_CONTROLLER))
+    cam = CameraParams(*to_fixed_tuple(a[_CAMERA : _CAMERA + _N_CAMERA], _N_CAMERA))
+    dist = unpack_disturbance(a, _DISTURBANCE)
+    return SimParams(
+        auv, ctrl, cam, a[_DT], int(a[_SUBSTEPS]), a[_LOST_REWARD], a[_BACK], a[_AHEAD], dist, a[_START_SPEED]
     )
-    ctrl = ControllerParams(a[22], a[23], a[24], a[25], a[26], a[27], a[28], a[29])
-    cam = CameraParams(a[30], a[31])
-    dist = _unpack_disturbance(a, _DIST)
-    return SimParams(auv, ctrl, cam, a[32], int(a[33]), a[34], a[35], a[36], dist, a[_START_SPEED])
 
 
 @njit(cache=True)

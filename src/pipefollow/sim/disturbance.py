@@ -32,6 +32,9 @@ from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 from numba import njit
+from numba.np.unsafe.ndarray import to_fixed_tuple
+
+from pipefollow.sim import records
 
 MAX_BURIED = 4  # buried stretches a scenario can hold
 _NONE4 = (math.inf, math.inf, math.inf, math.inf)
@@ -60,28 +63,24 @@ class Disturbance(NamedTuple):
 
 
 NO_DISTURBANCE = Disturbance()
-PACKED_SIZE = 7 + 2 * MAX_BURIED  # floats of a packed Disturbance
+PACKED_SIZE = records.size(NO_DISTURBANCE)  # floats of a packed Disturbance
+_AT = records.offsets(NO_DISTURBANCE)
+_SCALARS = _AT["buried_from"]  # the scalar fields come first, up to the buried stretches
+_FROM, _TO = _AT["buried_from"], _AT["buried_to"]
 
 
 def pack(d: Disturbance) -> list[float]:
     """``d`` as a flat list of floats (see :func:`unpack`)."""
-    return [*d[:7], *d.buried_from, *d.buried_to]
+    return records.flatten(d)
 
 
 @njit(cache=True)
 def unpack(a, i):
     """The record packed at ``a[i : i + PACKED_SIZE]``, inside compiled code."""
-    return Disturbance(
-        a[i],
-        a[i + 1],
-        a[i + 2],
-        a[i + 3],
-        a[i + 4],
-        a[i + 5],
-        a[i + 6],
-        (a[i + 7], a[i + 8], a[i + 9], a[i + 10]),
-        (a[i + 11], a[i + 12], a[i + 13], a[i + 14]),
-    )
+    scalars = to_fixed_tuple(a[i : i + _SCALARS], _SCALARS)
+    buried_from = to_fixed_tuple(a[i + _FROM : i + _FROM + MAX_BURIED], MAX_BURIED)
+    buried_to = to_fixed_tuple(a[i + _TO : i + _TO + MAX_BURIED], MAX_BURIED)
+    return Disturbance(*scalars, buried_from, buried_to)
 
 
 @njit(cache=True)
@@ -300,4 +299,3 @@ def check_camera_noise(value: Any) -> float:
 def check_miss_prob(value: Any) -> float:
     """A miss probability given on the command line: a number in [0, 1]."""
     return _probability(value, "miss probability", "")
-

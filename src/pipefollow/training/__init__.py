@@ -6,3 +6,7 @@ extra).
 
 May import ``files``, ``sim``, ``learners``, ``readings`` and ``envs``.
 """
+
+from pipefollow.files.compile_cache import configure_numba_cache
+
+configure_numba_cache()  # before any compiled module of this package is decorated

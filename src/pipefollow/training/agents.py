@@ -1,7 +1,6 @@
-"""The agents' common interface and a factory.
+"""The agents' factory under the readings (:mod:`pipefollow.learners.registry` names the learners).
 
-Every agent (:class:`~pipefollow.learners.cacla.Cacla`, :class:`~pipefollow.learners.sarsa.Sarsa`,
-:class:`~pipefollow.learners.heuristic.Heuristic`) has:
+Every agent (a learner of the registry, :class:`~pipefollow.learners.heuristic.Heuristic`) has:
 
 * ``begin_episode(sigma)``: set the exploration σ for the coming episode;
 * ``act(obs, explore=True) -> float``: the action in [-1, 1];
@@ -15,10 +14,9 @@ from __future__ import annotations
 import numpy as np
 
 from pipefollow import readings as rd
-from pipefollow.learners.cacla import Cacla
-from pipefollow.learners.sarsa import Sarsa, SarsaParams
+from pipefollow.learners import registry
 
-ALGORITHMS = ("sarsa", "cacla")
+ALGORITHMS = registry.NAMES
 
 
 def make_agent(
@@ -29,23 +27,13 @@ def make_agent(
     rng: np.random.Generator | None = None,
     readings: rd.Readings = rd.DEFAULT,
     **params,
-) -> Cacla | Sarsa:
-    """A fresh learner: ``sarsa`` or ``cacla`` (with ``skew_deg`` Δγ in degrees and ``supervised``).
+):
+    """A fresh learner of the registry (``sarsa``, ``cacla``, ``ac``) under ``readings``.
 
-    ``readings`` fixes the open points (RBF form and widths, the skew and k(s) rules); extra
-    keyword arguments override fields of :class:`~pipefollow.learners.cacla.CaclaParams` /
-    :class:`~pipefollow.learners.sarsa.SarsaParams`.
+    ``skew_deg`` is Δγ in degrees (CACLA), ``supervised`` adds the heuristic as supervisor (CACLA,
+    actor-critic); extra keyword arguments override fields of the learner's parameter record.
+
+    Raises:
+        ValueError: an unknown algorithm, or an option it does not take.
     """
-    grid = rd.state_grid(readings)
-    if algorithm == "sarsa":
-        if skew_deg or supervised:
-            raise ValueError("skew and supervision apply to CACLA only")
-        agent = Sarsa(SarsaParams(**params), grid=grid, action_grid=rd.action_grid(readings), rng=rng)
-        agent.readings = readings.id
-        return agent
-    if algorithm == "cacla":
-        params = rd.cacla_params(readings, skew_deg, supervised=supervised, **params)
-        agent = Cacla(params, grid=grid, rng=rng)
-        agent.readings = readings.id
-        return agent
-    raise ValueError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {algorithm!r}")
+    return registry.make(algorithm, readings, rng, skew_deg=skew_deg, supervised=supervised, **params)

@@ -1,8 +1,9 @@
 """Policy files: a learned agent in one ``.npz`` (loaded with ``allow_pickle=False``).
 
 A file holds ``format`` (``pipefollow-policy``), ``format_version``, ``package_version``,
-``algorithm`` (``cacla`` or ``sarsa``), ``params`` (JSON of the agent's parameter record),
-``grid`` and, for SARSA, ``action_grid`` (JSON feature specifications), ``weights`` and
+``algorithm`` (a learner of :mod:`pipefollow.learners.registry`: ``sarsa``, ``cacla``, ``ac``),
+the learner's own fields (its ``policy_fields``: ``params``, JSON of the agent's parameter record,
+``grid`` and, for SARSA, ``action_grid``, JSON feature specifications, and ``weights``) and
 ``readings``: the id of the readings the policy was trained under (docs/design.md), under which
 it is evaluated unless told otherwise. The loaded agent carries it as ``agent.readings``.
 
@@ -27,11 +28,8 @@ import numpy as np
 
 import pipefollow
 from pipefollow.files.atomic import atomic_file
-from pipefollow.learners import cacla
-from pipefollow.learners.cacla import Cacla, CaclaParams
 from pipefollow.learners.mlp import MLPPolicy
-from pipefollow.learners.rbf import RBFGrid
-from pipefollow.learners.sarsa import Sarsa, SarsaParams
+from pipefollow.learners.registry import LEARNERS, NAMES, learner_of
 
 FORMAT = "pipefollow-policy"
 FORMAT_VERSION = 4  # 2: SARSA weights per action centre (13 × 1,764); 3: readings; 4: mlp
@@ -41,32 +39,21 @@ class PolicyError(ValueError):
     """A policy file that cannot be used; the message names the file and the problem."""
 
 
-def save_policy(agent: Cacla | Sarsa | MLPPolicy, path: str | os.PathLike, **metadata) -> Path:
-    """Write ``agent`` to ``path`` (``.npz``) atomically, with its readings' id (``agent.readings``).
+def save_policy(agent, path: str | os.PathLike, **metadata) -> Path:
+    """Write ``agent`` (a learner of the registry, or an MLP) to ``path`` (``.npz``) atomically.
 
-    Extra string ``metadata`` is stored too.
+    The file holds the agent's readings' id (``agent.readings``); extra string ``metadata`` is stored too.
     """
     path = Path(path)
     if isinstance(agent, MLPPolicy):
         return _save_mlp(agent, path, metadata)
-    if isinstance(agent, Cacla):
-        algorithm, extra = "cacla", {}
-    elif isinstance(agent, Sarsa):
-        algorithm, extra = "sarsa", {"action_grid": json.dumps(agent.action_grid.to_dict())}
-    else:
+    kind = learner_of(agent)
+    if kind is None:
         raise TypeError(f"cannot save a policy of type {type(agent).__name__}")
-    params = {k: (bool(v) if isinstance(v, bool) else v) for k, v in agent.params._asdict().items()}
     arrays = {
-        "format": np.array(FORMAT),
-        "format_version": np.array(FORMAT_VERSION),
-        "package_version": np.array(pipefollow.__version__),
-        "algorithm": np.array(algorithm),
-        "params": np.array(json.dumps(params)),
-        "grid": np.array(json.dumps(agent.grid.to_dict())),
-        "metadata": np.array(json.dumps({k: str(v) for k, v in metadata.items()})),
-        "weights": agent.weights,
+        **_header(kind.name, metadata),
+        **kind.policy_fields(agent),
         "readings": np.array(getattr(agent, "readings", "default")),
-        **{k: np.array(v) for k, v in extra.items()},
     }
     with atomic_file(path) as f:
         np.savez_compressed(f, **arrays)
@@ -127,7 +114,7 @@ def _load_mlp(data: dict, src: str) -> MLPPolicy:
     return agent
 
 
-def load_policy(path: str | os.PathLike, seed: int | None = None) -> Cacla | Sarsa | MLPPolicy:
+def load_policy(path: str | os.PathLike, seed: int | None = None):
     """Read a policy file written by :func:`save_policy`; problems raise :class:`PolicyError`."""
     path = Path(path)
     src = f"policy file '{path}'"
@@ -149,39 +136,23 @@ def load_policy(path: str | os.PathLike, seed: int | None = None) -> Cacla | Sar
     try:
         version = int(data["format_version"])
         algorithm = str(data["algorithm"])
-        params = json.loads(str(data["params"]))
-        grid = RBFGrid.from_dict(json.loads(str(data["grid"])))
-        weights = np.asarray(data["weights"], dtype=np.float64)
     except (KeyError, ValueError, TypeError) as e:
         raise PolicyError(f"{src}: missing or malformed entry ({e})") from None
     if version > FORMAT_VERSION:
         raise PolicyError(f"{src}: format version {version} is newer than this pipefollow reads")
-    trained = str(data.get("readings", "default"))
-    if algorithm == "cacla" and version < 3 and isinstance(params, dict):
-        # before readings: a boolean skew_centred, and eq. 15 moved the weights by Δγ·φ(s)
-        centred = params.pop("skew_centred", False)
-        params["skew_sample"] = cacla.SAMPLE_CENTRED if centred else cacla.SAMPLE_LOCATION
-        params["skew_step"] = cacla.STEP_WEIGHTS
-        if params.get("skew", 0.0) > 0.0:
-            trained = "skew_step=weights" + (",skew_sample=centred" if centred else "")
+    if algorithm not in LEARNERS:
+        expected = ", ".join(NAMES)
+        raise PolicyError(f"{src}: unknown algorithm '{algorithm}' (expected {expected} or mlp)")
+    missing = [k for k in ("params", "grid", "weights") if k not in data]
+    if missing:
+        raise PolicyError(f"{src}: missing or malformed entry ({missing[0]!r})")
     try:
-        if algorithm == "cacla":
-            agent = Cacla(CaclaParams(**params), grid=grid, seed=seed)
-        elif algorithm == "sarsa":
-            action_grid = RBFGrid.from_dict(json.loads(str(data["action_grid"])))
-            agent = Sarsa(SarsaParams(**params), grid=grid, action_grid=action_grid, seed=seed)
-        else:
-            raise PolicyError(f"{src}: unknown algorithm '{algorithm}' (expected cacla, sarsa or mlp)")
+        agent, weights = LEARNERS[algorithm].from_policy(data, version, seed)
     except (TypeError, KeyError, ValueError) as e:
-        if isinstance(e, PolicyError):
-            raise
         raise PolicyError(f"{src}: parameters do not fit algorithm '{algorithm}' ({e})") from None
-    if version < 2 and algorithm == "sarsa" and weights.shape == agent.weights.shape[::-1]:
-        weights = np.ascontiguousarray(weights.T)  # version 1 stored SARSA's weights state-major
     if weights.shape != agent.weights.shape:
         raise PolicyError(f"{src}: weights have shape {weights.shape}, expected {agent.weights.shape}")
     if not np.all(np.isfinite(weights)):
         raise PolicyError(f"{src}: weights contain NaN or infinite values")
     agent.weights[...] = weights
-    agent.readings = trained
     return agent

@@ -1,0 +1,187 @@
+"""The paper's reference learners: the general actor-critic of eq. 9 and Rosenstein & Barto's eq. 11.
+
+CACLA (:mod:`pipefollow.learners.cacla`) is built on them (paper §2.1–2.2); this learner keeps
+everything of CACLA but the actor's update, so the two differ only in the terms the paper argues
+for:
+
+* eq. 9, ``φ += α_π δ ∇_φ ln π(a, s; φ)`` with the Gaussian policy of eq. 8, whose score is
+  ``∇_φ ln π = (a − A(s))/σ² ∇_φ A(s)``: the actor moves towards the executed action in proportion
+  to δ, away from it when δ < 0. As in eq. 11, whose first part the paper calls "identical to
+  (9)", the constant 1/σ² is taken into the step size: ``w_A += α_π δ (a − A(s)) φ(s)``;
+* eq. 11 (supervised, Rosenstein & Barto 2004): ``w_A += α_π [k δ (a^RL − A(s)) + (1 − k)(a^SUP −
+  A(s))] φ(s)``, the executed action ``k a^RL + (1 − k) a^SUP`` (eq. 10) and k(s) as in supervised
+  CACLA (eq. 13).
+
+CACLA's eq. 7 replaces δ by ``max(sgn δ, 0)``: no update when δ ≤ 0 (the max term) and a step
+that does not scale with δ (the sign term). The critic (eqs. 5–6), the Gaussian exploration
+(eq. 8), the features and the semi-Markov updates while the pipe is lost are CACLA's.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numba import njit
+
+from pipefollow.learners import cacla
+from pipefollow.learners import episodes as ep
+from pipefollow.learners.actor_agent import A, ActorAgent, K, V
+from pipefollow.learners.cacla import CaclaParams, act, trust_step, unpack
+from pipefollow.learners.heuristic import heuristic_action
+from pipefollow.learners.protocol import LearnerKind
+from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite, grid_features, state_grid
+from pipefollow.learners.sums import dot
+from pipefollow.sim import decision as sim
+
+PAPER_AC = CaclaParams()  # the paper's α_V = 0.4, α_π = 0.2, γ_d = 0.8, Δk = 0.05
+
+
+@njit(cache=True)
+def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p):
+    """One actor-critic update (eq. 9, or eq. 11 when supervised) from φ(s); returns δ.
+
+    ``discount`` is γ_d^n for a transition of n decisions (semi-Markov, docs/design.md).
+    """
+    v = dot(w[V], phi)
+    delta = reward + discount * dot(w[V], phi_next) - v  # eq. 4, pre-update critic
+    mu = dot(w[A], phi)
+    if p.supervised:
+        k = min(p.k_max, max(0.0, dot(w[K], phi)))
+        step = p.alpha_pi * (k * delta * (a_rl - mu) + (1.0 - k) * (a_sup - mu))  # eq. 11
+    else:
+        step = p.alpha_pi * delta * (a_rl - mu)  # eq. 9, Gaussian score, 1/σ² in α_π
+    cv = p.alpha_v * delta  # eqs. 5-6
+    for i in range(phi.shape[0]):
+        w[V, i] += cv * phi[i]
+        w[A, i] += step * phi[i]
+    if p.supervised:
+        trust_step(w, phi, delta, p)
+    return delta
+
+
+@njit(cache=True)
+def update_packed(w, phi, a_rl, a_sup, reward, discount, phi_next, hp):
+    """:func:`update` with packed parameters: the cheap entry point from Python."""
+    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp))
+
+
+@njit(cache=True)
+def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, normalized, phi_next, hp):
+    """φ(s') into ``phi_next`` and :func:`update`, in one call; ``(δ, False)`` if s' is not finite."""
+    if not features_if_finite(next_obs, grid[0], grid[1], grid[2], normalized, phi_next):
+        return 0.0, False
+    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp)), True
+
+
+class ActorCritic(ActorAgent):
+    """An actor-critic agent (eq. 9; eq. 11 when supervised) on CACLA's features and Gaussian policy.
+
+    Args:
+        params: step sizes and options (:class:`~pipefollow.learners.cacla.CaclaParams` without skew).
+        grid, rng, seed, supervisor: as for :class:`~pipefollow.learners.cacla.Cacla`.
+
+    Raises:
+        ValueError: ``params`` with a skew step (this learner explores with eq. 8 only).
+    """
+
+    algorithm = "ac"
+    pack = staticmethod(cacla.pack)
+    act_packed = staticmethod(cacla.act_packed)  # CACLA's policy: eq. 8, and eq. 10 when supervised
+    act_heuristic_packed = staticmethod(cacla.act_heuristic_packed)
+    update_packed = staticmethod(update_packed)
+    update_next_packed = staticmethod(update_next_packed)
+
+    def __init__(
+        self,
+        params: CaclaParams = PAPER_AC,
+        grid: RBFGrid = STATE_GRID,
+        rng: np.random.Generator | None = None,
+        seed: int | None = None,
+        supervisor: Callable[[np.ndarray], float] | None = None,
+    ) -> None:
+        if params.skew != 0.0:
+            raise ValueError(f"the actor-critic explores with eq. 8 only: skew must be 0, got {params.skew}")
+        super().__init__(params, grid, rng, seed, supervisor)
+
+    @property
+    def name(self) -> str:
+        """Short algorithm label."""
+        return "supervised actor-critic" if self.params.supervised else "actor-critic"
+
+
+@njit(cache=True)
+def episodes(w, hp, tracks, run, grid, rng, env_rng, dz, stats, poses):
+    """The actor-critic's episodes in compiled code: the same numbers as its agent in the environment."""
+    p = unpack(hp)
+    ps = sim.unpack_params(run.sim)
+    decision_s = ps.dt * ps.substeps
+    nf = w.shape[1]
+    s = np.empty(sim.STATE_SIZE)
+    phi, phi_pend, phi_next = np.empty(nf), np.empty(nf), np.empty(nf)
+    book, totals = np.empty(ep.BOOK_SIZE), np.empty(ep.TALLY_SIZE)
+    n = run.n_decisions
+    for e in range(run.sigmas.shape[0]):
+        sigma = run.sigmas[e]
+        points, cum, start = ep.pipe_of(tracks, e)
+        ep.start_episode(s, points, cum, start, ps, env_rng, dz, book, totals, poses, e)
+        have_phi = False  # phi already holds φ(s) of the current state (computed for the last update)
+        a_rl_p = a_sup_p = 0.0
+        for t in range(n):
+            visible = s[sim.IN_VIEW] != 0.0
+            a = a_rl = a_sup = 0.0
+            if visible:
+                if not have_phi:
+                    grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi)
+                z = rng.standard_normal() if sigma > 0.0 else 0.0
+                a_sup = heuristic_action(s[sim.X1], s[sim.Y1]) if p.supervised else 0.0
+                a, a_rl = act(w, phi, sigma, z, z, a_sup, p)
+            have_phi = False
+            r = ep.decide(s, a, points, cum, ps, env_rng, dz, totals, poses, e, t)
+            if not run.learn:
+                continue
+            ep.carry(book, visible, r, p.discount)
+            if visible:
+                phi, phi_pend = phi_pend, phi  # keep φ(s) for the update; no copy
+                a_rl_p, a_sup_p = a_rl, a_sup
+            if ep.due(book, s[sim.IN_VIEW] != 0.0, t == n - 1):
+                grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
+                update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p)
+                book[ep.PENDING] = 0.0
+                phi, phi_next = phi_next, phi  # φ(s') is the next decision's φ(s)
+                have_phi = True
+        ep.close_episode(stats, e, s, totals, n, decision_s)
+
+
+def run_compiled(agent: ActorCritic, tracks, run, env_rng, dz, stats, poses) -> None:
+    """:func:`episodes` for ``agent``."""
+    episodes(agent.weights, cacla.pack(agent.params), tracks, run, ep.features_of(agent.grid), agent.rng,
+             env_rng, dz, stats, poses)  # fmt: skip
+
+
+def from_policy(data: dict, version: int, seed: int | None = None):
+    """An agent and its weights from a policy file's arrays (CACLA's fields)."""
+    return cacla.from_policy(data, version, seed, agent_class=ActorCritic)
+
+
+def make(r, rng: np.random.Generator | None = None, *, supervised: bool = False, **fields) -> ActorCritic:
+    """A fresh actor-critic under the readings ``r`` (fields: those of ``CaclaParams`` but the skew's)."""
+    params = cacla.params_under(r, 0.0, supervised=supervised, **fields)
+    agent = ActorCritic(params, grid=state_grid(r.rbf, r.rbf_width), rng=rng)
+    agent.readings = r.id
+    return agent
+
+
+LEARNER = LearnerKind(
+    name="ac",
+    title="actor-critic",
+    summary="the general actor-critic (eq. 9; supervised: Rosenstein & Barto's eq. 11)",
+    agent_class=ActorCritic,
+    options=frozenset({"supervised"}),
+    step_sizes=cacla.LEARNER.step_sizes,
+    make=make,
+    check=cacla.check_compiled,
+    run=run_compiled,
+    policy_fields=cacla.policy_fields,
+    from_policy=from_policy,
+)

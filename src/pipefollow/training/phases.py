@@ -1,0 +1,80 @@
+"""Training in phases, the one way ``pipefollow train`` and experiment trials train a learner.
+
+A run with seed ``s`` draws from three streams: the agent's generator ``numpy.random.default_rng(s)``
+(exploration; made by the caller, see :func:`agent_rng`), its first child (the pipes of
+``random[:FAMILY]`` phases, spawned at the first such phase) and ``default_rng(SeedSequence(s).spawn(1)[0])``
+(the random disturbances, :func:`disturbance_rng`). σ is the paper's schedule in the ``sigma_unit``
+reading's units, scaled to normalized action units; the simulation takes the readings and the disturbances.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from pipefollow import readings as rd
+from pipefollow.sim import decision as sim
+from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
+from pipefollow.training.compiled import train_compiled
+from pipefollow.training.random_pipes import train_random_compiled
+
+
+def agent_rng(seed: int) -> np.random.Generator:
+    """The agent's generator of a run with ``seed`` (exploration; its first child draws random pipes)."""
+    return np.random.default_rng(seed)
+
+
+def disturbance_rng(seed: int) -> np.random.Generator:
+    """The random disturbances' generator of a run with ``seed``: a stream of their own."""
+    return np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
+
+
+def sim_under(readings: rd.Readings, disturbance: Disturbance = NO_DISTURBANCE) -> sim.SimParams:
+    """The simulated system of a run: the readings' parameters with ``disturbance``."""
+    return rd.sim_params(readings)._replace(disturbance=disturbance)
+
+
+def train_phases(
+    agent,
+    phases: Sequence[tuple[str, int]],
+    *,
+    seed: int,
+    readings: rd.Readings = rd.DEFAULT,
+    disturbance: Disturbance = NO_DISTURBANCE,
+    episode_seconds: float = 20.0,
+    sigma_start: float = 1.0,
+    sigma_end: float = 0.01,
+    progress: Callable[[int], None] | None = None,
+) -> list[np.ndarray]:
+    """Train ``agent`` (its ``rng`` from :func:`agent_rng`) through ``phases`` of (pipeline, episodes).
+
+    A pipeline is a built-in name, a JSON file or ``random[:FAMILY]`` (a new pipe every episode).
+    σ runs from ``sigma_start`` to ``sigma_end`` (the paper's units, scaled by the ``sigma_unit``
+    reading) over each phase. ``progress`` gets the episodes done over all phases. Returns one
+    (episodes, 4) statistics array per phase.
+    """
+    from pipefollow.sim.suites import Suite, resolve_training
+
+    pipes = [resolve_training(name) for name, _ in phases]  # a bad pipeline fails before any training
+    scale = rd.sigma_scale(readings)
+    schedule = dict(
+        episode_seconds=episode_seconds,
+        sigma_start=sigma_start * scale,
+        sigma_end=sigma_end * scale,
+        params=sim_under(readings, disturbance),
+        env_rng=disturbance_rng(seed),
+    )
+    out, done, pipe_rng = [], 0, None
+    for pipe, (_, episodes) in zip(pipes, phases, strict=True):
+        report = None if progress is None else (lambda n, before=done: progress(before + n))
+        if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the agent's generator
+            pipe_rng = pipe_rng if pipe_rng is not None else agent.rng.spawn(1)[0]
+            stats = train_random_compiled(
+                agent, pipe, episodes, pipe_rng=pipe_rng, progress=report, **schedule
+            )
+        else:
+            stats = train_compiled(agent, pipe, episodes, progress=report, **schedule)
+        out.append(stats)
+        done += episodes
+    return out
