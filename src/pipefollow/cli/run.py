@@ -260,6 +260,13 @@ def evaluate(
     "see docs/design.md) [default: the project's readings, or those of --init]."
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
+@click.option(
+    "--randomization",
+    metavar="PRESET|FILE.toml",
+    default=None,
+    help="Domain randomization: each episode draws its disturbances from a preset (mild, moderate, "
+    "harsh) or a TOML table (see pipefollow.sim.randomization); not with the fixed disturbance options.",
+)
 @disturbance_options
 @guard
 def train(
@@ -276,6 +283,7 @@ def train(
     force,
     readings,
     as_json,
+    randomization,
     disturbance,
 ):
     """Train a learner; writes the policy and its learning curve.
@@ -288,6 +296,14 @@ def train(
     existing = [name for name in TRAINING_OUTPUTS if (Path(out_dir) / name).exists()]
     if existing and not force:
         raise UserError(f"--out '{out_dir}' already holds {existing[0]}; use --force to replace it")
+    if randomization is not None:
+        from pipefollow.sim.randomization import load
+
+        randomization = load(randomization)
+        if disturbance != _disturbance.NO_DISTURBANCE:
+            raise UserError("--randomization replaces --current, --camera-noise and --miss-prob: give one")
+        if algorithm in ("ppo", "sac"):
+            raise UserError(f"--randomization is not available with --algorithm {algorithm}")
     if algorithm in ("ppo", "sac"):
         return _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance)
     if steps is not None:
@@ -346,6 +362,7 @@ def train(
                 seed=seed,
                 readings=reading,
                 disturbance=disturbance,
+                randomization=randomization,
                 episode_seconds=seconds,
                 progress=progress,
             )
@@ -368,6 +385,10 @@ def train(
     }
     if disturbance != _disturbance.NO_DISTURBANCE:
         result["disturbance"] = _disturbance.to_dict(disturbance)
+    if randomization is not None:
+        from pipefollow.sim.randomization import to_dict
+
+        result["randomization"] = to_dict(randomization)
     if as_json:
         click.echo(json.dumps(result))
         return

@@ -18,14 +18,18 @@ from pipefollow.envs.shell import (
     observation,
     parse_reset_options,
     pipeline_source,
+    randomized_setup,
     start_episode,
     state_infos,
 )
 from pipefollow.sim import decision as sim
-from pipefollow.sim.disturbance import Disturbance
+from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
 from pipefollow.sim.pipeline import Pipeline
+from pipefollow.sim.randomization import Randomization
+from pipefollow.sim.randomization import resolve as resolve_randomization
 
 __all__ = ["MAX_EPISODE_SECONDS", "PipelineFollowingEnv"]
+
 
 class PipelineFollowingEnv(gym.Env):
     """An AUV following a subsea pipeline with a downward camera (Fjerdingen et al., 2010).
@@ -103,6 +107,10 @@ class PipelineFollowingEnv(gym.Env):
       none by default. Its random parts draw from the environment's seeded ``np_random``.
     * ``obs_dtype``: ``"float64"`` (default; the simulator's own numbers) or ``"float32"`` (what
       most neural-network policies take; the observation rounded to float32).
+    * ``randomization``: domain randomization, a
+      :class:`~pipefollow.sim.randomization.Randomization`, a preset name (``mild``, ``moderate``,
+      ``harsh``) or a table of its keys: every reset draws the episode's disturbances from
+      ``np_random`` (before the pipe of a ``random`` family); not with ``disturbance``.
 
     ## Info
 
@@ -132,6 +140,7 @@ class PipelineFollowingEnv(gym.Env):
         params: sim.SimParams = sim.PAPER_SIM,
         disturbance: Disturbance | dict[str, Any] | None = None,
         obs_dtype: str | type = "float64",
+        randomization: Randomization | str | dict[str, Any] | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None, 'human' or 'rgb_array', got {render_mode!r}")
@@ -139,6 +148,12 @@ class PipelineFollowingEnv(gym.Env):
             episode_seconds, start_lateral_noise, start_heading_noise_deg, params, disturbance, obs_dtype
         )
         self.setup = setup
+        self.randomization = None
+        if randomization is not None:
+            self.randomization = resolve_randomization(randomization)
+            if setup.params.disturbance != NO_DISTURBANCE:
+                raise ValueError("give a disturbance or a randomization of the disturbances, not both")
+        self.episode_setup = setup  # this episode's: under a randomization, its own disturbances
         self.suite, self.pipeline = pipeline_source(pipeline)
         self.episode_seconds = setup.episode_seconds
         self.max_decisions = setup.max_decisions
@@ -164,8 +179,11 @@ class PipelineFollowingEnv(gym.Env):
         opts = parse_reset_options(options)
         if opts.switches_pipeline:
             self.suite, self.pipeline = pipeline_source(opts.pipeline)
+        if self.randomization is not None:  # drawn first, before the pipe
+            self.episode_setup = randomized_setup(self.setup, self.randomization, self.np_random)
+            self._z = np.zeros(self.episode_setup.noise_count)
         self.pipeline = start_episode(
-            self.state, self.suite, self.pipeline, self.np_random, self.setup, self._z,
+            self.state, self.suite, self.pipeline, self.np_random, self.episode_setup, self._z,
             opts.lateral_offset, opts.heading_offset_deg,
         )  # fmt: skip
         self._decisions = 0
@@ -196,7 +214,9 @@ class PipelineFollowingEnv(gym.Env):
         s, z = self.state, self._z
         if z.size:
             self.np_random.standard_normal(out=z)
-        r = sim.decide_packed(s, a, self.pipeline.points, self.pipeline.cumulative, self.setup.packed, z)
+        r = sim.decide_packed(
+            s, a, self.pipeline.points, self.pipeline.cumulative, self.episode_setup.packed, z
+        )
         self._decisions += 1
         self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
         if s[sim.IN_VIEW] != 0.0:

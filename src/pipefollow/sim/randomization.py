@@ -262,6 +262,28 @@ def resolve(spec: Any, source: str = "randomization") -> Randomization:
     return check(preset(spec, source), source)
 
 
+def load(spec: str) -> Randomization:
+    """A preset name, or a TOML file (``.toml``) holding the table or a ``[randomization]`` table.
+
+    Raises:
+        DisturbanceError: an unreadable file, bad TOML, an unknown preset or a bad table.
+    """
+    if not str(spec).endswith(".toml"):
+        return resolve(spec, "--randomization")
+    import tomllib
+
+    from pipefollow.files.atomic import read_text_file
+
+    source = f"--randomization {spec}"
+    try:
+        table = tomllib.loads(read_text_file(spec, source, DisturbanceError))
+    except tomllib.TOMLDecodeError as e:
+        raise DisturbanceError(f"{source}: not valid TOML ({e})") from None
+    if isinstance(table.get("randomization"), Mapping):
+        table = table["randomization"]
+    return from_dict(table, source)
+
+
 def to_dict(r: Randomization) -> dict[str, Any]:
     """The table of ``r`` (inverse of :func:`from_dict`), ranges as lists."""
     return {f.name: list(v) if isinstance(v := getattr(r, f.name), tuple) else v for f in fields(r)}

@@ -1,0 +1,147 @@
+"""Training under randomized disturbances: compiled loops equal the environment; same seed, same numbers."""
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from pipefollow.cli import main
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.sim import decision as sim
+from pipefollow.sim import randomization as rz
+from pipefollow.sim.disturbance import make_disturbance
+from pipefollow.sim.pipeline import builtin
+from pipefollow.sim.suites import get_suite
+from pipefollow.training.agents import make_agent
+from pipefollow.training.compiled import run_episode, train, train_compiled
+from pipefollow.training.random_pipes import train_random_compiled
+
+KINDS = {
+    "cacla": dict(algorithm="cacla"),
+    "supervised-skew": dict(algorithm="cacla", skew_deg=22.5, supervised=True),
+    "sarsa": dict(algorithm="sarsa"),
+}
+# every kind on, in ranges wide enough that episodes differ a lot
+WILD = rz.Randomization(
+    current_speed=(0.0, 0.3),
+    current_time_constant=20.0,
+    current_speed_sd=0.03,
+    current_direction_sd_deg=15.0,
+    camera_noise=(0.0, 0.08),
+    miss_prob=(0.0, 0.15),
+    buried_prob=0.5,
+    buried_count=2,
+    buried_length_m=(0.3, 1.0),
+    buried_region_m=(1.0, 9.0),
+)
+
+
+@pytest.mark.parametrize("kind", list(KINDS))
+def test_compiled_path_equals_the_environment_under_randomization(kind):
+    pipe = builtin("paper-left")
+    a = make_agent(rng=np.random.default_rng(3), **KINDS[kind])
+    b = make_agent(rng=np.random.default_rng(3), **KINDS[kind])
+    env = PipelineFollowingEnv(pipe, 20, randomization=WILD)
+    env.np_random = np.random.default_rng(11)
+    currents = []
+    stats_env = train(env, a, 8, callback=lambda e, ep: currents.append(env.episode_setup.params.disturbance))
+    stats_fast = train_compiled(b, pipe, 8, env_rng=np.random.default_rng(11), randomization=WILD)
+    np.testing.assert_allclose(stats_fast, stats_env, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(b.weights, a.weights, rtol=0, atol=1e-9)
+    # each episode met its own disturbances: the draws of default_rng(11) interleaved with the normals
+    assert len({d.current_speed for d in currents}) == 8
+    assert stats_env[:, 3].sum() > 0  # misses and burial lost the pipe at times
+
+
+@pytest.mark.parametrize("kind", ["cacla", "sarsa"])
+def test_random_pipes_under_randomization_equal_the_environment_with_one_generator(kind):
+    a = make_agent(rng=np.random.default_rng(5), **KINDS[kind])
+    b = make_agent(rng=np.random.default_rng(5), **KINDS[kind])
+    env = PipelineFollowingEnv("random:hard", 20, randomization="harsh")
+    env.np_random = np.random.default_rng(21)
+    stats_env = train(env, a, 6)
+    g = np.random.default_rng(21)  # the environment's one generator: pipes and disturbances
+    stats_fast = train_random_compiled(b, get_suite("hard"), 6, pipe_rng=g, env_rng=g, randomization="harsh")
+    np.testing.assert_allclose(stats_fast, stats_env, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(b.weights, a.weights, rtol=0, atol=1e-9)
+
+
+def test_the_environment_draws_the_disturbances_of_a_reset_first():
+    env = PipelineFollowingEnv("paper-left", 20, randomization="moderate")
+    env.reset(seed=4)
+    expected = rz.draw(rz.PRESETS["moderate"], np.random.default_rng(4))
+    assert env.episode_setup.params.disturbance == expected
+    _, info = env.reset()
+    second = env.episode_setup.params.disturbance
+    assert second != expected
+    assert float(info["current"][0]) == pytest.approx(second.current_speed)
+    # an episode under the draw equals an episode under that disturbance, fixed
+    fixed = PipelineFollowingEnv("paper-left", 20, disturbance=expected)
+    fixed.np_random = np.random.default_rng(4)
+    rz.draw(rz.PRESETS["moderate"], fixed.np_random)  # the draw the randomized reset made
+    again = PipelineFollowingEnv("paper-left", 20, randomization="moderate")
+    ep_random = run_episode(again, make_agent("cacla", rng=np.random.default_rng(0)), seed=4)
+    ep_fixed = run_episode(fixed, make_agent("cacla", rng=np.random.default_rng(0)))
+    assert ep_random.ret == ep_fixed.ret
+
+
+def test_randomization_refuses_a_fixed_disturbance_too():
+    with pytest.raises(ValueError, match="not both"):
+        PipelineFollowingEnv("paper-left", 20, disturbance={"camera_noise": 0.1}, randomization="mild")
+    params = sim.PAPER_SIM._replace(disturbance=make_disturbance(0.1, 0.0))
+    with pytest.raises(ValueError, match="not both"):
+        train_compiled(make_agent("cacla"), builtin("paper-left"), 2, params=params,
+                       env_rng=np.random.default_rng(0), randomization="mild")  # fmt: skip
+    with pytest.raises(ValueError, match="env_rng"):
+        train_compiled(make_agent("cacla"), builtin("paper-left"), 2, randomization="mild")
+    with pytest.raises(rz.DisturbanceError, match="preset 'stormy'"):
+        PipelineFollowingEnv("paper-left", 20, randomization="stormy")
+
+
+# ---------------------------------------------------------------------------------------------
+# The command line
+
+
+def _train(tmp_path, name, *extra):
+    out = tmp_path / name
+    args = ["train", "--algorithm", "cacla", "--pipeline", "random:mixed", "--episodes", "12", "--seconds",
+            "30", "--seed", "7", "--out", str(out), "--json", *extra]  # fmt: skip
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    with np.load(out / "policy.npz") as f:
+        return json.loads(res.stdout), f["weights"]
+
+
+def test_cli_train_with_a_preset_or_a_table_is_seeded(tmp_path):
+    a, wa = _train(tmp_path, "a", "--randomization", "moderate")
+    b, wb = _train(tmp_path, "b", "--randomization", "moderate")
+    calm, wc = _train(tmp_path, "c")
+    assert a["returns"] == b["returns"]
+    np.testing.assert_array_equal(wa, wb)
+    assert a["returns"] != calm["returns"]
+    assert a["randomization"]["current_speed"] == [0.0, 0.2]
+    table = tmp_path / "sea.toml"
+    table.write_text('preset = "moderate"\n')
+    t, wt = _train(tmp_path, "t", "--randomization", str(table))
+    assert t["returns"] == a["returns"]
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        ("stormy", "preset 'stormy'"),
+        ("{table}", "miss_prob"),
+    ],
+)
+def test_cli_train_bad_randomization_is_one_line_exit_2_and_writes_nothing(tmp_path, value, message):
+    table = tmp_path / "bad.toml"
+    table.write_text("miss_prob = [0.0, 1.5]\n")
+    out = tmp_path / "out"
+    args = ["train", "--algorithm", "cacla", "--episodes", "2", "--out", str(out),
+            "--randomization", value.format(table=table)]  # fmt: skip
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2, res.output
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0]
+    assert not out.exists()
