@@ -145,3 +145,28 @@ def test_cli_train_bad_randomization_is_one_line_exit_2_and_writes_nothing(tmp_p
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0]
     assert not out.exists()
+
+
+def test_the_vector_environment_equals_single_environments_under_randomization():
+    from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
+
+    n, seconds = 3, 8
+    vec = PipelineFollowingVectorEnv(n, "random:medium", episode_seconds=seconds, randomization=WILD)
+    singles = [PipelineFollowingEnv("random:medium", seconds, randomization=WILD) for _ in range(n)]
+    obs, _ = vec.reset(seed=40)
+    firsts = [env.reset(seed=40 + i)[0] for i, env in enumerate(singles)]
+    np.testing.assert_array_equal(obs, np.array(firsts))
+    rng = np.random.default_rng(0)
+    for t in range(2 * seconds + 1):  # through an autoreset (next step after the end)
+        actions = rng.uniform(-1, 1, n)
+        obs, rewards, _, truncated, _ = vec.step(actions)
+        for i, env in enumerate(singles):
+            if t == seconds:  # the step after the end resets it
+                o = env.reset()[0]
+                r, tr = 0.0, False
+            else:
+                o, r, _, tr, _ = env.step([actions[i]])
+            np.testing.assert_allclose(obs[i], o, rtol=0, atol=1e-12)
+            assert rewards[i] == pytest.approx(r, abs=1e-12)
+            assert truncated[i] == tr
+    assert vec._packed[0].tolist() != vec._packed[1].tolist()  # each its own disturbances

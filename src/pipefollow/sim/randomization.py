@@ -38,6 +38,7 @@ import numpy as np
 from pipefollow.sim.disturbance import MAX_BURIED, Disturbance, DisturbanceError
 
 DRAWS = 4 + 3 * MAX_BURIED  # uniforms consumed by one draw (module docstring)
+MAX_NOISE = 2 + 4 + 1  # the most standard normals a camera reading consumes (current, noise, miss)
 _NONE4 = (math.inf, math.inf, math.inf, math.inf)
 
 Range = tuple[float, float]
