@@ -170,3 +170,52 @@ def test_the_vector_environment_equals_single_environments_under_randomization()
             assert rewards[i] == pytest.approx(r, abs=1e-12)
             assert truncated[i] == tr
     assert vec._packed[0].tolist() != vec._packed[1].tolist()  # each its own disturbances
+
+
+def test_an_experiment_trial_and_train_randomize_alike(tmp_path):
+    seed, episodes, seconds = 3, 6, 12
+    args = ["train", "--algorithm", "cacla", "--pipeline", "random:easy", "--episodes", str(episodes),
+            "--seconds", str(seconds), "--seed", str(seed), "--out", str(tmp_path / "train"), "--json",
+            "--randomization", "harsh"]  # fmt: skip
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    from pipefollow.training.policy_files import load_policy
+
+    trained = load_policy(json.loads(res.stdout)["policy"])
+    toml = tmp_path / "one.toml"
+    toml.write_text(
+        f'[experiment]\nname = "one"\nrepeats = 1\nseed = {seed}\n[[trial]]\nname = "t"\n'
+        'algorithm = "cacla"\n'
+        f'phases = [{{ pipeline = "random:easy", episodes = {episodes} }}]\nepisode_seconds = {seconds}\n'
+        'randomization = { preset = "harsh" }\n'
+    )
+    out = tmp_path / "experiment"
+    res = CliRunner().invoke(
+        main,
+        ["reproduce", "--experiment", str(toml), "--out", str(out), "--backend", "serial", "--no-figures"],
+    )
+    assert res.exit_code == 0, res.output
+    (policy,) = (out / "policies").glob("t-seed*.npz")
+    np.testing.assert_array_equal(load_policy(policy).weights, trained.weights)
+
+
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        ('randomization = "stormy"', "preset 'stormy'"),
+        ("randomization = { miss_prob = [0.2, 0.1] }", "miss_prob"),
+        ('randomization = "mild"\ndisturbance = { camera_noise = 0.1 }', "not both"),
+        ("randomization = 3", "preset name or a table"),
+    ],
+)
+def test_experiment_files_refuse_a_bad_randomization(tmp_path, line, message):
+    from pipefollow.experiments.config import ConfigError, load_experiment
+
+    toml = tmp_path / "bad.toml"
+    toml.write_text(
+        '[experiment]\nname = "bad"\n[[trial]]\nname = "t"\nalgorithm = "cacla"\n'
+        f'phases = [{{ pipeline = "paper-left", episodes = 2 }}]\n{line}\n'
+    )
+    with pytest.raises(ConfigError, match=message) as e:
+        load_experiment(toml)
+    assert "\n" not in str(e.value)
