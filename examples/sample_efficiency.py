@@ -33,6 +33,7 @@ from pipefollow.sim.decision import PAPER_SIM
 from pipefollow.sim.disturbance import make_disturbance
 from pipefollow.sim.suites import get_suite, min_length_for
 from pipefollow.training.agents import make_agent
+from pipefollow.training.phases import disturbance_rng
 from pipefollow.training.random_pipes import train_random_compiled
 
 TRAIN_FAMILY, EPISODE_S, TEST_SUITE, TEST_S = "mixed", 90.0, "heldout", 60.0
@@ -51,8 +52,11 @@ def _paper(supervised: bool, **options) -> Callable[[int, int], tuple[object, in
         agent = make_agent("cacla", supervised=supervised, rng=rng)
         episodes = max(1, budget // int(EPISODE_S))
         pipe_rng = rng.spawn(1)[0]
+        extra = dict(options)
+        if "randomization" in extra:  # the disturbances' stream of pipefollow train (training.phases)
+            extra["env_rng"] = disturbance_rng(seed)
         train_random_compiled(agent, get_suite(TRAIN_FAMILY), episodes, pipe_rng=pipe_rng,
-                              episode_seconds=EPISODE_S, **options)  # fmt: skip
+                              episode_seconds=EPISODE_S, **extra)  # fmt: skip
         return agent, episodes * int(EPISODE_S)
 
     return train
@@ -73,6 +77,8 @@ VARIANTS: dict[str, tuple[str, Callable[[int, int], tuple[object, int]]]] = {
     "supervised-cacla": ("supervised CACLA (paper)", _paper(True)),
     "cacla-sigma0.3": ("CACLA, σ from 0.3", _paper(False, sigma_start=0.3)),
     "supervised-cacla-sigma0.3": ("supervised CACLA, σ from 0.3", _paper(True, sigma_start=0.3)),
+    "cacla-mild": ("CACLA, trained under `mild`", _paper(False, randomization="mild")),
+    "supervised-cacla-mild": ("supervised CACLA, trained under `mild`", _paper(True, randomization="mild")),
     "ppo": ("PPO", _deep("ppo")),
     "sac": ("SAC", _deep("sac")),
 }
