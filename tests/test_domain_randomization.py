@@ -219,3 +219,15 @@ def test_experiment_files_refuse_a_bad_randomization(tmp_path, line, message):
     with pytest.raises(ConfigError, match=message) as e:
         load_experiment(toml)
     assert "\n" not in str(e.value)
+
+
+@pytest.mark.slow
+def test_cli_ppo_trains_under_a_randomization(tmp_path):
+    pytest.importorskip("stable_baselines3")
+    out = tmp_path / "ppo"
+    args = ["train", "--algorithm", "ppo", "--pipeline", "random:easy", "--steps", "64", "--seconds", "8",
+            "--out", str(out), "--randomization", "mild", "--json"]  # fmt: skip
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["randomization"]["current_speed"] == [0.0, 0.1]
+    assert (out / "policy.npz").exists()

@@ -302,10 +302,10 @@ def train(
         randomization = load(randomization)
         if disturbance != _disturbance.NO_DISTURBANCE:
             raise UserError("--randomization replaces --current, --camera-noise and --miss-prob: give one")
-        if algorithm in ("ppo", "sac"):
-            raise UserError(f"--randomization is not available with --algorithm {algorithm}")
     if algorithm in ("ppo", "sac"):
-        return _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance)
+        return _train_deep(
+            algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization
+        )
     if steps is not None:
         raise UserError("--steps applies to --algorithm ppo and sac only (use --episodes)")
     from pipefollow.learners.registry import learner, taking
@@ -400,7 +400,7 @@ def train(
     click.echo(f"policy: {policy_path}\nlearning curve: {curve_path}")
 
 
-def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance) -> None:
+def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization=None):
     """``train --algorithm ppo|sac``: :func:`pipefollow.training.deep.train_to_folder`."""
     from click.core import ParameterSource
 
@@ -434,11 +434,17 @@ def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, dis
                 done[0] = min(n, steps)
 
         extra = {} if disturbance == _disturbance.NO_DISTURBANCE else {"disturbance": disturbance}
+        if randomization is not None:
+            extra["randomization"] = randomization
         result = deep.train_to_folder(
             algorithm, pipeline, out, steps=steps, seconds=seconds, seed=seed, progress=progress, **extra
         )
     if disturbance != _disturbance.NO_DISTURBANCE:
         result["disturbance"] = _disturbance.to_dict(disturbance)
+    if randomization is not None:
+        from pipefollow.sim.randomization import to_dict
+
+        result["randomization"] = to_dict(randomization)
     if as_json:
         click.echo(json.dumps(result))
         return
