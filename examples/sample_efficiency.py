@@ -77,8 +77,8 @@ VARIANTS: dict[str, tuple[str, Callable[[int, int], tuple[object, int]]]] = {
     "supervised-cacla": ("supervised CACLA (paper)", _paper(True)),
     "cacla-sigma0.3": ("CACLA, σ from 0.3", _paper(False, sigma_start=0.3)),
     "supervised-cacla-sigma0.3": ("supervised CACLA, σ from 0.3", _paper(True, sigma_start=0.3)),
-    "cacla-mild": ("CACLA, trained under `mild`", _paper(False, randomization="mild")),
-    "supervised-cacla-mild": ("supervised CACLA, trained under `mild`", _paper(True, randomization="mild")),
+    "cacla-mild": ("CACLA, trained under mild", _paper(False, randomization="mild")),
+    "supervised-cacla-mild": ("supervised CACLA, trained under mild", _paper(True, randomization="mild")),
     "ppo": ("PPO", _deep("ppo")),
     "sac": ("SAC", _deep("sac")),
 }
