@@ -13,8 +13,10 @@ for:
   CACLA (eq. 13).
 
 CACLA's eq. 7 replaces δ by ``max(sgn δ, 0)``: no update when δ ≤ 0 (the max term) and a step
-that does not scale with δ (the sign term). The critic (eqs. 5–6), the Gaussian exploration
-(eq. 8), the features and the semi-Markov updates while the pipe is lost are CACLA's.
+that does not scale with δ (the sign term). To tell the two apart, ``actor_update`` replaces δ by
+``max(δ, 0)`` (the max term alone, ``positive``) or ``sgn δ`` (the sign term alone, ``sign``).
+The critic (eqs. 5–6), the Gaussian exploration (eq. 8), the features and the semi-Markov updates
+while the pipe is lost are CACLA's.
 """
 
 from __future__ import annotations
@@ -41,8 +43,8 @@ from pipefollow.sim import records
 DELTA, POSITIVE, SIGN = 0, 1, 2  # δ (eq. 9); max(δ, 0): the max term alone; sgn(δ): the sign term alone
 ACTOR_UPDATES = {"delta": DELTA, "positive": POSITIVE, "sign": SIGN}
 
-# CACLA's record with the step factor: the same fields in the same order, so that CACLA's compiled
-# policy (``cacla.act``) reads the first of them from this record's packed array.
+# CACLA's record with the step factor: CACLA's compiled policy (``cacla.act``) and k(s) step
+# (``cacla.trust_step``) read it by the same field names.
 ActorCriticParams = NamedTuple(
     "ActorCriticParams", [*CaclaParams.__annotations__.items(), ("actor_update", int)]
 )
