@@ -104,10 +104,30 @@ def apply_readings(ids, base: str = "default"):
         raise UserError(str(e)) from None
 
 
-def load_controller(spec: str, seed: int, lookahead: float | None = None):
-    """``heuristic``, ``los`` (lookahead Δ in m) or a policy file → an agent."""
-    from pipefollow.evaluation.benchmark import load_controller as load
+def policy_file(spec: str, option: str) -> str:
+    """A policy file, or the ``policy.npz`` inside a folder (what ``train --out`` writes)."""
+    path = Path(spec)
+    if path.is_dir():
+        inside = path / "policy.npz"
+        if not inside.is_file():
+            raise UserError(f"{option} '{spec}': a folder without policy.npz")
+        return str(inside)
+    return spec
 
+
+def load_controller(spec: str, seed: int, lookahead: float | None = None):
+    """``heuristic``, ``los`` (lookahead Δ in m), a policy file or a folder holding one → an agent."""
+    from pipefollow.evaluation.benchmark import CONTROLLERS
+    from pipefollow.evaluation.benchmark import load_controller as load
+    from pipefollow.sim.pipe_names import did_you_mean
+
+    if spec not in CONTROLLERS:
+        spec = policy_file(spec, "--controller")
+        if not Path(spec).exists() and Path(spec).suffix.lower() != ".npz":
+            names = ", ".join(CONTROLLERS)
+            raise UserError(
+                f"controller '{spec}': not {names} nor a policy file{did_you_mean(spec, list(CONTROLLERS))}"
+            )
     try:
         return load(spec, seed, lookahead)
     except ValueError as e:

@@ -23,6 +23,7 @@ from pipefollow.cli.common import (
     writable_folder,
 )
 from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS
+from pipefollow.files.progress import progress as progress_report
 from pipefollow.sim import disturbance as _disturbance
 
 
@@ -243,9 +244,10 @@ def evaluate(
 @click.option(
     "--init",
     "init_policy",
-    type=click.Path(dir_okay=False),
+    type=click.Path(),
     default=None,
-    help="Continue training from this policy file (e.g. left turns, then right turns).",
+    help="Continue training from this policy file, or the folder holding it (e.g. left turns, then "
+    "right turns); its learner options are kept unless given.",
 )
 @click.option("--force", is_flag=True, help="Replace the policy and learning curve already in --out.")
 @reading_option(
@@ -296,20 +298,16 @@ def train(
     pipe = resolve_training(pipeline)  # a Pipeline, or a Suite for random[:FAMILY]
     rng = np.random.default_rng(seed)
     if init_policy:
+        from pipefollow.cli.common import policy_file
         from pipefollow.training.policy_files import load_policy
 
+        init_policy = policy_file(init_policy, "--init")
         agent = load_policy(init_policy)
         reading = apply_readings(readings, agent.readings)
         if agent.algorithm != algorithm:
             raise UserError(f"--init {init_policy}: holds a {agent.name} policy, not {algorithm}")
         if algorithm == "cacla":
-            wanted = cacla_params(reading, skew, supervised=supervised)
-            held = agent.params._replace(**{k: getattr(wanted, k) for k in _LEARNING_RATES})
-            if held != wanted:
-                raise UserError(
-                    f"--init {init_policy}: holds a {agent.name} policy under readings "
-                    f"'{agent.readings}'; its options differ from these"
-                )
+            _check_init_options(agent, reading, init_policy, skew, supervised, cacla_params)
         agent.readings = reading.id
         agent.rng = rng
     else:
@@ -320,11 +318,8 @@ def train(
 
     made = first_missing(out_dir)
     out = writable_folder(out_dir, "--out")  # before training, after the checks of --init
-    show = not as_json and sys.stderr.isatty()
     try:
-        with click.progressbar(
-            length=episodes, label=f"training {agent.name}", file=sys.stderr, hidden=not show
-        ) as bar:
+        with progress_report(episodes, f"training {agent.name}", hidden=as_json, unit="episodes") as bar:
             done = [0]
 
             def progress(n):
@@ -374,18 +369,41 @@ def train(
     click.echo(f"policy: {policy_path}\nlearning curve: {curve_path}")
 
 
+def _check_init_options(agent, reading, init_policy, skew, supervised, cacla_params) -> None:
+    """``train --init``: the saved policy's --skew and --supervised unless given; differences named."""
+    from click.core import ParameterSource
+
+    ctx = click.get_current_context()
+    given = {n for n in ("skew", "supervised") if ctx.get_parameter_source(n) == ParameterSource.COMMANDLINE}
+    held = agent.params
+    keep_supervised = supervised if "supervised" in given else held.supervised
+    wanted = cacla_params(reading, skew if "skew" in given else 0.0, supervised=keep_supervised)
+    if "skew" not in given:
+        wanted = wanted._replace(skew=held.skew)
+    held = held._replace(**{k: getattr(wanted, k) for k in _LEARNING_RATES})
+    differ = [f"{f} {getattr(held, f)!r} (this run: {getattr(wanted, f)!r})" for f in wanted._fields
+              if getattr(held, f) != getattr(wanted, f)]  # fmt: skip
+    if differ:
+        raise UserError(
+            f"--init {init_policy}: holds a {agent.name} policy (readings '{agent.readings}') whose options "
+            f"differ from this run's: {'; '.join(differ)}; give its options or none"
+        )
+
+
 def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance) -> None:
     """``train --algorithm ppo|sac``: :func:`pipefollow.training.deep.train_to_folder`."""
     from click.core import ParameterSource
 
     ctx = click.get_current_context()
+    option = {p.name: p.opts[0] for p in ctx.command.params}  # a parameter's name → its option
     given = [
-        f"--{name.replace('_', '-')}"
+        option[name]
         for name in ("skew", "supervised", "episodes", "init_policy", "readings")
         if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE
     ]
     if given:
-        raise UserError(f"{', '.join(given)} not available with --algorithm {algorithm} (see --steps)")
+        budget = "; its budget is --steps" if "--episodes" in given else ""
+        raise UserError(f"{', '.join(given)} not available with --algorithm {algorithm}{budget}")
     try:
         from pipefollow.training import deep
     except ImportError as e:  # pipefollow.training.deep.DeepExtraMissing: torch or Stable-Baselines3 missing
@@ -397,9 +415,7 @@ def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, dis
     resolve_training(pipeline)  # a bad pipeline fails before any work
     out = writable_folder(out_dir, "--out")
     steps = 100_000 if steps is None else steps
-    show = not as_json and sys.stderr.isatty()
-    label = f"training {algorithm.upper()}"
-    with click.progressbar(length=steps, label=label, file=sys.stderr, hidden=not show) as bar:
+    with progress_report(steps, f"training {algorithm.upper()}", hidden=as_json, unit="steps") as bar:
         done = [0]
 
         def progress(n):

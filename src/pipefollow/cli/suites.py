@@ -184,6 +184,7 @@ def benchmark(
         from pipefollow.evaluation.plot import plot_benchmark
 
         plot_benchmark(run, plot_path)
+        run.summary["plot"] = str(plot_path)
     if as_json:
         click.echo(json.dumps(run.summary))
         return
