@@ -10,6 +10,7 @@ from pipefollow.cli.common import (
     SEED,
     UserError,
     check_plot_path,
+    complete_suite,
     disturbance_options,
     finite,
     guard,
@@ -31,6 +32,7 @@ from pipefollow.cli.common import (
     "suite_specs",
     multiple=True,
     metavar="SUITE|PATH",
+    shell_complete=complete_suite,
     help="A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
     "(repeatable) [default: heldout].",
 )

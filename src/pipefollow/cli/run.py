@@ -14,10 +14,13 @@ from pipefollow.cli.common import (
     UserError,
     apply_readings,
     check_plot_path,
+    complete_pipeline,
     controller_options,
     disturbance_options,
+    disturbance_text,
     finite,
     guard,
+    inert_readings,
     load_controller,
     reading_option,
     writable_folder,
@@ -60,10 +63,17 @@ def _summary(stats) -> dict:
     "--pipeline",
     default="paper-left",
     show_default=True,
+    shell_complete=complete_pipeline,
     help="Built-in name (paper-left, paper-right, paper-validation), a JSON file, a pipe of a suite "
     "(e.g. heldout-003, as 'suites export' names it) or random[:FAMILY] for a new pipe every episode.",
 )
-@click.option("--episodes", default=1, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
+@click.option(
+    "--episodes",
+    default=1,
+    show_default=True,
+    type=click.IntRange(min=1, max=MAX_EPISODES),
+    help="Number of episodes; they differ only with start noise, random disturbances or a random pipeline.",
+)
 @click.option(
     "--seconds",
     type=click.FloatRange(min=1.0, max=MAX_SECONDS),
@@ -137,6 +147,17 @@ def evaluate(
     pipe = resolve_pipeline(pipeline, seconds)  # a Pipeline, or a Suite for random[:FAMILY]
     agent = load_controller(controller, seed, lookahead)
     reading = apply_readings(readings, getattr(agent, "readings", "default"))
+    warnings = inert_readings(readings)
+    if episodes > 1 and not (start_noise or heading_noise or isinstance(pipe, Suite)):
+        from pipefollow.sim.disturbance import noise_count
+
+        if not noise_count(disturbance):
+            warnings.append(
+                f"the {episodes} episodes are the same: nothing random differs between them "
+                "(see --start-noise, --heading-noise, random:FAMILY, --camera-noise, --miss-prob)"
+            )
+    for w in warnings:
+        click.echo(f"pipefollow: warning: {w}", err=True)
     env = PipelineFollowingEnv(
         pipeline if isinstance(pipe, Suite) else pipe,  # a family: the env draws a pipe every episode
         seconds,
@@ -165,6 +186,8 @@ def evaluate(
     }
     if disturbance != _disturbance.NO_DISTURBANCE:
         result["disturbance"] = _disturbance.to_dict(disturbance)
+    if warnings:
+        result["warnings"] = warnings
     if plot_path:
         from pipefollow.envs.render import plot_trajectories
 
@@ -181,7 +204,10 @@ def evaluate(
     if as_json:
         click.echo(json.dumps(result))
         return
-    click.echo(f"{controller} on {pipeline}, {episodes} episode(s) of {env.episode_seconds:g} s")
+    click.echo(
+        f"{controller} on {pipeline}, {episodes} episode(s) of {env.episode_seconds:g} s"
+        f"{disturbance_text(disturbance)}"
+    )
     click.echo(f"{'episode':>7} {'return':>9} {'in view':>8} {'progress':>9}")
     for i, row in enumerate(result["episodes"]):
         click.echo(f"{i:>7} {row['return']:>9.3f} {row['pipe_in_view']:>8.1%} {row['progress_m']:>8.2f}m")
@@ -215,10 +241,17 @@ def evaluate(
     "--pipeline",
     default="paper-left",
     show_default=True,
+    shell_complete=complete_pipeline,
     help="Built-in name or JSON file to train on, or random[:FAMILY] for a new pipe every episode "
     "(families: see 'pipefollow suites'; random = random:mixed).",
 )
-@click.option("--episodes", default=500, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
+@click.option(
+    "--episodes",
+    default=500,
+    show_default=True,
+    type=click.IntRange(min=1, max=MAX_EPISODES),
+    help="Training episodes (σ falls linearly from 1 to 0.01 over them); SARSA and CACLA.",
+)
 @click.option(
     "--seconds",
     default=20.0,
@@ -233,7 +266,13 @@ def evaluate(
     default=None,
     help="PPO and SAC: budget in environment steps (decisions) [default: 100,000].",
 )
-@click.option("--seed", default=0, show_default=True, type=SEED)
+@click.option(
+    "--seed",
+    default=0,
+    show_default=True,
+    type=SEED,
+    help="Seed of the learner's exploration, its initial weights and any random pipes and disturbances.",
+)
 @click.option(
     "--out",
     "out_dir",
