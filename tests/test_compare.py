@@ -130,3 +130,11 @@ def test_cli_compare_json_plot_and_labels(tmp_path):
 def test_cli_compare_label_count_must_match(tmp_path):
     res = CliRunner().invoke(main, ["compare", "heuristic", "los", "--label", "H"])
     assert res.exit_code == 2 and "one per policy" in res.stderr
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 7, 8, 13, 100])
+def test_iqm_is_scipys_trimmed_mean(n):
+    from scipy.stats import trim_mean
+
+    x = np.random.default_rng(n).normal(size=(1, n)).round(1)  # rounded: ties
+    assert cmp.iqm(x) == pytest.approx(trim_mean(x, 0.25, axis=None), abs=1e-12)
