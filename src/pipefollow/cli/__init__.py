@@ -15,6 +15,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "pipefollow.cli.suites:benchmark",
         "Run a controller deterministically on every pipe of a suite, beside the heuristic.",
     ),
+    "compare": (
+        "pipefollow.cli.compare:compare",
+        "Compare learners over training seeds × pipes: IQM, mean, probability of improvement.",
+    ),
     "evaluate": (
         "pipefollow.cli.run:evaluate",
         "Evaluate a controller deterministically (σ = 0) on a pipeline.",

@@ -11,10 +11,13 @@ from pipefollow.cli.common import (
     UserError,
     apply_readings,
     check_plot_path,
+    complete_suite,
     controller_options,
     disturbance_options,
+    disturbance_text,
     finite,
     guard,
+    inert_readings,
     load_controller,
     reading_option,
     writable_folder,
@@ -117,6 +120,7 @@ def pipelines(as_json):
     "suite_specs",
     multiple=True,
     metavar="SUITE|PATH",
+    shell_complete=complete_suite,
     help="A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
     "(repeatable; what 'suites export' writes) [default: heldout].",
 )
@@ -167,6 +171,9 @@ def benchmark(
     _pipe_count(suite, pipes)
     agent = load_controller(controller, seed, lookahead)
     reading = apply_readings(readings, getattr(agent, "readings", "default"))
+    warnings = inert_readings(readings)
+    for w in warnings:
+        click.echo(f"pipefollow: warning: {w}", err=True)
     run = run_benchmark(
         agent,
         suite,
@@ -180,13 +187,16 @@ def benchmark(
     run.summary["readings"] = reading.id
     if disturbance != _disturbance.NO_DISTURBANCE:
         run.summary["disturbance"] = _disturbance.to_dict(disturbance)
+    if warnings:
+        run.summary["warnings"] = warnings
     if plot_path:
         from pipefollow.evaluation.plot import plot_benchmark
 
         plot_benchmark(run, plot_path)
+        run.summary["plot"] = str(plot_path)
     if as_json:
         click.echo(json.dumps(run.summary))
         return
-    click.echo(format_summary(run.summary, seconds))
+    click.echo(format_summary(run.summary, seconds) + disturbance_text(disturbance, "\n  disturbances   "))
     if plot_path:
         click.echo(f"plot: {plot_path}")
