@@ -10,6 +10,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from pipefollow.perception.camera import VisionCamera, camera_settings
 from pipefollow.sim import decision as sim
 from pipefollow.sim.disturbance import Disturbance, check, disturbance_from_dict, noise_count
 from pipefollow.sim.pipeline import Pipeline, resolve
@@ -90,6 +91,16 @@ class PipelineFollowingEnv(gym.Env):
       noise, missed detections, buried stretches) or a dict of its user-unit keys
       (:func:`~pipefollow.sim.disturbance.disturbance_from_dict`), replacing ``params.disturbance``;
       none by default. Its random parts draw from the environment's seeded ``np_random``.
+    * ``camera``: ``"ideal"`` (default: the exact visible piece, the paper's) or ``"vision"``: the
+      observation and the in-view decision come from a pipe detector on the rendered camera image
+      (:mod:`pipefollow.perception`; needs the extra ``vision``); "not found" is a lost pipe.
+    * ``observation``: ``"state"`` (default, ``Box(4)``) or ``"image"``: the camera image,
+      ``Box(0, 255, (1, H, W), uint8)``.
+    * ``reward_from``: ``"truth"`` (default: eq. 19 from the true geometry; a lost detection still
+      gives −10) or ``"detected"`` (eq. 19 from the detection).
+    * ``water``: the image's water and camera settings: a
+      :class:`~pipefollow.perception.water.Water`, a preset name (``clear``, ``moderate``,
+      ``turbid``) or a dict of its fields (``preset`` allowed); ``clear`` by default.
 
     ## Info
 
@@ -102,7 +113,9 @@ class PipelineFollowingEnv(gym.Env):
     while the pipe is lost. At the episode's last step also its summary:
     ``episode_pipe_in_view`` (share of decisions ending with the pipe in view),
     ``episode_progress_m`` and ``episode_rms_e_dist`` (RMS of ``e_dist`` over those decisions;
-    NaN if none).
+    NaN if none). With the vision camera also ``detected``, ``detection_confidence``,
+    ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the exact camera's); the episode's
+    summary is then the exact camera's too.
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 2}
@@ -116,6 +129,10 @@ class PipelineFollowingEnv(gym.Env):
         render_mode: str | None = None,
         params: sim.SimParams = sim.PAPER_SIM,
         disturbance: Disturbance | dict[str, Any] | None = None,
+        camera: str = "ideal",
+        observation: str = "state",
+        reward_from: str = "truth",
+        water: Any = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None, 'human' or 'rgb_array', got {render_mode!r}")
@@ -154,6 +171,14 @@ class PipelineFollowingEnv(gym.Env):
             dtype=np.float64,
         )
         self.action_space = spaces.Box(-1.0, 1.0, (1,), dtype=np.float32)
+        # the vision camera (pipefollow.perception.camera): None with the ideal camera's state
+        self.camera_settings = camera_settings(camera, observation, reward_from, water)
+        self._vision = None
+        if self.camera_settings.renders:
+            self._vision = VisionCamera(self.camera_settings, cam, params.lost_reward)
+            if observation == "image":
+                w = self.camera_settings.water
+                self.observation_space = spaces.Box(0, 255, (1, w.height, w.width), dtype=np.uint8)
         self.state = np.zeros(sim.STATE_SIZE)
         self._decisions = 0
         self._seen, self._sum_e2 = 0, 0.0
@@ -200,9 +225,11 @@ class PipelineFollowingEnv(gym.Env):
         self._seen, self._sum_e2 = 0, 0.0
         self.trail = [(x, y, psi)]
         self.last_reward, self.episode_return = None, 0.0
+        if self._vision is not None:
+            self._vision.reset(self.state, self.pipeline.points, self.pipeline.cumulative, self.np_random)
         if self.render_mode == "human":
             self.render()
-        return self.state[:4].copy(), self._info()
+        return self._observation(), self._info()
 
     def _set_pipeline(self, spec) -> None:
         """A fixed pipeline, or a training family (``random[:NAME]``) to draw from at every reset."""
@@ -222,12 +249,16 @@ class PipelineFollowingEnv(gym.Env):
         s, z = self.state, self._z
         if z.size:
             self.np_random.standard_normal(out=z)
+        a_prev = s[sim.A_PREV]
         r = sim.decide_packed(s, a, self.pipeline.points, self.pipeline.cumulative, self._packed, z)
         self._decisions += 1
         self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
         if s[sim.IN_VIEW] != 0.0:
             self._seen += 1
             self._sum_e2 += s[sim.E_DIST] ** 2
+        if self._vision is not None:  # the episode's summary above stays the true geometry's
+            pipe = self.pipeline
+            r = self._vision.step(s, pipe.points, pipe.cumulative, self.np_random, r, a_prev)
         truncated = self._decisions >= self.max_decisions
         self.last_reward = r
         self.episode_return += r
@@ -238,11 +269,14 @@ class PipelineFollowingEnv(gym.Env):
             info["episode_pipe_in_view"] = self._seen / self._decisions
             info["episode_progress_m"] = s[sim.PROGRESS_MAX]
             info["episode_rms_e_dist"] = math.sqrt(self._sum_e2 / self._seen) if self._seen else math.nan
-        return s[:4].copy(), r, False, truncated, info
+        return self._observation(), r, False, truncated, info
+
+    def _observation(self) -> np.ndarray:
+        return self.state[:4].copy() if self._vision is None else self._vision.observation(self.state)
 
     def _info(self) -> dict[str, Any]:
         s = self.state
-        return {
+        info = {
             "pipe_in_view": bool(s[sim.IN_VIEW]),
             "overridden": bool(s[sim.OVERRIDDEN]),
             "e_dist": s[sim.E_DIST],
@@ -257,6 +291,9 @@ class PipelineFollowingEnv(gym.Env):
             "camera_missed": bool(s[sim.MISSED]),
             "current": (s[sim.CURRENT_SPEED], s[sim.CURRENT_DIR]),
         }
+        if self._vision is not None:
+            info.update(self._vision.info())
+        return info
 
     def render(self):
         """The paper's Fig. 2 view: an RGB array (``"rgb_array"``) or a Matplotlib window (``"human"``).
@@ -278,7 +315,10 @@ class PipelineFollowingEnv(gym.Env):
         if self.render_mode == "human":
             self._scene.show(pause=1.0 / self.metadata["render_fps"])
             return None
-        return self._scene.rgb()
+        view = self._scene.rgb()
+        if self._vision is not None:  # the camera image and the detection beside the Fig. 2 view
+            view = np.hstack([view, self._vision.panel(view.shape[0])])
+        return view
 
     def close(self):
         """Close the rendering's figure (and its window)."""

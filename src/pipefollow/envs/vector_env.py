@@ -20,6 +20,8 @@ single environment draws them.
   (``episode_pipe_in_view``, ``episode_progress_m``, ``episode_rms_e_dist``) where an episode ends.
 * **Disturbances**: supported, as in the single environment (each sub-environment draws its
   camera reading's normals from its own generator).
+* **Vision camera** (``camera="vision"``, ``observation="image"``): supported; after the batched
+  decision each sub-environment renders and detects with its own generator, as the single one does.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ from gymnasium.vector.utils import batch_space
 from numba import njit
 
 from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.perception.camera import VisionCamera
 from pipefollow.sim import decision as sim
 from pipefollow.sim.pipeline import Pipeline, resolve
 from pipefollow.sim.suites import min_length_for, parse_random_spec
@@ -156,6 +159,11 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self._rewards = np.zeros(n)
         self._no_skip = np.zeros(n, dtype=bool)
         self._ended = np.zeros(n, dtype=bool)
+        # the vision camera renders and detects per sub-environment after the batched decision
+        self._cams = None
+        if proto._vision is not None:
+            settings, cam, lost = proto.camera_settings, self.params.camera, self.params.lost_reward
+            self._cams = [VisionCamera(settings, cam, lost) for _ in range(n)]
 
     def _load_pipe(self, i: int, pipe: Pipeline) -> None:
         m = len(pipe.points)
@@ -211,7 +219,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
         for i in range(n):
             self._reset_one(i, lateral, heading)
         self._autoreset[:] = False
-        return self.states[:, :4].copy(), self._infos(np.zeros(n, dtype=bool))
+        return self._observations(), self._infos(np.zeros(n, dtype=bool))
 
     def _reset_one(self, i: int, lateral=None, heading_deg=None) -> None:
         """Sub-environment ``i``'s reset, with the single environment's draws in its order."""
@@ -239,6 +247,8 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self._decisions[i] = 0
         self._seen[i] = 0
         self._sum_e2[i] = 0.0
+        if self._cams is not None:
+            self._cams[i].reset(self.states[i], self._points[i, :m], self._cum[i, :m], rng)
 
     def step(self, actions):
         """One 1-s decision of every sub-environment (next-step autoreset; module docstring)."""
@@ -254,12 +264,19 @@ class PipelineFollowingVectorEnv(VectorEnv):
                     rngs[i].standard_normal(out=self._z[i])
         skip = resetting if any_reset else self._no_skip
         rewards, truncated = self._rewards, self._ended
+        a_prev = self.states[:, sim.A_PREV].copy()
         ok = step_batch(
             self.states, a, self._points, self._cum, self._n_points, self._packed, self._z, skip, rewards,
             self._decisions, self._seen, self._sum_e2, self.max_decisions, truncated,
         )  # fmt: skip
         if not ok:
             raise ValueError("action is NaN")
+        if self._cams is not None:
+            rngs = self.np_random_generators
+            for i in np.flatnonzero(~skip):
+                m = self._n_points[i]
+                pts, cum = self._points[i, :m], self._cum[i, :m]
+                rewards[i] = self._cams[i].step(self.states[i], pts, cum, rngs[i], rewards[i], a_prev[i])
         if any_reset:
             for i in np.flatnonzero(resetting):
                 self._reset_one(int(i))
@@ -267,7 +284,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
         terminated = np.zeros(self.num_envs, dtype=bool)
         infos = self._infos(truncated)
         self._autoreset = truncated.copy()  # no terminal states: only truncations end episodes
-        return self.states[:, :4].copy(), rewards.copy(), terminated, truncated, infos
+        return self._observations(), rewards.copy(), terminated, truncated, infos
 
     def reset_done(self) -> np.ndarray:
         """Reset the sub-environments whose episode ended at the last step, now; their first observations.
@@ -279,7 +296,12 @@ class PipelineFollowingVectorEnv(VectorEnv):
         for i in done:
             self._reset_one(int(i))
         self._autoreset[:] = False
-        return self.states[done, :4].copy()
+        return self._observations()[done]
+
+    def _observations(self) -> np.ndarray:
+        if self._cams is None:
+            return self.states[:, :4].copy()
+        return np.stack([c.observation(s) for c, s in zip(self._cams, self.states, strict=True)])
 
     def _infos(self, ended: np.ndarray) -> dict[str, np.ndarray]:
         s = self.states
@@ -293,6 +315,10 @@ class PipelineFollowingVectorEnv(VectorEnv):
         infos["pose"], infos["_pose"] = s[:, sim.X : sim.PSI + 1].copy(), every
         infos["nu"], infos["_nu"] = s[:, sim.U : sim.R + 1].copy(), every
         infos["waypoint"], infos["_waypoint"] = s[:, sim.WP_X : sim.WP_Y + 1].copy(), every
+        if self._cams is not None:
+            for key in self._cams[0].info():
+                infos[key] = np.array([c.info()[key] for c in self._cams])
+                infos["_" + key] = every
         if ended.any():
             dec = np.maximum(self._decisions, 1)
             with np.errstate(invalid="ignore", divide="ignore"):

@@ -35,8 +35,9 @@ _CV2 = None
 class Detection(NamedTuple):
     """What :func:`detect_pipe` found: ``found`` and, if so, the pipe's centre line in view.
 
-    ``(x1, y1)`` is the far end (the end with the larger forward position), ``(x2, y_near)`` the
-    near end, in camera metres; ``confidence`` in [0, 1]. Without a pipe the numbers are 0.
+    ``(x2, y_near)`` is the near end (the end nearer the AUV's centre, the footprint's origin:
+    the pipe comes from behind the AUV), ``(x1, y1)`` the far end, in camera metres;
+    ``confidence`` in [0, 1]. Without a pipe the numbers are 0.
     """
 
     found: bool
@@ -279,7 +280,9 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
         return False, 0.0, 0.0, 0.0, 0.0, confidence
     xa, ya = ax0 + t0 * (bx0 - ax0), ay0 + t0 * (by0 - ay0)
     xb, yb = ax0 + t1 * (bx0 - ax0), ay0 + t1 * (by0 - ay0)
-    if ya > yb:
+    # the near end is the one nearer the AUV (the footprint's origin): the pipe comes from behind
+    # it, also when it runs across the view after a turn
+    if xa * xa + ya * ya > xb * xb + yb * yb:
         xa, ya, xb, yb = xb, yb, xa, ya
     x1 = min(max(xb, -half_width), half_width)
     y1 = min(max(yb, 0.0), depth)
