@@ -3,7 +3,7 @@
 Each command wires options to the library; the work is done in the modules it calls.
 """
 
-from pipefollow.cli import experiments, run, suites  # noqa: F401 - registers the commands
+from pipefollow.cli import experiments, run, suites, vision  # noqa: F401 - registers the commands
 from pipefollow.cli.common import main
 
 __all__ = ["main"]

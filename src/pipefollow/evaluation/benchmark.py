@@ -184,10 +184,14 @@ def run_episodes(
     seconds: float,
     params: sim.SimParams = sim.PAPER_SIM,
     noise_seed: int = 0,
+    camera: dict | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """One deterministic episode (σ = 0) of ``agent`` per pipe.
 
-    ``noise_seed`` seeds the random disturbances, if any (module docstring).
+    ``noise_seed`` seeds the random disturbances, if any (module docstring). ``camera``: the
+    environment's camera arguments (``camera``, ``water``, ``reward_from``); with the vision
+    camera the episodes run through the environment, the images and detections drawing from the
+    pipe's noise generator, and ``pipe_in_view`` and ``rms_e_dist`` are the exact camera's.
 
     Returns ``(results, poses)``: (pipes, 5) columns return, pipe_in_view, progress_m, Σ e_dist²
     and number of decisions in view; (pipes, decisions + 1, 3) poses (x, y, ψ).
@@ -196,8 +200,8 @@ def run_episodes(
     out = np.zeros((len(pipes), 5))
     poses = np.zeros((len(pipes), n_decisions + 1, 3))
     compiled = _compiled_kind(agent)
-    if compiled is None:
-        _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed)
+    if compiled is None or camera:
+        _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed, camera)
         return out, poses
     from pipefollow.sim.disturbance import noise_count
 
@@ -219,12 +223,12 @@ def run_episodes(
     return out, poses
 
 
-def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0) -> None:
+def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0, camera=None) -> None:
     """:func:`run_episodes` through the Gymnasium environment, for controllers without a compiled kind."""
     from pipefollow.envs.env import PipelineFollowingEnv
 
     for i, pipe in enumerate(pipes):
-        env = PipelineFollowingEnv(pipe, seconds, params=params)
+        env = PipelineFollowingEnv(pipe, seconds, params=params, **(camera or {}))
         env.np_random = _noise_rng(noise_seed, i)
         agent.begin_episode(0.0)
         obs, info = env.reset()
@@ -234,9 +238,9 @@ def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0
             a = agent.act(obs, explore=False) if info["pipe_in_view"] else 0.0
             obs, r, terminated, truncated, info = env.step([a])
             total += r
-            if info["pipe_in_view"]:
+            if info.get("true_pipe_in_view", info["pipe_in_view"]):  # the exact camera's view
                 seen += 1
-                sum_e2 += info["e_dist"] ** 2
+                sum_e2 += info.get("true_e_dist", info["e_dist"]) ** 2
             done = terminated or truncated
         out[i] = (total, seen / env.max_decisions, info["progress_m"], sum_e2, seen)
         poses[i] = np.array(env.trail)
@@ -268,6 +272,7 @@ def benchmark(
     n_pipes: int | None = None,
     seed: int = 0,
     noise_seed: int = 0,
+    camera: dict | None = None,
 ) -> BenchmarkRun:
     """Run ``agent`` and the heuristic on the suite's pipes and summarize (module docstring).
 
@@ -280,11 +285,13 @@ def benchmark(
         n_pipes: number of pipes (default: the whole held-out suite; 100 of a training family).
         seed: seed of the bootstrap resampling.
         noise_seed: seed of the random disturbances (module docstring), the same for both.
+        camera: the environment's camera arguments for ``agent`` (:func:`run_episodes`); the
+            heuristic it is compared with always runs on the ideal camera.
     """
     n = n_pipes if n_pipes is not None else (suite.count or 100)
     pipes = suite.pipes(n, min_length_for(seconds))
-    res, poses = run_episodes(agent, pipes, seconds, params, noise_seed)
-    is_heuristic = isinstance(agent, Heuristic)
+    res, poses = run_episodes(agent, pipes, seconds, params, noise_seed, camera)
+    is_heuristic = isinstance(agent, Heuristic) and not camera
     if is_heuristic:
         h_res, h_poses = res, poses
     else:

@@ -104,7 +104,7 @@ def detect_pipe(
     img = check_image(image)
     cv2 = require_cv2()
     h, w = img.shape
-    if float(img.std()) < 2.0:  # blank or saturated: no edges to find
+    if float(cv2.meanStdDev(img)[1][0, 0]) < 2.0:  # blank or saturated: no edges to find
         return NOT_FOUND
     smooth = cv2.GaussianBlur(img, (5, 5), 1.0)
     # thresholds from the image's own gradients: their mean is the texture's and the noise's (the

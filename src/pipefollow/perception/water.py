@@ -50,7 +50,7 @@ CLEAR = Water()
 WATER_PRESETS = {
     "clear": CLEAR,
     "moderate": Water(turbidity=0.2, blur=0.9, noise=5.0, snow=12.0),
-    "turbid": Water(turbidity=0.35, blur=1.2, noise=7.0, snow=25.0),
+    "turbid": Water(turbidity=0.25, blur=1.2, noise=7.0, snow=25.0),
 }
 
 
