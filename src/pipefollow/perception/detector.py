@@ -25,9 +25,10 @@ from pipefollow.sim.camera import clip_segment
 MIN_SIDE = 16  # smallest image side (pixels) the detector accepts
 EDGE_FACTOR = 3.2  # Canny's high threshold in mean gradients of the image ...
 MIN_EDGE = 24.0  # ... and at least this (Canny's 3×3 Sobel units)
-MIN_EDGE_SHARE = 0.25  # the weaker edge's segment length, at least this share of the stronger's
+MIN_EDGE_SHARE = 0.1  # the weaker edge's segment length, at least this share of the stronger's
 MIN_SUPPORT = 0.25  # the two edges' segment length, at least this share of the footprint's longer side
 EXTEND = 0.4  # m: how far edge pixels on the fitted edges may lengthen the Hough segments' extent
+JOIN = 0.5  # m: two legs whose nearest ends are closer than this are one bent pipe
 SOBEL_GAIN = 8.0  # a 3×3 Sobel gives 8× the central-difference gradient
 _CV2 = None
 
@@ -113,7 +114,7 @@ def detect_pipe(
     edges = cv2.Canny(smooth, 0.5 * high, high, L2gradient=True)
     short = min(h, w)
     segs = cv2.HoughLinesP(
-        edges, 1.0, math.pi / 180.0, threshold=max(8, short // 8), minLineLength=short / 8.0, maxLineGap=3
+        edges, 1.0, math.pi / 180.0, threshold=max(8, short // 8), minLineLength=short / 8.0, maxLineGap=6
     )
     if segs is None:
         return NOT_FOUND
@@ -142,7 +143,51 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     """From Hough segments (pixels ``x0, y0, x1, y1``) and the edge image to the pipe's centre line.
 
     Returns ``(found, x1, y1, x2, y_near, confidence)`` in camera metres (see :func:`detect_pipe`).
+    A pipe that bends in view shows two straight legs: the strongest leg is found first, then the
+    strongest leg of another direction among the remaining segments; if one of its ends lies
+    within :data:`JOIN` of one of the first leg's, the observation spans the chain's outer ends,
+    as the exact camera's spans the visible piece from its near to its far end.
     """
+    m = segs.shape[0]
+    active = np.ones(m, dtype=np.bool_)
+    args = (edges, half_width, depth, diameter, min_confidence)
+    found, ends, confidence, used, dirn = leg(segs, active, *args)
+    if not found:
+        return False, 0.0, 0.0, 0.0, 0.0, confidence
+    for i in range(m):
+        if used[i]:
+            active[i] = False
+    found2, ends2, _, _, dirn2 = leg(segs, active, *args)
+    bend = abs((dirn2 - dirn + 0.5 * math.pi) % math.pi - 0.5 * math.pi)
+    if found2 and bend > math.radians(15.0):
+        best, bi, bj = math.inf, 0, 0
+        for i in range(2):
+            for j in range(2):
+                d = math.hypot(ends[i, 0] - ends2[j, 0], ends[i, 1] - ends2[j, 1])
+                if d < best:
+                    best, bi, bj = d, i, j
+        if best < JOIN:
+            ends[bi, 0], ends[bi, 1] = ends2[1 - bj, 0], ends2[1 - bj, 1]
+    xa, ya, xb, yb = ends[0, 0], ends[0, 1], ends[1, 0], ends[1, 1]
+    # the near end is the one nearer the AUV (the footprint's origin): the pipe comes from behind
+    # it, also when it runs across the view after a turn
+    if xa * xa + ya * ya > xb * xb + yb * yb:
+        xa, ya, xb, yb = xb, yb, xa, ya
+    x1 = min(max(xb, -half_width), half_width)
+    y1 = min(max(yb, 0.0), depth)
+    x2 = min(max(xa, -half_width), half_width)
+    y_near = min(max(ya, 0.0), depth)
+    return True, x1, y1, x2, y_near, confidence
+
+
+@njit(cache=True)
+def leg(segs, active, edges, half_width, depth, diameter, min_confidence):
+    """The strongest straight piece of pipe among the ``active`` segments.
+
+    Returns ``(found, ends, confidence, used, direction)``: the centre line's two ends inside the
+    footprint (a 2 × 2 array, unordered), the segments of its two edges, and its direction (rad).
+    """
+    nothing = np.zeros((2, 2))
     h, w = edges.shape
     sx, sy = 2.0 * half_width / w, depth / h  # metres per column, per row
     m = segs.shape[0]
@@ -158,7 +203,8 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     bins = 36
     hist = np.zeros(bins)
     for i in range(m):
-        hist[int(theta[i] / math.pi * bins) % bins] += length[i]
+        if active[i]:
+            hist[int(theta[i] / math.pi * bins) % bins] += length[i]
     best_bin, best_val = 0, -1.0
     for b in range(bins):
         v = hist[b] + 0.5 * (hist[(b - 1) % bins] + hist[(b + 1) % bins])
@@ -169,14 +215,15 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     s2, c2 = 0.0, 0.0  # doubled angles average a direction modulo π
     for i in range(m):
         diff = abs((theta[i] - peak + 0.5 * math.pi) % math.pi - 0.5 * math.pi)
-        if diff < math.radians(12.0):
+        if diff < math.radians(12.0) and active[i]:
             keep[i] = True
             s2 += length[i] * math.sin(2.0 * theta[i])
             c2 += length[i] * math.cos(2.0 * theta[i])
     idx = np.nonzero(keep)[0]
     k = idx.size
+    used = np.zeros(m, dtype=np.bool_)
     if k < 2:
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0
+        return False, nothing, 0.0, used, 0.0
     dirn = 0.5 * math.atan2(s2, c2)
     dx, dy = math.cos(dirn), math.sin(dirn)
     nx, ny = -dy, dx
@@ -217,7 +264,7 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
             ):
                 pa, pb, score = i, j, total
     if pa < 0:
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0
+        return False, nothing, 0.0, used, dirn
     t_lo, t_hi = math.inf, -math.inf
     for j in range(k):
         if group[j] == pa or group[j] == pb:
@@ -229,7 +276,9 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     sep = g_rho[pb] - g_rho[pa]
     confidence = min(1.0, 0.5 * score / extent) * math.exp(-(((sep - diameter) / diameter) ** 2))
     if confidence < min_confidence or score < MIN_SUPPORT * max(depth, 2.0 * half_width):
-        return False, 0.0, 0.0, 0.0, 0.0, confidence
+        return False, nothing, confidence, used, dirn
+    for j in range(k):
+        used[idx[j]] = group[j] == pa or group[j] == pb
     # refine each edge: least squares of the offset across against the position along, on its
     # edge pixels near it; twice, the second time in a narrower band around the first fit (the
     # Hough direction is only good to a degree or two)
@@ -277,18 +326,11 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     ax0, ay0, bx0, by0 = ends[0, 0], ends[0, 1], ends[1, 0], ends[1, 1]
     t0, t1 = clip_segment(ax0, ay0, bx0, by0, -half_width, half_width, 0.0, depth)
     if t0 > t1:
-        return False, 0.0, 0.0, 0.0, 0.0, confidence
-    xa, ya = ax0 + t0 * (bx0 - ax0), ay0 + t0 * (by0 - ay0)
-    xb, yb = ax0 + t1 * (bx0 - ax0), ay0 + t1 * (by0 - ay0)
-    # the near end is the one nearer the AUV (the footprint's origin): the pipe comes from behind
-    # it, also when it runs across the view after a turn
-    if xa * xa + ya * ya > xb * xb + yb * yb:
-        xa, ya, xb, yb = xb, yb, xa, ya
-    x1 = min(max(xb, -half_width), half_width)
-    y1 = min(max(yb, 0.0), depth)
-    x2 = min(max(xa, -half_width), half_width)
-    y_near = min(max(ya, 0.0), depth)
-    return True, x1, y1, x2, y_near, confidence
+        return False, nothing, confidence, used, dirn
+    out = np.empty((2, 2))
+    out[0, 0], out[0, 1] = ax0 + t0 * (bx0 - ax0), ay0 + t0 * (by0 - ay0)
+    out[1, 0], out[1, 1] = ax0 + t1 * (bx0 - ax0), ay0 + t1 * (by0 - ay0)
+    return True, out, confidence, used, dirn
 
 
 @njit(cache=True)
