@@ -53,7 +53,7 @@ NOT_FOUND = Detection(False)
 
 
 def require_cv2():
-    """OpenCV's module; a one-line ``ImportError`` naming the extra when it is not installed."""
+    """OpenCV's module, set to one thread; a one-line ``ImportError`` naming the extra when it is missing."""
     global _CV2
     if _CV2 is None:
         try:
@@ -63,6 +63,8 @@ def require_cv2():
                 "the vision camera needs OpenCV: install the extra 'vision' "
                 '(pip install "pipefollow[vision]")'
             ) from None
+        # OpenCV's worker threads cost more than they give on a 64 × 96 image: one thread (decisions.md)
+        cv2.setNumThreads(1)
         _CV2 = cv2
     return _CV2
 
