@@ -248,6 +248,27 @@ def _finish(img, noise, sd, out):
             out[r, c] = 0 if v < 0.0 else (255 if v >= 255.0 else np.uint8(v))
 
 
+@njit(cache=True)
+def _render(out, img, tmp, dist, across, along, a, b, segs, seabed, growth, snow, noise, scalars, x, y, psi):
+    """One frame in one compiled call (a Python call per stage cost more than some stages)."""
+    hw, depth, radius, burial, growth_share, sigma, sd = (
+        scalars[0], scalars[1], scalars[2], scalars[3], scalars[4], scalars[5], scalars[6],
+    )  # fmt: skip
+    h, w = img.shape
+    dist[:] = np.inf
+    _pipe_distance(segs, hw, depth, w, h, radius, dist, across, along)
+    _compose(
+        img, x, y, psi, hw, depth, radius, burial, growth_share, seabed, growth, dist, across, along, a, b
+    )
+    lo, span = SNOW_LEVEL[0], SNOW_LEVEL[1] - SNOW_LEVEL[0]
+    for i in range(snow.size // 3):
+        r = min(int(snow[3 * i] * h), h - 1)
+        c = min(int(snow[3 * i + 1] * w), w - 1)
+        img[r, c] += lo + span * snow[3 * i + 2]
+    _blur(img, tmp, sigma)
+    _finish(img, noise, np.float32(sd), out)
+
+
 class Renderer:
     """Renders camera images of one geometry; holds its buffers so a frame allocates nothing."""
 
@@ -260,6 +281,20 @@ class Renderer:
         self._across = np.zeros(shape, dtype=np.float32)
         self._along = np.zeros(shape, dtype=np.float32)
         self._a, self._b = light_and_water(water, camera)
+        self._no_pipe = np.zeros((0, 5))
+        # the scalars of a frame: footprint, pipe radius, burial, growth, blur σ, noise s.d.
+        sigma = math.hypot(water.blur, SCATTER_BLUR * water.turbidity)
+        self._scalars = np.array(
+            [
+                camera.half_width,
+                camera.depth,
+                0.5 * water.pipe_diameter,
+                water.burial,
+                water.growth,
+                sigma,
+                water.noise,
+            ]
+        )
         self._noise_bank: np.ndarray | None = None  # drawn from the first frame's generator
 
     def render(
@@ -277,50 +312,18 @@ class Renderer:
         ``points`` of shape (0, 2), gives a frame without pipe).
         """
         wt, cam = self.water, self.camera
-        x, y, psi = (float(v) for v in pose)
-        radius = 0.5 * wt.pipe_diameter
-        self._dist.fill(np.inf)
-        if points.shape[0] >= 2:
-            segs = pipe_segments(points, cum, x, y, psi, cam.half_width, cam.depth, radius)
-            _pipe_distance(
-                segs,
-                cam.half_width,
-                cam.depth,
-                wt.width,
-                wt.height,
-                radius,
-                self._dist,
-                self._across,
-                self._along,
-            )
-        img = self._img
-        _compose(
-            img,
-            x,
-            y,
-            psi,
-            cam.half_width,
-            cam.depth,
-            radius,
-            wt.burial,
-            wt.growth,
-            textures.seabed,
-            textures.growth,
-            self._dist,
-            self._across,
-            self._along,
-            self._a,
-            self._b,
-        )
+        x, y, psi = pose
         n_snow = rng.poisson(wt.snow) if wt.snow > 0.0 else 0
-        if n_snow:
-            rows = rng.integers(0, wt.height, n_snow)
-            cols = rng.integers(0, wt.width, n_snow)
-            np.add.at(img, (rows, cols), rng.uniform(*SNOW_LEVEL, n_snow).astype(np.float32))
-        _blur(img, self._tmp, math.hypot(wt.blur, SCATTER_BLUR * wt.turbidity))
+        snow = rng.random(3 * n_snow)  # row, column and brightness of each speck
         if out is None:
             out = np.empty((wt.height, wt.width), dtype=np.uint8)
-        _finish(img, self._noise_frame(rng), np.float32(wt.noise), out)
+        segs = self._no_pipe
+        if points.shape[0] >= 2:
+            segs = pipe_segments(points, cum, x, y, psi, cam.half_width, cam.depth, 0.5 * wt.pipe_diameter)
+        _render(
+            out, self._img, self._tmp, self._dist, self._across, self._along, self._a, self._b,
+            segs, textures.seabed, textures.growth, snow, self._noise_frame(rng), self._scalars, x, y, psi,
+        )  # fmt: skip
         return out
 
     def _noise_frame(self, rng: np.random.Generator) -> np.ndarray:
