@@ -167,7 +167,7 @@ def calibrate(rows: Sequence[dict]) -> list[dict]:
 
 
 def sample_figure(
-    pipes, frames: Sequence[Frame], path, turbidities=(0.1, 0.2, 0.3), per_row: int = 6, seed: int = 0
+    pipes, frames: Sequence[Frame], path, turbidities=(0.1, 0.2, 0.25, 0.3), per_row: int = 6, seed: int = 0
 ):
     """A figure of sample frames per turbidity with the exact piece (green) and the detection (red)."""
     from pipefollow.envs.render import new_figure, save_figure
