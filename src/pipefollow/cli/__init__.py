@@ -38,6 +38,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "train": ("pipefollow.cli.run:train", "Train a learner; writes the policy and its learning curve."),
     "trials": ("pipefollow.cli.experiments:trials", "List the trials of an experiment."),
+    "vision": (
+        "pipefollow.cli.vision:vision",
+        "The vision camera: how good its pipe detector is, and a camera model calibrated from it.",
+    ),
 }
 
 for _name, (_path, _short) in COMMANDS.items():

@@ -8,6 +8,7 @@ one, by subject.
 
 from __future__ import annotations
 
+import functools
 import sys
 from pathlib import Path
 
@@ -286,3 +287,70 @@ def complete_suite(ctx, param, incomplete: str):
     from pipefollow.sim.suites import SUITES
 
     return _complete(list(SUITES), incomplete)
+
+
+def camera_options(fn):
+    """Decorate a command with ``--camera``, ``--water``, ``--turbidity``, ``--burial`` and ``--growth``.
+
+    The command receives one keyword argument ``camera``: ``None`` for the ideal camera, else the
+    environment's camera arguments (``camera``, ``water``). A bad value is a one-line error naming
+    the setting (exit status 2).
+    """
+
+    @functools.wraps(fn)
+    def wrapper(*args, camera, water, turbidity, burial, growth, **kwargs):
+        settings = {
+            k: v
+            for k, v in (("turbidity", turbidity), ("burial", burial), ("growth", growth))
+            if v is not None
+        }
+        if camera == "ideal":
+            if settings or water is not None:
+                raise UserError("--water, --turbidity, --burial and --growth need --camera vision")
+            return fn(*args, camera=None, **kwargs)
+        from pipefollow.perception.camera import camera_settings
+
+        try:
+            chosen = camera_settings("vision", water={"preset": water or "clear", **settings})
+        except (ValueError, ImportError) as e:
+            raise UserError(str(e)) from None
+        return fn(*args, camera={"camera": "vision", "water": chosen.water}, **kwargs)
+
+    number = click.FloatRange(min=0.0)
+    options = [
+        click.option(
+            "--camera",
+            type=click.Choice(["ideal", "vision"]),
+            default="ideal",
+            show_default=True,
+            help="ideal: the exact visible piece (the paper's); vision: a pipe detector on the camera image.",
+        ),
+        click.option(
+            "--water", default=None, metavar="PRESET", help="Water preset: clear, moderate, turbid [clear]."
+        ),
+        click.option(
+            "--turbidity",
+            type=number,
+            callback=finite,
+            default=None,
+            metavar="C",
+            help="Beam attenuation (1/m).",
+        ),
+        click.option(
+            "--burial",
+            type=number,
+            callback=finite,
+            default=None,
+            help="Share of the pipe's width under sand.",
+        ),
+        click.option(
+            "--growth",
+            type=number,
+            callback=finite,
+            default=None,
+            help="Share of the pipe under marine growth.",
+        ),
+    ]
+    for option in reversed(options):
+        wrapper = option(wrapper)
+    return wrapper

@@ -10,6 +10,7 @@ from pipefollow.cli.common import (
     SEED,
     UserError,
     apply_readings,
+    camera_options,
     check_plot_path,
     complete_suite,
     controller_options,
@@ -151,15 +152,19 @@ def pipelines(as_json):
 @reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @disturbance_options
+@camera_options
 @guard
 def benchmark(
-    controller, lookahead, suite_specs, seconds, pipes, seed, plot_path, readings, as_json, disturbance
-):
+    controller, lookahead, suite_specs, seconds, pipes, seed, plot_path, readings, as_json, disturbance,
+    camera,
+):  # fmt: skip
     """Run a controller deterministically on every pipe of a suite, beside the heuristic.
 
     Reports the mean return with a bootstrap 95 % confidence interval, the interquartile mean,
     the success rate (pipe in view at ≥ 95 % of the decisions) and, for a controller other than
     the heuristic, the paired per-pipe difference to the heuristic with its confidence interval.
+    With --camera vision the controller sees through the pipe detector (the pipe in view is still
+    the exact camera's) and is compared with the heuristic on the ideal camera.
     """
     from pipefollow.evaluation.benchmark import benchmark as run_benchmark
     from pipefollow.evaluation.benchmark import format_summary
@@ -183,8 +188,12 @@ def benchmark(
         n_pipes=pipes,
         seed=seed,
         noise_seed=seed,
+        camera=camera,
     )
     run.summary["readings"] = reading.id
+    if camera:  # compared with the heuristic on the ideal camera
+        run.summary["camera"] = "vision"
+        run.summary["water"] = camera["water"]._asdict()
     if disturbance != _disturbance.NO_DISTURBANCE:
         run.summary["disturbance"] = _disturbance.to_dict(disturbance)
     if warnings:

@@ -136,6 +136,7 @@ def run_episodes(
     seconds: float,
     params: sim.SimParams = sim.PAPER_SIM,
     noise_seed: int = 0,
+    camera: dict | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """One deterministic episode (σ = 0) of ``agent`` per pipe.
 
@@ -143,6 +144,9 @@ def run_episodes(
     registry run their own compiled loop without learning, the heuristic, LOS and exported networks
     one compiled loop here; other controllers (and learners the compiled loop cannot run, such as
     a custom supervisor) run through the environment's episode function.
+    ``camera``: the environment's camera arguments (``camera``, ``water``, ``reward_from``); with
+    the vision camera the episodes run through the environment, the images and detections drawing
+    from the pipe's noise generator, and ``pipe_in_view`` and ``rms_e_dist`` are the exact camera's.
 
     Returns ``(results, poses)``: (pipes, 5) columns return, pipe_in_view, progress_m, Σ e_dist²
     and number of decisions in view; (pipes, decisions + 1, 3) poses (x, y, ψ).
@@ -159,9 +163,9 @@ def run_episodes(
             learner.check(agent)
         except TypeError:
             learner = None
-    if learner is None and fixed is None:
+    if (learner is None and fixed is None) or camera:
         results = np.zeros((len(pipes), len(_COLUMNS)))
-        _env_episodes(agent, pipes, seconds, params, results, poses, noise_seed)
+        _env_episodes(agent, pipes, seconds, params, results, poses, noise_seed, camera)
         return results, poses
     run = Run(sim.pack_params(params), np.zeros(1), n_decisions, False)
     k = noise_count(params.disturbance)
@@ -185,12 +189,12 @@ def run_episodes(
     return out[:, _COLUMNS], poses
 
 
-def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0) -> None:
-    """:func:`run_episodes` through the environment's episode function, for any controller."""
+def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0, camera=None) -> None:
+    """:func:`run_episodes` through the environment's episode function, for any controller or camera."""
     from pipefollow.envs.env import PipelineFollowingEnv
 
     for i, pipe in enumerate(pipes):
-        env = PipelineFollowingEnv(pipe, seconds, params=params)
+        env = PipelineFollowingEnv(pipe, seconds, params=params, **(camera or {}))
         env.np_random = _noise_rng(noise_seed, i)
         stats = run_episode(env, agent)
         out[i] = np.asarray(stats.as_full_row())[_COLUMNS]
@@ -223,6 +227,7 @@ def benchmark(
     n_pipes: int | None = None,
     seed: int = 0,
     noise_seed: int = 0,
+    camera: dict | None = None,
 ) -> BenchmarkRun:
     """Run ``agent`` and the heuristic on the suite's pipes and summarize (module docstring).
 
@@ -235,11 +240,13 @@ def benchmark(
         n_pipes: number of pipes (default: the whole held-out suite; 100 of a training family).
         seed: seed of the bootstrap resampling.
         noise_seed: seed of the random disturbances (module docstring), the same for both.
+        camera: the environment's camera arguments for ``agent`` (:func:`run_episodes`); the
+            heuristic it is compared with always runs on the ideal camera.
     """
     n = n_pipes if n_pipes is not None else (suite.count or 100)
     pipes = suite.pipes(n, min_length_for(seconds))
-    res, poses = run_episodes(agent, pipes, seconds, params, noise_seed)
-    is_heuristic = isinstance(agent, Heuristic)
+    res, poses = run_episodes(agent, pipes, seconds, params, noise_seed, camera)
+    is_heuristic = isinstance(agent, Heuristic) and not camera
     if is_heuristic:
         h_res, h_poses = res, poses
     else:

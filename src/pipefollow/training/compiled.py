@@ -98,9 +98,9 @@ def run_episode(
         next_obs, r, terminated, truncated, info = env.step([a])
         total += r
         steps += 1
-        if info["pipe_in_view"]:
+        if info.get("true_pipe_in_view", info["pipe_in_view"]):  # the exact camera's, under vision too
             seen += 1
-            sum_e2 += float(info["e_dist"]) ** 2
+            sum_e2 += float(info.get("true_e_dist", info["e_dist"])) ** 2
         done = terminated or truncated
         if learn:
             if visible:
