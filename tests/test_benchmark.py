@@ -19,8 +19,8 @@ from pipefollow.training.compiled import run_episode
 from pipefollow.training.policy_files import save_policy
 
 KEYS = {
-    "controller", "suite", "n_episodes", "mean_return", "ci95_return", "iqm_return", "success_rate",
-    "mean_pipe_in_view", "rms_e_dist", "mean_progress_m", "episodes",
+    "controller", "suite", "n_episodes", "mean_return", "ci95_mean", "ci95_return", "iqm_return", "ci95_iqm",
+    "success_rate", "mean_pipe_in_view", "rms_e_dist", "mean_progress_m", "episodes",
 }  # fmt: skip
 
 
@@ -71,8 +71,16 @@ def test_summary_matches_an_independent_computation():
     pooled = math.sqrt(np.nansum(rms**2 * n_seen) / n_seen.sum())
     assert s["rms_e_dist"] == pytest.approx(pooled, rel=1e-12)
     ci = sps.bootstrap((ret,), np.mean, n_resamples=N_RESAMPLES, method="BCa", rng=np.random.default_rng(3))
-    assert s["ci95_return"] == [ci.confidence_interval.low, ci.confidence_interval.high]
-    assert s["ci95_return"][0] < s["mean_return"] < s["ci95_return"][1]
+    assert s["ci95_mean"] == [ci.confidence_interval.low, ci.confidence_interval.high]
+    assert s["ci95_return"] == s["ci95_mean"]  # the former name
+    assert s["ci95_mean"][0] < s["mean_return"] < s["ci95_mean"][1]
+    # the IQM's interval: percentiles of the IQMs of pipes resampled with replacement (rliable's
+    # stratified bootstrap with the pipes as runs of one task); its centre is near the IQM
+    lo, hi = s["ci95_iqm"]
+    assert lo < s["iqm_return"] < hi
+    idx = np.random.default_rng(0).integers(0, 30, size=(4000, 30))
+    ref = np.percentile(sps.trim_mean(ret[idx], 0.25, axis=1), [2.5, 97.5])
+    assert abs(lo - ref[0]) < 0.1 * (hi - lo) and abs(hi - ref[1]) < 0.1 * (hi - lo)
     diff = ret - run.heuristic_returns
     h = benchmark(Heuristic(), get_suite("heldout"), controller="heuristic", seconds=40.0, n_pipes=30)
     np.testing.assert_array_equal(run.heuristic_returns, [e["return"] for e in h.summary["episodes"]])
@@ -114,7 +122,8 @@ def test_cli_benchmark_json_and_plot(tmp_path):
     res = CliRunner().invoke(main, [*args, "--seconds", "20", "--json", "--plot", str(plot)])
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
-    assert set(out) == KEYS | {"vs_heuristic", "readings"} and out["readings"] == "default"
+    assert set(out) == KEYS | {"vs_heuristic", "readings", "plot"} and out["readings"] == "default"
+    assert out["plot"] == str(plot)
     assert set(out["vs_heuristic"]) == {"mean_diff", "ci95_diff", "win_rate"}
     assert set(out["episodes"][0]) == {"name", "return", "pipe_in_view", "progress_m", "rms_e_dist"}
     assert out["controller"] == str(policy) and out["suite"] == "heldout-easy" and out["n_episodes"] == 5

@@ -328,7 +328,7 @@ def test_plot_is_written_in_the_format_its_suffix_names(runner, tmp_path, name, 
     "name, fragment",
     [
         ("p.xyz", "'.xyz' is not a known file type; use one of"),
-        ("p", "no suffix is not a known file type"),
+        ("p", "has no suffix to tell the file type"),
         ("afile/p.png", "is a file, not a folder"),
         ("afile/sub/p.png", "is a file, not a folder"),
     ],

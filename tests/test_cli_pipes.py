@@ -119,3 +119,17 @@ def test_unknown_pipeline_suggests_the_closest_name(runner):
 def test_did_you_mean_is_silent_when_nothing_is_close():
     assert did_you_mean("zzzz", ["paper-left", "heldout"]) == ""
     assert did_you_mean("rando:hard", ["random:hard", "random:easy"]) == " (did you mean 'random:hard'?)"
+
+
+def test_gym_make_takes_a_pipeline_as_its_points():
+    import gymnasium as gym
+
+    import pipefollow
+
+    env = gym.make(pipefollow.ENV_ID, pipeline=[[0, 0], [5, 0], [5, 5]])
+    obs, _ = env.reset(seed=0)
+    np.testing.assert_array_equal(env.unwrapped.pipeline.points, [[0.0, 0.0], [5.0, 0.0], [5.0, 5.0]])
+    # heading north along the first segment, the pipe straight ahead: x1 = 0, y1 at the footprint's far edge
+    assert obs[0] == 0.0 and obs[1] == 3.0
+    with pytest.raises(PipelineError, match="pipeline points: needs at least two distinct points"):
+        gym.make(pipefollow.ENV_ID, pipeline=[[0, 0]])

@@ -309,8 +309,12 @@ def test_the_reference_learners_experiment_sets_the_actor_critics_beside_cacla()
     assert "reference-learners" in shipped_experiments()
     exp = load_experiment("reference-learners")
     assert exp.repeats == 5
-    setups = {(t.algorithm, t.supervised) for t in exp.trials}
-    assert setups == {("cacla", False), ("ac", False), ("cacla", True), ("ac", True)}
+    setups = {(t.algorithm, t.supervised, t.actor_update) for t in exp.trials}
+    assert setups == {
+        (algorithm, supervised, update)
+        for supervised in (False, True)
+        for algorithm, update in [("cacla", "delta"), ("ac", "delta"), ("ac", "positive"), ("ac", "sign")]
+    }
     for t in exp.trials:  # the paper's step sizes, training pipe and schedule (§4, §4.1)
         assert (t.alpha_v, t.alpha_pi, t.discount, t.delta_k) == (0.4, 0.2, 0.8, 0.05)
         assert [(p.pipeline, p.episodes) for p in t.phases] == [("paper-left", 500)]

@@ -29,13 +29,15 @@ from pipefollow.training.compiled import train, train_compiled
 from pipefollow.training.policy_files import load_policy, save_policy
 
 # every learner, and each with every shared option it takes switched on
+ON = {"skew_deg": [22.5], "supervised": [True], "actor_update": ["positive", "sign"]}  # OPTIONS switched on
 SETUPS = [(name, {}) for name in NAMES] + [
-    (name, {"skew_deg": 22.5} if option == "skew_deg" else {option: True})
+    (name, {option: value})
     for name in NAMES
     for option in OPTIONS
     if option in LEARNERS[name].options
+    for value in ON[option]
 ]
-IDS = [name + "".join(f"-{k}" for k in opts) for name, opts in SETUPS]
+IDS = [name + "".join(f"-{k}={v}" for k, v in opts.items()) for name, opts in SETUPS]
 
 NOISY = make_disturbance(0.1, 60.0, current_time_constant=20.0, current_speed_sd=0.03, camera_noise=0.05,
                          miss_prob=0.1)  # fmt: skip
@@ -44,7 +46,7 @@ NOISY = make_disturbance(0.1, 60.0, current_time_constant=20.0, current_speed_sd
 def test_the_registry_knows_the_papers_learners_and_the_reference_one():
     assert NAMES == ("sarsa", "cacla", "ac")
     for name, kind in LEARNERS.items():
-        assert kind.name == name and set(kind.options) <= set(OPTIONS)
+        assert kind.name == name and set(kind.options) <= set(OPTIONS) == set(ON)
         agent = make_agent(name)
         assert learner_of(agent) is kind and agent.algorithm == name
     with pytest.raises(ValueError, match="algorithm must be one of sarsa, cacla, ac, got 'q'"):

@@ -15,6 +15,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "pipefollow.cli.suites:benchmark",
         "Run a controller deterministically on every pipe of a suite, beside the heuristic.",
     ),
+    "compare": (
+        "pipefollow.cli.compare:compare",
+        "Compare learners over training seeds × pipes: IQM, mean, probability of improvement.",
+    ),
     "evaluate": (
         "pipefollow.cli.run:evaluate",
         "Evaluate a controller deterministically (σ = 0) on a pipeline.",
@@ -38,6 +42,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "train": ("pipefollow.cli.run:train", "Train a learner; writes the policy and its learning curve."),
     "trials": ("pipefollow.cli.experiments:trials", "List the trials of an experiment."),
+    "vision": (
+        "pipefollow.cli.vision:vision",
+        "The vision camera: how good its pipe detector is, and a camera model calibrated from it.",
+    ),
 }
 
 for _name, (_path, _short) in COMMANDS.items():

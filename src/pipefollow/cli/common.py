@@ -8,6 +8,7 @@ one, by subject.
 
 from __future__ import annotations
 
+import functools
 import sys
 from pathlib import Path
 
@@ -104,10 +105,30 @@ def apply_readings(ids, base: str = "default"):
         raise UserError(str(e)) from None
 
 
-def load_controller(spec: str, seed: int, lookahead: float | None = None):
-    """``heuristic``, ``los`` (lookahead Δ in m) or a policy file → an agent."""
-    from pipefollow.evaluation.benchmark import load_controller as load
+def policy_file(spec: str, option: str) -> str:
+    """A policy file, or the ``policy.npz`` inside a folder (what ``train --out`` writes)."""
+    path = Path(spec)
+    if path.is_dir():
+        inside = path / "policy.npz"
+        if not inside.is_file():
+            raise UserError(f"{option} '{spec}': a folder without policy.npz")
+        return str(inside)
+    return spec
 
+
+def load_controller(spec: str, seed: int, lookahead: float | None = None):
+    """``heuristic``, ``los`` (lookahead Δ in m), a policy file or a folder holding one → an agent."""
+    from pipefollow.evaluation.benchmark import CONTROLLERS
+    from pipefollow.evaluation.benchmark import load_controller as load
+    from pipefollow.sim.pipe_names import did_you_mean
+
+    if spec not in CONTROLLERS:
+        spec = policy_file(spec, "--controller")
+        if not Path(spec).exists() and Path(spec).suffix.lower() != ".npz":
+            names = ", ".join(CONTROLLERS)
+            raise UserError(
+                f"controller '{spec}': not {names} nor a policy file{did_you_mean(spec, list(CONTROLLERS))}"
+            )
     try:
         return load(spec, seed, lookahead)
     except ValueError as e:
@@ -129,7 +150,9 @@ def controller_options(fn):
         "--controller",
         default="heuristic",
         show_default=True,
-        help="'heuristic', 'los' (line-of-sight guidance) or a policy file (.npz) from 'pipefollow train'.",
+        shell_complete=complete_controller,
+        help="'heuristic', 'los' (line-of-sight guidance), or a policy file (.npz) from 'pipefollow train' "
+        "or the folder holding it.",
     )(fn)
 
 
@@ -199,3 +222,133 @@ def check_plot_path(plot_path: str | None) -> None:
         from pipefollow.files.output_paths import check_output_file, image_formats
 
         check_output_file(plot_path, "--plot", tuple(image_formats()))
+
+
+# Readings that act in a deterministic evaluation of a saved policy: those of the simulation
+# (readings.sim_params); the others act in training only, and a policy file keeps its features.
+EVALUATION_READINGS = ("start_speed",)
+
+
+def inert_readings(ids) -> list[str]:
+    """Warnings for the ``--reading`` ids that cannot change an evaluation (the others act in training)."""
+    keys = [part.split("=", 1)[0].strip() for i in ids for part in str(i).split(",") if "=" in part]
+    inert = [k for k in dict.fromkeys(keys) if k not in EVALUATION_READINGS]
+    return [
+        f"--reading {k}: acts in training only; it cannot change the evaluation of a saved policy or "
+        f"a fixed controller (evaluation readings: {', '.join(EVALUATION_READINGS)})"
+        for k in inert
+    ]
+
+
+def disturbance_text(d, prefix: str = "; disturbances: ") -> str:
+    """The disturbances of a run in words, for the head of a text report; ``""`` without any."""
+    from pipefollow.sim import disturbance as dist
+
+    if d == dist.NO_DISTURBANCE:
+        return ""
+    t = dist.to_dict(d)
+    parts = []
+    if t["current_speed"]:
+        parts.append(f"current {t['current_speed']:g} m/s towards {t['current_direction_deg']:g}°")
+    if t["camera_noise"]:
+        parts.append(f"camera noise {t['camera_noise']:g} m")
+    if t["miss_prob"]:
+        parts.append(f"missed detections {t['miss_prob']:.0%}")
+    if t["buried"]:
+        parts.append(f"{len(t['buried'])} buried stretch(es)")
+    return prefix + (", ".join(parts) or "varying current")
+
+
+def _complete(names, incomplete: str, files: bool = True):
+    from click.shell_completion import CompletionItem
+
+    items = [CompletionItem(n) for n in names if n.startswith(incomplete)]
+    return items + ([CompletionItem(incomplete, type="file")] if files else [])
+
+
+def complete_pipeline(ctx, param, incomplete: str):
+    """Shell completion of ``--pipeline``: built-ins, ``random:FAMILY``, then files."""
+    from pipefollow.sim.pipe_names import pipeline_names
+
+    return _complete(pipeline_names(), incomplete)
+
+
+def complete_controller(ctx, param, incomplete: str):
+    """Shell completion of ``--controller``: the built-in controllers, then policy files and folders."""
+    from pipefollow.evaluation.benchmark import CONTROLLERS
+
+    return _complete(list(CONTROLLERS), incomplete)
+
+
+def complete_suite(ctx, param, incomplete: str):
+    """Shell completion of ``--suite``: the suites, then folders and files."""
+    from pipefollow.sim.suites import SUITES
+
+    return _complete(list(SUITES), incomplete)
+
+
+def camera_options(fn):
+    """Decorate a command with ``--camera``, ``--water``, ``--turbidity``, ``--burial`` and ``--growth``.
+
+    The command receives one keyword argument ``camera``: ``None`` for the ideal camera, else the
+    environment's camera arguments (``camera``, ``water``). A bad value is a one-line error naming
+    the setting (exit status 2).
+    """
+
+    @functools.wraps(fn)
+    def wrapper(*args, camera, water, turbidity, burial, growth, **kwargs):
+        settings = {
+            k: v
+            for k, v in (("turbidity", turbidity), ("burial", burial), ("growth", growth))
+            if v is not None
+        }
+        if camera == "ideal":
+            if settings or water is not None:
+                raise UserError("--water, --turbidity, --burial and --growth need --camera vision")
+            return fn(*args, camera=None, **kwargs)
+        from pipefollow.perception.camera import camera_settings
+
+        try:
+            chosen = camera_settings("vision", water={"preset": water or "clear", **settings})
+        except (ValueError, ImportError) as e:
+            raise UserError(str(e)) from None
+        return fn(*args, camera={"camera": "vision", "water": chosen.water}, **kwargs)
+
+    number = click.FloatRange(min=0.0)
+    options = [
+        click.option(
+            "--camera",
+            type=click.Choice(["ideal", "vision"]),
+            default="ideal",
+            show_default=True,
+            help="ideal: the exact visible piece (the paper's); vision: a pipe detector on the camera image.",
+        ),
+        click.option(
+            "--water", default=None, metavar="PRESET", help="Water preset: clear, moderate, turbid [clear]."
+        ),
+        click.option(
+            "--turbidity",
+            type=number,
+            callback=finite,
+            default=None,
+            metavar="C",
+            help="Beam attenuation (1/m).",
+        ),
+        click.option(
+            "--burial",
+            type=number,
+            callback=finite,
+            default=None,
+            help="Share of the pipe's width under sand.",
+        ),
+        click.option(
+            "--growth",
+            type=number,
+            callback=finite,
+            default=None,
+            help="Share of the pipe under marine growth.",
+        ),
+    ]
+    for option in reversed(options):
+        wrapper = option(wrapper)
+    return wrapper

@@ -163,7 +163,8 @@ def reproduce(
         return
     click.echo(
         f"{exp.name}: {run.trials_total} trials ({run.trials_computed} computed, {run.trials_reused} reused) "
-        f"in {run.wall_seconds:.1f} s, backend {run.backend} ({run.workers} workers)"
+        f"in {run.wall_seconds:.1f} s, backend {run.backend} "
+        f"({run.workers} worker{'s' if run.workers != 1 else ''})"
     )
     if exp.compare_readings:
         _echo_sensitivity(run.run_dir, outputs)

@@ -14,15 +14,19 @@ from pipefollow.cli.common import (
     UserError,
     apply_readings,
     check_plot_path,
+    complete_pipeline,
     controller_options,
     disturbance_options,
+    disturbance_text,
     finite,
     guard,
+    inert_readings,
     load_controller,
     reading_option,
     writable_folder,
 )
 from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS
+from pipefollow.files.progress import progress as progress_report
 from pipefollow.learners.registry import NAMES as LEARNER_NAMES
 from pipefollow.sim import disturbance as _disturbance
 
@@ -61,10 +65,17 @@ def _summary(stats) -> dict:
     "--pipeline",
     default="paper-left",
     show_default=True,
+    shell_complete=complete_pipeline,
     help="Built-in name (paper-left, paper-right, paper-validation), a JSON file, a pipe of a suite "
     "(e.g. heldout-003, as 'suites export' names it) or random[:FAMILY] for a new pipe every episode.",
 )
-@click.option("--episodes", default=1, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
+@click.option(
+    "--episodes",
+    default=1,
+    show_default=True,
+    type=click.IntRange(min=1, max=MAX_EPISODES),
+    help="Number of episodes; they differ only with start noise, random disturbances or a random pipeline.",
+)
 @click.option(
     "--seconds",
     type=click.FloatRange(min=1.0, max=MAX_SECONDS),
@@ -138,6 +149,17 @@ def evaluate(
     pipe = resolve_pipeline(pipeline, seconds)  # a Pipeline, or a Suite for random[:FAMILY]
     agent = load_controller(controller, seed, lookahead)
     reading = apply_readings(readings, getattr(agent, "readings", "default"))
+    warnings = inert_readings(readings)
+    if episodes > 1 and not (start_noise or heading_noise or isinstance(pipe, Suite)):
+        from pipefollow.sim.disturbance import noise_count
+
+        if not noise_count(disturbance):
+            warnings.append(
+                f"the {episodes} episodes are the same: nothing random differs between them "
+                "(see --start-noise, --heading-noise, random:FAMILY, --camera-noise, --miss-prob)"
+            )
+    for w in warnings:
+        click.echo(f"pipefollow: warning: {w}", err=True)
     env = PipelineFollowingEnv(
         pipeline if isinstance(pipe, Suite) else pipe,  # a family: the env draws a pipe every episode
         seconds,
@@ -166,6 +188,8 @@ def evaluate(
     }
     if disturbance != _disturbance.NO_DISTURBANCE:
         result["disturbance"] = _disturbance.to_dict(disturbance)
+    if warnings:
+        result["warnings"] = warnings
     if plot_path:
         from pipefollow.envs.render import plot_trajectories
 
@@ -182,7 +206,10 @@ def evaluate(
     if as_json:
         click.echo(json.dumps(result))
         return
-    click.echo(f"{controller} on {pipeline}, {episodes} episode(s) of {env.episode_seconds:g} s")
+    click.echo(
+        f"{controller} on {pipeline}, {episodes} episode(s) of {env.episode_seconds:g} s"
+        f"{disturbance_text(disturbance)}"
+    )
     click.echo(f"{'episode':>7} {'return':>9} {'in view':>8} {'progress':>9}")
     for i, row in enumerate(result["episodes"]):
         click.echo(f"{i:>7} {row['return']:>9.3f} {row['pipe_in_view']:>8.1%} {row['progress_m']:>8.2f}m")
@@ -221,10 +248,17 @@ def evaluate(
     "--pipeline",
     default="paper-left",
     show_default=True,
+    shell_complete=complete_pipeline,
     help="Built-in name or JSON file to train on, or random[:FAMILY] for a new pipe every episode "
     "(families: see 'pipefollow suites'; random = random:mixed).",
 )
-@click.option("--episodes", default=500, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES))
+@click.option(
+    "--episodes",
+    default=500,
+    show_default=True,
+    type=click.IntRange(min=1, max=MAX_EPISODES),
+    help="Training episodes (σ falls linearly from 1 to 0.01 over them); SARSA and CACLA.",
+)
 @click.option(
     "--seconds",
     default=20.0,
@@ -239,7 +273,13 @@ def evaluate(
     default=None,
     help="PPO and SAC: budget in environment steps (decisions) [default: 100,000].",
 )
-@click.option("--seed", default=0, show_default=True, type=SEED)
+@click.option(
+    "--seed",
+    default=0,
+    show_default=True,
+    type=SEED,
+    help="Seed of the learner's exploration, its initial weights and any random pipes and disturbances.",
+)
 @click.option(
     "--out",
     "out_dir",
@@ -250,9 +290,10 @@ def evaluate(
 @click.option(
     "--init",
     "init_policy",
-    type=click.Path(dir_okay=False),
+    type=click.Path(),
     default=None,
-    help="Continue training from this policy file (e.g. left turns, then right turns).",
+    help="Continue training from this policy file, or the folder holding it (e.g. left turns, then "
+    "right turns); its learner options are kept unless given.",
 )
 @click.option("--force", is_flag=True, help="Replace the policy and learning curve already in --out.")
 @reading_option(
@@ -320,21 +361,15 @@ def train(
     pipe = resolve_training(pipeline)  # a Pipeline, or a Suite for random[:FAMILY]
     rng = agent_rng(seed)
     if init_policy:
+        from pipefollow.cli.common import policy_file
         from pipefollow.training.policy_files import load_policy
 
+        init_policy = policy_file(init_policy, "--init")
         agent = load_policy(init_policy)
         reading = apply_readings(readings, agent.readings)
         if agent.algorithm != algorithm:
             raise UserError(f"--init {init_policy}: holds a {agent.name} policy, not {algorithm}")
-        wanted = make_agent(algorithm, skew_deg=skew, supervised=supervised, readings=reading).params
-        held = agent.params._replace(
-            **{k: getattr(wanted, k) for k in wanted._fields if k in _LEARNING_RATES}
-        )
-        if held != wanted:
-            raise UserError(
-                f"--init {init_policy}: holds a {agent.name} policy under readings "
-                f"'{agent.readings}'; its options differ from these"
-            )
+        _check_init_options(agent, reading, init_policy, skew, supervised)
         agent.readings = reading.id
         agent.rng = rng
     else:
@@ -345,11 +380,8 @@ def train(
 
     made = first_missing(out_dir)
     out = writable_folder(out_dir, "--out")  # before training, after the checks of --init
-    show = not as_json and sys.stderr.isatty()
     try:
-        with click.progressbar(
-            length=episodes, label=f"training {agent.name}", file=sys.stderr, hidden=not show
-        ) as bar:
+        with progress_report(episodes, f"training {agent.name}", hidden=as_json, unit="episodes") as bar:
             done = [0]
 
             def progress(n):
@@ -400,18 +432,44 @@ def train(
     click.echo(f"policy: {policy_path}\nlearning curve: {curve_path}")
 
 
+def _check_init_options(agent, reading, init_policy, skew, supervised) -> None:
+    """``train --init``: the saved policy's --skew and --supervised unless given; differences named."""
+    from click.core import ParameterSource
+
+    from pipefollow.training.agents import make_agent
+
+    ctx = click.get_current_context()
+    given = {n for n in ("skew", "supervised") if ctx.get_parameter_source(n) == ParameterSource.COMMANDLINE}
+    held = agent.params
+    keep = supervised if "supervised" in given else bool(getattr(held, "supervised", False))
+    skew_deg = skew if "skew" in given else 0.0
+    wanted = make_agent(agent.algorithm, skew_deg=skew_deg, supervised=keep, readings=reading).params
+    if "skew" not in given and "skew" in wanted._fields:
+        wanted = wanted._replace(skew=held.skew)
+    held = held._replace(**{k: getattr(wanted, k) for k in wanted._fields if k in _LEARNING_RATES})
+    differ = [f"{f} {getattr(held, f)!r} (this run: {getattr(wanted, f)!r})" for f in wanted._fields
+              if getattr(held, f) != getattr(wanted, f)]  # fmt: skip
+    if differ:
+        raise UserError(
+            f"--init {init_policy}: holds a {agent.name} policy (readings '{agent.readings}') whose options "
+            f"differ from this run's: {'; '.join(differ)}; give its options or none"
+        )
+
+
 def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization=None):
     """``train --algorithm ppo|sac``: :func:`pipefollow.training.deep.train_to_folder`."""
     from click.core import ParameterSource
 
     ctx = click.get_current_context()
+    option = {p.name: p.opts[0] for p in ctx.command.params}  # a parameter's name → its option
     given = [
-        f"--{name.replace('_', '-')}"
+        option[name]
         for name in ("skew", "supervised", "episodes", "init_policy", "readings")
         if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE
     ]
     if given:
-        raise UserError(f"{', '.join(given)} not available with --algorithm {algorithm} (see --steps)")
+        budget = "; its budget is --steps" if "--episodes" in given else ""
+        raise UserError(f"{', '.join(given)} not available with --algorithm {algorithm}{budget}")
     try:
         from pipefollow.training import deep
     except ImportError as e:  # pipefollow.training.deep.DeepExtraMissing: torch or Stable-Baselines3 missing
@@ -423,9 +481,7 @@ def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, dis
     resolve_training(pipeline)  # a bad pipeline fails before any work
     out = writable_folder(out_dir, "--out")
     steps = 100_000 if steps is None else steps
-    show = not as_json and sys.stderr.isatty()
-    label = f"training {algorithm.upper()}"
-    with click.progressbar(length=steps, label=label, file=sys.stderr, hidden=not show) as bar:
+    with progress_report(steps, f"training {algorithm.upper()}", hidden=as_json, unit="steps") as bar:
         done = [0]
 
         def progress(n):

@@ -10,11 +10,15 @@ from pipefollow.cli.common import (
     SEED,
     UserError,
     apply_readings,
+    camera_options,
     check_plot_path,
+    complete_suite,
     controller_options,
     disturbance_options,
+    disturbance_text,
     finite,
     guard,
+    inert_readings,
     load_controller,
     reading_option,
     writable_folder,
@@ -117,6 +121,7 @@ def pipelines(as_json):
     "suite_specs",
     multiple=True,
     metavar="SUITE|PATH",
+    shell_complete=complete_suite,
     help="A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
     "(repeatable; what 'suites export' writes) [default: heldout].",
 )
@@ -147,15 +152,19 @@ def pipelines(as_json):
 @reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @disturbance_options
+@camera_options
 @guard
 def benchmark(
-    controller, lookahead, suite_specs, seconds, pipes, seed, plot_path, readings, as_json, disturbance
-):
+    controller, lookahead, suite_specs, seconds, pipes, seed, plot_path, readings, as_json, disturbance,
+    camera,
+):  # fmt: skip
     """Run a controller deterministically on every pipe of a suite, beside the heuristic.
 
     Reports the mean return with a bootstrap 95 % confidence interval, the interquartile mean,
     the success rate (pipe in view at ≥ 95 % of the decisions) and, for a controller other than
     the heuristic, the paired per-pipe difference to the heuristic with its confidence interval.
+    With --camera vision the controller sees through the pipe detector (the pipe in view is still
+    the exact camera's) and is compared with the heuristic on the ideal camera.
     """
     from pipefollow.evaluation.benchmark import benchmark as run_benchmark
     from pipefollow.evaluation.benchmark import format_summary
@@ -167,6 +176,9 @@ def benchmark(
     _pipe_count(suite, pipes)
     agent = load_controller(controller, seed, lookahead)
     reading = apply_readings(readings, getattr(agent, "readings", "default"))
+    warnings = inert_readings(readings)
+    for w in warnings:
+        click.echo(f"pipefollow: warning: {w}", err=True)
     run = run_benchmark(
         agent,
         suite,
@@ -176,17 +188,24 @@ def benchmark(
         n_pipes=pipes,
         seed=seed,
         noise_seed=seed,
+        camera=camera,
     )
     run.summary["readings"] = reading.id
+    if camera:  # compared with the heuristic on the ideal camera
+        run.summary["camera"] = "vision"
+        run.summary["water"] = camera["water"]._asdict()
     if disturbance != _disturbance.NO_DISTURBANCE:
         run.summary["disturbance"] = _disturbance.to_dict(disturbance)
+    if warnings:
+        run.summary["warnings"] = warnings
     if plot_path:
         from pipefollow.evaluation.plot import plot_benchmark
 
         plot_benchmark(run, plot_path)
+        run.summary["plot"] = str(plot_path)
     if as_json:
         click.echo(json.dumps(run.summary))
         return
-    click.echo(format_summary(run.summary, seconds))
+    click.echo(format_summary(run.summary, seconds) + disturbance_text(disturbance, "\n  disturbances   "))
     if plot_path:
         click.echo(f"plot: {plot_path}")

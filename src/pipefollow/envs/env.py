@@ -14,6 +14,7 @@ from gymnasium.error import ResetNeeded
 from pipefollow.envs.shell import (
     MAX_EPISODE_SECONDS,
     episode_summary,
+    image_space,
     make_setup,
     observation,
     parse_reset_options,
@@ -22,6 +23,7 @@ from pipefollow.envs.shell import (
     start_episode,
     state_infos,
 )
+from pipefollow.perception.camera import VisionCamera, camera_settings
 from pipefollow.sim import decision as sim
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
 from pipefollow.sim.pipeline import Pipeline
@@ -107,6 +109,16 @@ class PipelineFollowingEnv(gym.Env):
       none by default. Its random parts draw from the environment's seeded ``np_random``.
     * ``obs_dtype``: ``"float64"`` (default; the simulator's own numbers) or ``"float32"`` (what
       most neural-network policies take; the observation rounded to float32).
+    * ``camera``: ``"ideal"`` (default: the exact visible piece, the paper's) or ``"vision"``: the
+      observation and the in-view decision come from a pipe detector on the rendered camera image
+      (:mod:`pipefollow.perception`; needs the extra ``vision``); "not found" is a lost pipe.
+    * ``observation``: ``"state"`` (default, ``Box(4)``) or ``"image"``: the camera image,
+      ``Box(0, 255, (1, H, W), uint8)``.
+    * ``reward_from``: ``"truth"`` (default: eq. 19 from the true geometry; a lost detection still
+      gives −10) or ``"detected"`` (eq. 19 from the detection).
+    * ``water``: the image's water and camera settings: a
+      :class:`~pipefollow.perception.water.Water`, a preset name (``clear``, ``moderate``,
+      ``turbid``) or a dict of its fields (``preset`` allowed); ``clear`` by default.
     * ``randomization``: domain randomization, a
       :class:`~pipefollow.sim.randomization.Randomization`, a preset name (``mild``, ``moderate``,
       ``harsh``) or a table of its keys: every reset draws the episode's disturbances from
@@ -125,7 +137,9 @@ class PipelineFollowingEnv(gym.Env):
     while the pipe is lost. At the episode's last step also its summary:
     ``episode_pipe_in_view`` (share of decisions ending with the pipe in view),
     ``episode_progress_m`` and ``episode_rms_e_dist`` (RMS of ``e_dist`` over those decisions;
-    NaN if none).
+    NaN if none). With the vision camera also ``detected``, ``detection_confidence``,
+    ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the exact camera's); the episode's
+    summary is then the exact camera's too.
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 2}
@@ -140,6 +154,10 @@ class PipelineFollowingEnv(gym.Env):
         params: sim.SimParams = sim.PAPER_SIM,
         disturbance: Disturbance | dict[str, Any] | None = None,
         obs_dtype: str | type = "float64",
+        camera: str = "ideal",
+        observation: str = "state",
+        reward_from: str = "truth",
+        water: Any = None,
         randomization: Randomization | str | dict[str, Any] | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -163,6 +181,13 @@ class PipelineFollowingEnv(gym.Env):
         self.params = setup.params
         self.observation_space = setup.observation_space
         self.action_space = setup.action_space
+        # the vision camera (pipefollow.perception.camera): None with the ideal camera's state
+        self.camera_settings = camera_settings(camera, observation, reward_from, water)
+        self._vision = None
+        if self.camera_settings.renders:
+            self._vision = VisionCamera(self.camera_settings, self.params.camera, self.params.lost_reward)
+            if observation == "image":
+                self.observation_space = image_space(self.camera_settings.water)
         self.state = np.zeros(sim.STATE_SIZE)
         self._z = np.zeros(setup.noise_count)  # standard normals of one camera reading
         self._decisions = 0
@@ -192,9 +217,11 @@ class PipelineFollowingEnv(gym.Env):
         s = self.state
         self.trail = [(s[sim.X], s[sim.Y], s[sim.PSI])]
         self.last_reward, self.episode_return = None, 0.0
+        if self._vision is not None:
+            self._vision.reset(self.state, self.pipeline.points, self.pipeline.cumulative, self.np_random)
         if self.render_mode == "human":
             self.render()
-        return observation(s, self.setup), state_infos(s)
+        return self._observation(), self._info()
 
     def step(self, action):
         """One 1-s decision; see the class docstring."""
@@ -214,6 +241,7 @@ class PipelineFollowingEnv(gym.Env):
         s, z = self.state, self._z
         if z.size:
             self.np_random.standard_normal(out=z)
+        a_prev = s[sim.A_PREV]
         r = sim.decide_packed(
             s, a, self.pipeline.points, self.pipeline.cumulative, self.episode_setup.packed, z
         )
@@ -222,16 +250,30 @@ class PipelineFollowingEnv(gym.Env):
         if s[sim.IN_VIEW] != 0.0:
             self._seen += 1
             self._sum_e2 += s[sim.E_DIST] ** 2
+        if self._vision is not None:  # the episode's summary above stays the true geometry's
+            pipe = self.pipeline
+            r = self._vision.step(s, pipe.points, pipe.cumulative, self.np_random, r, a_prev)
         truncated = self._decisions >= self.max_decisions
         self._needs_reset = truncated
         self.last_reward = r
         self.episode_return += r
         if self.render_mode == "human":
             self.render()
-        info = state_infos(s)
+        info = self._info()
         if truncated:  # the episode's summary, for clients that log per episode
             info.update(episode_summary(self._decisions, self._seen, self._sum_e2, s[sim.PROGRESS_MAX]))
-        return observation(s, self.setup), r, False, truncated, info
+        return self._observation(), r, False, truncated, info
+
+    def _observation(self) -> np.ndarray:
+        if self._vision is None:
+            return observation(self.state, self.setup)
+        return self._vision.observation(self.state, self.setup.observation_space.dtype)
+
+    def _info(self) -> dict[str, Any]:
+        info = state_infos(self.state)
+        if self._vision is not None:
+            info.update(self._vision.info())
+        return info
 
     def __getstate__(self) -> dict[str, Any]:
         """The environment without its rendering's figure (a copy draws a new one when it renders)."""
@@ -259,7 +301,10 @@ class PipelineFollowingEnv(gym.Env):
         if self.render_mode == "human":
             self._scene.show(pause=1.0 / self.metadata["render_fps"])
             return None
-        return self._scene.rgb()
+        view = self._scene.rgb()
+        if self._vision is not None:  # the camera image and the detection beside the Fig. 2 view
+            view = np.hstack([view, self._vision.panel(view.shape[0])])
+        return view
 
     def close(self):
         """Close the rendering's figure (and its window)."""

@@ -37,6 +37,8 @@ SHARED_ARGUMENTS = (
     "disturbance",
     "obs_dtype",
 )
+# the camera's arguments (pipefollow.perception.camera.camera_settings), shared too
+CAMERA_ARGUMENTS = ("camera", "observation", "reward_from", "water")
 
 RESET_OPTIONS = ("pipeline", "lateral_offset", "heading_offset_deg")
 
@@ -262,6 +264,11 @@ def start_episode(
 def observation(states: np.ndarray, setup: Setup) -> np.ndarray:
     """Observations ``(x1, y1, x2, v_x)`` of one state or a batch: a new array of the setup's dtype."""
     return (states[:4] if states.ndim == 1 else states[:, :4]).astype(setup.obs_dtype)
+
+
+def image_space(water) -> spaces.Box:
+    """The observation space of ``observation="image"``: the grey camera image, ``(1, H, W)`` uint8."""
+    return spaces.Box(0, 255, (1, water.height, water.width), dtype=np.uint8)
 
 
 def state_infos(states: np.ndarray) -> dict[str, np.ndarray]:

@@ -38,6 +38,8 @@ single environment draws them.
   camera reading's normals from its own generator).
 * **Copies**: ``pickle`` and ``copy.deepcopy`` work at any time and the copy continues with the
   same numbers.
+* **Vision camera** (``camera="vision"``, ``observation="image"``): supported; after the batched
+  decision each sub-environment renders and detects with its own generator, as the single one does.
 """
 
 from __future__ import annotations
@@ -55,8 +57,10 @@ from gymnasium.vector.utils import batch_space
 from numba import njit
 
 from pipefollow.envs.shell import (
+    CAMERA_ARGUMENTS,
     SHARED_ARGUMENTS,
     episode_summary,
+    image_space,
     is_points,
     make_setup,
     observation,
@@ -66,6 +70,7 @@ from pipefollow.envs.shell import (
     start_episode,
     state_infos,
 )
+from pipefollow.perception.camera import VisionCamera, camera_settings
 from pipefollow.sim import decision as sim
 from pipefollow.sim.disturbance import NO_DISTURBANCE
 from pipefollow.sim.pipeline import Pipeline
@@ -143,12 +148,13 @@ class PipelineFollowingVectorEnv(VectorEnv):
             allowed = ", ".join(repr(m.value) for m in AutoresetMode)
             raise ValueError(f"autoreset_mode must be one of {allowed}, got {autoreset_mode!r}") from None
         randomization = kwargs.pop("randomization", None)
-        unknown = sorted(set(kwargs) - set(SHARED_ARGUMENTS))
+        unknown = sorted(set(kwargs) - set(SHARED_ARGUMENTS) - set(CAMERA_ARGUMENTS))
         if unknown:
             raise TypeError(
                 f"unknown argument(s) {unknown} of the vector environment; allowed: num_envs, pipeline, "
-                f"autoreset_mode, {', '.join(SHARED_ARGUMENTS)}, randomization"
+                f"autoreset_mode, {', '.join(SHARED_ARGUMENTS + CAMERA_ARGUMENTS)}, randomization"
             )
+        camera = camera_settings(**{k: kwargs.pop(k) for k in CAMERA_ARGUMENTS if k in kwargs})
         n = int(num_envs)
         one = is_points(pipeline) or not isinstance(pipeline, list | tuple)
         specs = [pipeline] * n if one else list(pipeline)
@@ -177,7 +183,10 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self.start_lateral_noise = setup.start_lateral_noise
         self.start_heading_noise_deg = setup.start_heading_noise_deg
         self.params = setup.params
-        self.single_observation_space = setup.observation_space
+        self.camera_settings = camera
+        self.single_observation_space = (
+            image_space(camera.water) if camera.observation == "image" else setup.observation_space
+        )
         self.single_action_space = setup.action_space
         self.observation_space = batch_space(self.single_observation_space, n)
         self.action_space = batch_space(self.single_action_space, n)
@@ -205,6 +214,11 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self._rewards = np.zeros(n)
         self._no_skip = np.zeros(n, dtype=bool)
         self._ended = np.zeros(n, dtype=bool)
+        # the vision camera renders and detects per sub-environment after the batched decision
+        self._cams = None
+        if camera.renders:
+            cam, lost = self.params.camera, self.params.lost_reward
+            self._cams = [VisionCamera(camera, cam, lost) for _ in range(n)]
 
     def _load_pipe(self, i: int, pipe: Pipeline) -> None:
         m = len(pipe.points)
@@ -260,7 +274,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
             self._reset_one(int(i), opts.lateral_offset, opts.heading_offset_deg)
         self._ended_before[mask] = False
         self._started = True
-        return observation(self.states, self.setup), self._infos(mask)
+        return self._observations(), self._infos(mask)
 
     def _reset_mask(self, mask) -> np.ndarray:
         """Gymnasium's ``reset_mask`` checked (as its ``SyncVectorEnv`` checks it); None: all."""
@@ -292,6 +306,10 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self._decisions[i] = 0
         self._seen[i] = 0
         self._sum_e2[i] = 0.0
+        if self._cams is not None:
+            m = self._n_points[i]
+            pts, cum = self._points[i, :m], self._cum[i, :m]
+            self._cams[i].reset(self.states[i], pts, cum, self.np_random_generators[i])
 
     def step(self, actions):
         """One 1-s decision of every sub-environment, autoresetting by :attr:`autoreset_mode`."""
@@ -315,12 +333,19 @@ class PipelineFollowingVectorEnv(VectorEnv):
                     rngs[i].standard_normal(out=self._z[i, : self._counts[i]])
         skip = resetting if any_reset else self._no_skip
         rewards, ended = self._rewards, self._ended
+        a_prev = self.states[:, sim.A_PREV].copy()
         ok = step_batch(
             self.states, a, self._points, self._cum, self._n_points, self._packed, self._z, skip,
             rewards, self._decisions, self._seen, self._sum_e2, self.max_decisions, ended,
         )  # fmt: skip
         if not ok:
             raise ValueError("action is NaN")
+        if self._cams is not None:  # each sub-environment renders and detects with its own generator
+            rngs = self.np_random_generators
+            for i in np.flatnonzero(~skip):
+                m = self._n_points[i]
+                pts, cum = self._points[i, :m], self._cum[i, :m]
+                rewards[i] = self._cams[i].step(self.states[i], pts, cum, rngs[i], rewards[i], a_prev[i])
         if any_reset:  # next-step autoreset
             for i in np.flatnonzero(resetting):
                 self._reset_one(int(i))
@@ -329,7 +354,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
         every = np.ones(self.num_envs, dtype=bool)
         if mode == AutoresetMode.SAME_STEP and truncated.any():
             final_obs = np.full(self.num_envs, None, dtype=object)
-            last = observation(self.states, self.setup)
+            last = self._observations()
             for i in np.flatnonzero(truncated):
                 final_obs[i] = last[i]
             final_info = self._infos(truncated, truncated)
@@ -342,7 +367,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
         else:
             infos = self._infos(every, truncated)
             self._ended_before = truncated.copy()
-        return observation(self.states, self.setup), rewards.copy(), terminated, truncated, infos
+        return self._observations(), rewards.copy(), terminated, truncated, infos
 
     def reset_done(self) -> np.ndarray:
         """Reset the sub-environments whose episode ended at the last step, now; their first observations.
@@ -354,13 +379,24 @@ class PipelineFollowingVectorEnv(VectorEnv):
         for i in done:
             self._reset_one(int(i))
         self._ended_before[:] = False
-        return observation(self.states[done], self.setup)
+        return self._observations()[done]
+
+    def _observations(self) -> np.ndarray:
+        if self._cams is None:
+            return observation(self.states, self.setup)
+        dtype = self.setup.observation_space.dtype
+        return np.stack([c.observation(s, dtype) for c, s in zip(self._cams, self.states, strict=True)])
 
     def _infos(self, present: np.ndarray, ended: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """The infos of all sub-environments, ``_key`` masks ``present``; the summary where ``ended``."""
         infos: dict[str, np.ndarray] = {}
         for key, value in state_infos(self.states).items():
             infos[key], infos["_" + key] = value, present.copy()
+        if self._cams is not None:
+            per_env = [c.info() for c in self._cams]
+            for key in per_env[0]:
+                infos[key] = np.array([d[key] for d in per_env])
+                infos["_" + key] = present.copy()
         if ended is not None and ended.any():
             summary = episode_summary(
                 self._decisions, self._seen, self._sum_e2, self.states[:, sim.PROGRESS_MAX]

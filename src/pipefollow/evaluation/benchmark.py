@@ -15,6 +15,12 @@ Definitions:
 * ``rms_e_dist``: root mean square of ``e_dist`` over the decisions that end with the pipe in
   view (per episode; pooled over all episodes for the summary); ``None`` without such decisions.
 * ``progress_m``: arc length reached along the pipe.
+* ``ci95_mean``: BCa bootstrap interval of the mean return over pipes (``ci95_return`` is its
+  former name); ``ci95_iqm``: the percentile interval of the IQM, the pipes resampled as rliable
+  resamples runs (:mod:`pipefollow.evaluation.compare`).
+* ``vs_heuristic``: *paired* per pipe: ``mean_diff`` and its interval are those of the per-pipe
+  differences (controller − heuristic on the same pipe and noise); ``win_rate`` is the share of
+  pipes where the controller's return is higher than the heuristic's on that pipe.
 
 Random disturbances (camera noise, missed detections, a varying current) draw, for pipe ``k``,
 from ``numpy.random.default_rng(SeedSequence([noise_seed, k]))`` in the order the environment
@@ -31,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from pipefollow.evaluation.compare import aggregate_intervals
 from pipefollow.evaluation.stats import bootstrap_ci, iqm, paired_difference
 from pipefollow.learners import episodes as ep
 from pipefollow.learners import mlp as mlp_mod
@@ -129,6 +136,7 @@ def run_episodes(
     seconds: float,
     params: sim.SimParams = sim.PAPER_SIM,
     noise_seed: int = 0,
+    camera: dict | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """One deterministic episode (σ = 0) of ``agent`` per pipe.
 
@@ -136,6 +144,9 @@ def run_episodes(
     registry run their own compiled loop without learning, the heuristic, LOS and exported networks
     one compiled loop here; other controllers (and learners the compiled loop cannot run, such as
     a custom supervisor) run through the environment's episode function.
+    ``camera``: the environment's camera arguments (``camera``, ``water``, ``reward_from``); with
+    the vision camera the episodes run through the environment, the images and detections drawing
+    from the pipe's noise generator, and ``pipe_in_view`` and ``rms_e_dist`` are the exact camera's.
 
     Returns ``(results, poses)``: (pipes, 5) columns return, pipe_in_view, progress_m, Σ e_dist²
     and number of decisions in view; (pipes, decisions + 1, 3) poses (x, y, ψ).
@@ -152,9 +163,9 @@ def run_episodes(
             learner.check(agent)
         except TypeError:
             learner = None
-    if learner is None and fixed is None:
+    if (learner is None and fixed is None) or camera:
         results = np.zeros((len(pipes), len(_COLUMNS)))
-        _env_episodes(agent, pipes, seconds, params, results, poses, noise_seed)
+        _env_episodes(agent, pipes, seconds, params, results, poses, noise_seed, camera)
         return results, poses
     run = Run(sim.pack_params(params), np.zeros(1), n_decisions, False)
     k = noise_count(params.disturbance)
@@ -178,12 +189,12 @@ def run_episodes(
     return out[:, _COLUMNS], poses
 
 
-def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0) -> None:
-    """:func:`run_episodes` through the environment's episode function, for any controller."""
+def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0, camera=None) -> None:
+    """:func:`run_episodes` through the environment's episode function, for any controller or camera."""
     from pipefollow.envs.env import PipelineFollowingEnv
 
     for i, pipe in enumerate(pipes):
-        env = PipelineFollowingEnv(pipe, seconds, params=params)
+        env = PipelineFollowingEnv(pipe, seconds, params=params, **(camera or {}))
         env.np_random = _noise_rng(noise_seed, i)
         stats = run_episode(env, agent)
         out[i] = np.asarray(stats.as_full_row())[_COLUMNS]
@@ -216,6 +227,7 @@ def benchmark(
     n_pipes: int | None = None,
     seed: int = 0,
     noise_seed: int = 0,
+    camera: dict | None = None,
 ) -> BenchmarkRun:
     """Run ``agent`` and the heuristic on the suite's pipes and summarize (module docstring).
 
@@ -228,24 +240,30 @@ def benchmark(
         n_pipes: number of pipes (default: the whole held-out suite; 100 of a training family).
         seed: seed of the bootstrap resampling.
         noise_seed: seed of the random disturbances (module docstring), the same for both.
+        camera: the environment's camera arguments for ``agent`` (:func:`run_episodes`); the
+            heuristic it is compared with always runs on the ideal camera.
     """
     n = n_pipes if n_pipes is not None else (suite.count or 100)
     pipes = suite.pipes(n, min_length_for(seconds))
-    res, poses = run_episodes(agent, pipes, seconds, params, noise_seed)
-    is_heuristic = isinstance(agent, Heuristic)
+    res, poses = run_episodes(agent, pipes, seconds, params, noise_seed, camera)
+    is_heuristic = isinstance(agent, Heuristic) and not camera
     if is_heuristic:
         h_res, h_poses = res, poses
     else:
         h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params, noise_seed)
     ret = res[:, RET]
     lo, hi = bootstrap_ci(ret, seed)
+    # the pipes as the runs of one task, in rliable's terms: its percentile interval of the IQM
+    iqm_ci = aggregate_intervals(ret[:, None], seed=seed)["ci95_iqm"]
     summary = {
         "controller": controller,
         "suite": suite.name,
         "n_episodes": len(pipes),
         "mean_return": float(ret.mean()),
-        "ci95_return": [lo, hi],
+        "ci95_mean": [lo, hi],
+        "ci95_return": [lo, hi],  # the former name of ci95_mean, kept for scripts that read it
         "iqm_return": iqm(ret),
+        "ci95_iqm": iqm_ci,
         "success_rate": float(np.mean(res[:, IN_VIEW] >= SUCCESS_IN_VIEW)),
         "mean_pipe_in_view": float(res[:, IN_VIEW].mean()),
         "rms_e_dist": _rms(float(res[:, SUM_E2].sum()), float(res[:, N_SEEN].sum())),
@@ -268,12 +286,13 @@ def benchmark(
 
 def format_summary(r: dict, seconds: float) -> str:
     """A benchmark summary as a few lines of text."""
-    lo, hi = r["ci95_return"]
+    lo, hi = r["ci95_mean"]
+    ilo, ihi = r["ci95_iqm"]
     rms = "—" if r["rms_e_dist"] is None else f"{r['rms_e_dist']:.3f} m"
     lines = [
         f"{r['controller']} on '{r['suite']}': {r['n_episodes']} pipes, {seconds:g} s each, σ = 0",
-        f"  mean return    {r['mean_return']:9.2f}  (95 % CI {lo:.2f} to {hi:.2f}; "
-        f"IQM {r['iqm_return']:.2f})",
+        f"  mean return    {r['mean_return']:9.2f}  (95 % CI {lo:.2f} to {hi:.2f})",
+        f"  IQM return     {r['iqm_return']:9.2f}  (95 % CI {ilo:.2f} to {ihi:.2f})",
         f"  success rate   {r['success_rate']:9.1%}  (pipe in view ≥ 95 % of the decisions)",
         f"  pipe in view   {r['mean_pipe_in_view']:9.1%}",
         f"  rms e_dist     {rms:>9}",

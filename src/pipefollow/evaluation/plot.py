@@ -60,3 +60,42 @@ def plot_benchmark(run: BenchmarkRun, path: str | os.PathLike) -> None:
             axt.set_ylabel("north (m)")
     fig.tight_layout()
     save_figure(fig, path)
+
+
+def plot_comparison(summary: dict, path: str | os.PathLike) -> None:
+    """Draw a comparison (:func:`pipefollow.evaluation.compare.compare`) and write it atomically.
+
+    Left: IQM and mean of each learner with their 95 % stratified-bootstrap intervals. Right: the
+    performance profiles, the share of runs × pipes with a return above τ, with their intervals.
+    """
+    learners = summary["learners"]
+    labels = list(learners)
+    fig = new_figure((12.0, 0.9 + 0.45 * len(labels) + 3.0))
+    grid = fig.add_gridspec(1, 3, width_ratios=[1, 1, 2])
+    for col, key in enumerate(("iqm", "mean")):
+        ax = fig.add_subplot(grid[0, col])
+        for row, label in enumerate(labels):
+            s = learners[label]
+            lo, hi = s[f"ci95_{key}"]
+            ax.plot([lo, hi], [row, row], color=f"C{row}", lw=6, alpha=0.5, solid_capstyle="butt")
+            ax.plot([s[key]], [row], "|", color="k", ms=14)
+        ax.set_yticks(range(len(labels)), labels if col == 0 else [""] * len(labels))
+        ax.set_ylim(-0.7, len(labels) - 0.3)
+        ax.invert_yaxis()
+        ax.set_xlabel(f"{'IQM' if key == 'iqm' else 'mean'} of the return")
+        ax.grid(axis="x", alpha=0.3)
+    ax = fig.add_subplot(grid[0, 2])
+    for row, label in enumerate(labels):
+        p = learners[label]["profile"]
+        runs = learners[label]["runs"]
+        ax.plot(p["tau"], p["share"], color=f"C{row}", lw=1.5, label=f"{label} ({runs} runs)")
+        ax.fill_between(p["tau"], p["ci95_low"], p["ci95_high"], color=f"C{row}", alpha=0.2, lw=0)
+    ax.set_xlabel("return τ")
+    ax.set_ylabel("share of runs × pipes with a return > τ")
+    ax.set_ylim(-0.02, 1.02)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower left")
+    fig.suptitle(f"{summary.get('suite', '')}: {summary['pipes']} pipes, 95 % stratified-bootstrap intervals",
+                 fontsize=10)  # fmt: skip
+    fig.tight_layout()
+    save_figure(fig, path)

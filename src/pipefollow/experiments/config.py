@@ -63,6 +63,12 @@ class TrialConfig:
     supervised: bool = _f(
         False, "the heuristic as supervisor: supervised CACLA (eqs. 10-13) or actor-critic (eq. 11)"
     )
+    actor_update: str = _f(
+        "delta",
+        "actor-critic: the actor's step factor on (a - A(s)): delta (eq. 9), positive (max(δ, 0): eq. 7's "
+        "max term alone) or sign (sgn δ: eq. 7's sign term alone)",
+        choices=("delta", "positive", "sign"),
+    )
     phases: tuple[Phase, ...] = _f((Phase(),), "training phases in order (paper §4.2: left, then right)")
     episode_seconds: float = _f(20.0, "episode length (s); one decision per second (paper §4.1)")
     sigma_start: float = _f(1.0, "exploration σ of the first episode, normalized action units (paper §4)")
@@ -251,7 +257,9 @@ def validate(obj, where: str) -> None:
         if not re.fullmatch(NAME_PATTERN, obj.name):
             raise bad("name", "letters, digits and any of - _ . @ = , +", obj.name)
         try:
-            check_options(obj.algorithm, skew_deg=obj.skew_deg, supervised=obj.supervised)
+            check_options(
+                obj.algorithm, skew_deg=obj.skew_deg, supervised=obj.supervised, actor_update=obj.actor_update
+            )
         except ValueError as e:
             raise ConfigError(f"{where}: {e}") from None
         _check_readings(obj.readings, f"{where}: key 'readings'")

@@ -34,6 +34,7 @@ from pipefollow.experiments import folder, store
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig
 from pipefollow.experiments.trial import TrialResult, run_trial
 from pipefollow.files.output_paths import first_missing, remove_empty_folders
+from pipefollow.files.progress import progress
 
 BACKENDS = ("serial", "process", "ray")
 
@@ -330,7 +331,7 @@ def run_experiment(
         return RunSummary(run_dir, backend, 1, total, 0, total, time.perf_counter() - t0, read_only=True)
     created = not (run_dir / store.CONFIG_FILE).exists()
     made = first_missing(run_dir)
-    hidden = not (show_progress and sys.stderr.isatty())
+    hidden = not show_progress
     try:
         with folder.locked(out_dir) as run_dir:
             try:
@@ -351,9 +352,7 @@ def run_experiment(
                     # Compiling (or loading the compiled code) is a phase of its own: inside the
                     # trials' progress bar it made the first time estimate many times too long.
                     _compile_phase(exp.name, [c for c, _ in work], n_workers > 1, hidden)
-                with click.progressbar(
-                    length=total, label=f"{exp.name}: trials", file=sys.stderr, hidden=hidden, show_pos=True
-                ) as bar:
+                with progress(total, f"{exp.name}: trials", hidden=hidden, unit="trials") as bar:
                     bar.update(len(done))
                     if backend == "serial" or not work:
                         results = _serial(work, trial_fn)

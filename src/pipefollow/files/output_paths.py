@@ -26,9 +26,10 @@ def check_output_file(path: str | os.PathLike, option: str, suffixes: tuple[str,
     p = Path(path)
     suffix = p.suffix.lower().lstrip(".")
     if suffix not in suffixes:
-        got = f"'.{suffix}'" if suffix else "no suffix"
         known = ", ".join(f".{x}" for x in suffixes)
-        raise OutputError(f"{option} '{p}': {got} is not a known file type; use one of {known}")
+        if not suffix:
+            raise OutputError(f"{option} '{p}': has no suffix to tell the file type; use one of {known}")
+        raise OutputError(f"{option} '{p}': '.{suffix}' is not a known file type; use one of {known}")
     if p.is_dir():
         raise OutputError(f"{option} '{p}': is a folder")
     for parent in p.parents:

@@ -340,7 +340,13 @@ def policy_fields(agent: Cacla) -> dict:
     }
 
 
-def from_policy(data: dict, version: int, seed: int | None = None, agent_class: type = None):
+def from_policy(
+    data: dict,
+    version: int,
+    seed: int | None = None,
+    agent_class: type | None = None,
+    params_class: type = CaclaParams,
+):
     """An agent and its weights from a policy file's arrays (see :func:`policy_fields`).
 
     Files before format 3 had a boolean ``skew_centred`` and were trained with eq. 15 moving the
@@ -356,7 +362,7 @@ def from_policy(data: dict, version: int, seed: int | None = None, agent_class: 
         params["skew_step"] = STEP_WEIGHTS
         if params.get("skew", 0.0) > 0.0:
             trained = "skew_step=weights" + (",skew_sample=centred" if centred else "")
-    agent = (agent_class or Cacla)(CaclaParams(**params), grid=grid, seed=seed)
+    agent = (agent_class or Cacla)(params_class(**params), grid=grid, seed=seed)
     agent.readings = trained
     return agent, weights
 

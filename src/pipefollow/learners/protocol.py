@@ -18,8 +18,9 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
-# Options shared by several learners: a learner names the ones it takes in ``LearnerKind.options``.
-OPTIONS = ("skew_deg", "supervised")
+# Options of the command line and experiment files, each with its off value; a learner names the
+# ones it takes in ``LearnerKind.options``, and an option set for another learner is refused.
+OPTIONS = {"skew_deg": 0.0, "supervised": False, "actor_update": "delta"}
 
 
 @dataclass(frozen=True)

@@ -47,15 +47,15 @@ def check_options(name: str, **options) -> None:
         ValueError: e.g. ``skew_deg applies to algorithm cacla only``.
     """
     kind = learner(name)
-    for option in OPTIONS:
-        if options.get(option) and option not in kind.options:
+    for option, off in OPTIONS.items():
+        if options.get(option, off) != off and option not in kind.options:
             raise ValueError(f"{option} applies to algorithm {' and '.join(taking(option))} only")
 
 
 def make(name: str, readings, rng: np.random.Generator | None = None, **options):
     """A fresh agent of learner ``name`` under ``readings``; ``options`` are shared options and step sizes.
 
-    Shared options left at their off value (0, False) are dropped for learners that do not take them.
+    Options left at their off value (0, False, ``delta``) are dropped for learners that do not take them.
     """
     check_options(name, **options)
     kind = learner(name)

@@ -157,10 +157,16 @@ def builtin(name: str) -> Pipeline:
     raise PipelineError(f"pipeline '{name}': unknown built-in (choose from {', '.join(BUILTIN_NAMES)})")
 
 
-def resolve(spec: str | os.PathLike | Pipeline) -> Pipeline:
-    """A pipeline from a built-in name, a JSON file path or a :class:`Pipeline`."""
+def resolve(spec) -> Pipeline:
+    """A pipeline from a built-in name, a JSON file path, a :class:`Pipeline` or its points.
+
+    Points are a sequence of ``[x, y]`` pairs (metres, north and east) or an (n, 2) array, as in a
+    pipeline file's ``"points"``.
+    """
     if isinstance(spec, Pipeline):
         return spec
+    if isinstance(spec, np.ndarray) or (isinstance(spec, list | tuple) and not isinstance(spec, str)):
+        return Pipeline(_validated_points(spec, "pipeline points"), "points")
     if isinstance(spec, str) and spec in BUILTIN_NAMES:
         return builtin(spec)
     path = Path(spec)

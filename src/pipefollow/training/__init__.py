@@ -1,8 +1,8 @@
 """Training: episodes, compiled loops, policy files, run outputs and the deep-RL baselines.
 
-Episodes through an environment, the compiled training loops (one pipe and a new random pipe
-per episode), policy files, a run's output files, and the deep-RL baselines (``deep``, optional
-extra).
+Episodes through an environment, training in a learner's compiled loop (one pipe and a new random
+pipe per episode), ``train_phases`` (the one way the command line and experiment trials train),
+policy files, a run's output files, and the deep-RL baselines (``deep``, optional extra).
 
 May import ``files``, ``sim``, ``learners``, ``readings`` and ``envs``.
 """

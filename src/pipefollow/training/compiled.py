@@ -10,12 +10,14 @@ Both paths follow the same protocol (docs/design.md):
 * the 20-s end is a time limit: agents bootstrap from the last state;
 * exploration σ falls linearly from ``sigma_start`` to ``sigma_end`` over the episodes.
 
-The compiled path (:func:`train_compiled`) composes the same compiled stage and update
+The compiled path (:func:`train_compiled`) runs the agent's learner's own compiled loop
+(:mod:`pipefollow.learners.episodes`), which composes the same compiled stage and update
 functions as the environment and agent classes, consumes the same random numbers in the same
 order, and so gives the same trajectory, returns and weights (tested to 1e-9). The agent's
 generator drives exploration; a second generator, ``env_rng``, plays the environment's
-``np_random``: per episode two uniforms (the start perturbation the environment draws at every
-reset) and one block of standard normals per camera reading for the random disturbances.
+``np_random``: one block of standard normals per camera reading (the reset's and each decision's)
+for the random disturbances. The compiled path starts without start noise, for which the
+environment would draw uniforms.
 """
 
 from __future__ import annotations
@@ -96,9 +98,9 @@ def run_episode(
         next_obs, r, terminated, truncated, info = env.step([a])
         total += r
         steps += 1
-        if info["pipe_in_view"]:
+        if info.get("true_pipe_in_view", info["pipe_in_view"]):  # the exact camera's, under vision too
             seen += 1
-            sum_e2 += float(info["e_dist"]) ** 2
+            sum_e2 += float(info.get("true_e_dist", info["e_dist"])) ** 2
         done = terminated or truncated
         if learn:
             if visible:

@@ -1,0 +1,115 @@
+"""Benchmarks of the vision camera: render, detect, and env.step with it beside the ideal camera.
+
+Usage: ``python benchmarks/vision.py [--repeats N] [--cpu]``
+
+Frames are taken along a heuristic episode on a held-out pipe (clear water, 64 × 96). Times are
+medians over repeats of blocks of calls; the two env.step lines are timed in turns in the same
+run (the machine is shared: compare within one run).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import platform
+import statistics
+import time
+
+import numpy as np
+
+CLOCK = time.perf_counter  # or time.process_time (--cpu): the process's CPU time, which waiting for
+# a core on a shared machine does not inflate
+
+
+def blocks(fn, repeats: int, inner: int) -> list[float]:
+    out = []
+    for _ in range(repeats):
+        t = CLOCK()
+        for _ in range(inner):
+            fn()
+        out.append((CLOCK() - t) / inner)
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--repeats", type=int, default=15)
+    parser.add_argument("--cpu", action="store_true", help="CPU time (time.process_time), not wall time.")
+    args = parser.parse_args()
+    global CLOCK
+    if args.cpu:
+        CLOCK = time.process_time
+    import cv2
+    import gymnasium as gym
+
+    import pipefollow  # noqa: F401 (registers the environment)
+    from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
+    from pipefollow.perception.detector import detect_pipe
+    from pipefollow.perception.image import Renderer, make_textures
+    from pipefollow.perception.water import CLEAR
+    from pipefollow.sim import decision as sim
+    from pipefollow.sim.suites import get_suite, min_length_for
+
+    pipe = get_suite("heldout").pipes(1, min_length_for(600.0))[0]
+    # poses along a heuristic episode (ideal camera)
+    env = gym.make("pipefollow/PipelineFollowing-v0", pipeline=pipe, episode_seconds=600.0).unwrapped
+    obs, _ = env.reset(seed=0)
+    poses = []
+    for _ in range(200):
+        poses.append((env.state[sim.X], env.state[sim.Y], env.state[sim.PSI]))
+        obs, *_ = env.step([math.atan2(obs[0], obs[1]) / (0.5 * math.pi)])
+    rng = np.random.default_rng(0)
+    tex = make_textures(rng)
+    renderer = Renderer(CLEAR)
+    out = np.empty((CLEAR.height, CLEAR.width), np.uint8)
+    images = [renderer.render(pipe.points, pipe.cumulative, p, tex, rng).copy() for p in poses]
+    it = iter(range(10**9))
+
+    def render():
+        renderer.render(pipe.points, pipe.cumulative, poses[next(it) % 200], tex, rng, out=out)
+
+    def detect():
+        detect_pipe(images[next(it) % 200])
+
+    def both():
+        k = next(it) % 200
+        renderer.render(pipe.points, pipe.cumulative, poses[k], tex, rng, out=out)
+        detect_pipe(out)
+
+    rows = []
+    for name, fn in (("render", render), ("detect_pipe", detect), ("render + detect (one decision)", both)):
+        fn()
+        target = "≤ 0.3 ms" if "+" in name else ""
+        rows.append((name, statistics.median(blocks(fn, args.repeats, 200)), target))
+
+    def stepper(camera):
+        e = gym.make("pipefollow/PipelineFollowing-v0", pipeline=pipe, episode_seconds=86_400, camera=camera)
+        e.reset(seed=0)
+        return lambda: e.step([0.0])
+
+    ideal, vision = stepper("ideal"), stepper("vision")
+    ideal(), vision()
+    ti, tv = [], []
+    for _ in range(args.repeats):  # in turns, so both meet the same load
+        ti += blocks(ideal, 1, 200)
+        tv += blocks(vision, 1, 200)
+    rows.append(("env.step, ideal camera", statistics.median(ti), ""))
+    rows.append(("env.step, vision camera", statistics.median(tv), "≤ 0.4 ms"))
+    vec = PipelineFollowingVectorEnv(16, pipe, episode_seconds=86_400.0, camera="vision")
+    vec.reset(seed=0)
+    zeros = np.zeros(16)
+    tvec = blocks(lambda: vec.step(zeros), args.repeats, 20)
+    rows.append(("vector env, 16 AUVs, vision camera, per AUV", statistics.median(tvec) / 16, ""))
+    print(f"{platform.machine()}, Python {platform.python_version()}, OpenCV {cv2.__version__}")
+    print(f"{args.repeats} repeats, {'CPU' if args.cpu else 'wall'} time")
+    print("| benchmark | median | target |\n|---|---|---|")
+    for name, t, target in rows:
+        ok = ""
+        if target:
+            limit = float(target.split()[1]) * 1e-3
+            ok = " ✓" if t <= limit else " ✗"
+        print(f"| {name} | {t * 1e3:.3f} ms | {target}{ok} |")
+
+
+if __name__ == "__main__":
+    main()

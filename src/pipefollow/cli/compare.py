@@ -1,0 +1,146 @@
+"""``pipefollow compare``: several learners over their training seeds and a suite of pipes."""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+from pipefollow.cli.common import (
+    SEED,
+    UserError,
+    check_plot_path,
+    complete_suite,
+    disturbance_options,
+    finite,
+    guard,
+    load_controller,
+)
+
+
+@click.command()
+@click.argument("policies", nargs=-1, required=True, metavar="POLICY...")
+@click.option(
+    "--label",
+    "labels",
+    multiple=True,
+    help="Learner of each POLICY, in order (repeat once per POLICY); policies with the same label "
+    "are runs of one learner [default: the learner and options the policy was trained with].",
+)
+@click.option(
+    "--suite",
+    "suite_specs",
+    multiple=True,
+    metavar="SUITE|PATH",
+    shell_complete=complete_suite,
+    help="A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
+    "(repeatable) [default: heldout].",
+)
+@click.option(
+    "--seconds",
+    type=click.FloatRange(min=1.0, max=86_400.0),
+    callback=finite,
+    default=60.0,
+    show_default=True,
+    help="Episode length in seconds.",
+)
+@click.option(
+    "--pipes",
+    type=click.IntRange(min=1, max=100_000),
+    default=None,
+    help="Number of pipes [default: all of a held-out suite or folder, 100 of a training family].",
+)
+@click.option(
+    "--reps",
+    type=click.IntRange(min=100, max=1_000_000),
+    default=50_000,
+    show_default=True,
+    help="Bootstrap replicates of the IQM and mean intervals (rliable's default).",
+)
+@click.option(
+    "--seed",
+    default=0,
+    show_default=True,
+    type=SEED,
+    help="Seed of the bootstrap and of the random disturbances.",
+)
+@click.option(
+    "--plot",
+    "plot_path",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Save the intervals and performance profiles as a figure (.png, .svg, .pdf, ...).",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@disturbance_options
+@guard
+def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path, as_json, disturbance):
+    """Compare learners over training seeds × pipes: IQM, mean, probability of improvement.
+
+    Every POLICY (a policy file, or heuristic / los) runs one deterministic episode per pipe
+    under the readings it was trained with. Policies of one learner (same training options, or
+    same --label) are its runs; the intervals are rliable's stratified bootstrap over runs, kept
+    per pipe, so they need several training seeds per learner.
+    """
+    import numpy as np
+
+    from pipefollow.evaluation.benchmark import RET, run_episodes
+    from pipefollow.evaluation.compare import compare as run_compare
+    from pipefollow.readings import parse, sim_params
+    from pipefollow.sim.pipe_names import resolve_suite
+    from pipefollow.sim.suites import min_length_for
+
+    check_plot_path(plot_path)
+    if labels and len(labels) != len(policies):
+        raise UserError(f"--label given {len(labels)} times for {len(policies)} policies (one per policy)")
+    suite = resolve_suite(suite_specs or ["heldout"])
+    n = pipes if pipes is not None else (suite.count or 100)
+    if suite.count is not None and n > suite.count:
+        raise UserError(f"--pipes {n}: suite '{suite.name}' has {suite.count} pipes")
+    agents = [load_controller(p, seed) for p in policies]  # every file checked before any episode
+    pipe_list = suite.pipes(n, min_length_for(seconds))
+    if not labels:  # the learner and options each policy was trained with
+        labels = tuple(getattr(agent, "name", spec) for spec, agent in zip(policies, agents, strict=True))
+    rows: dict[str, list] = {}
+    for spec, agent, label in zip(policies, agents, labels, strict=True):
+        reading = parse(getattr(agent, "readings", "default"), source=f"policy '{spec}' readings")
+        params = sim_params(reading)._replace(disturbance=disturbance)
+        res, _ = run_episodes(agent, pipe_list, seconds, params, noise_seed=seed)
+        rows.setdefault(label, []).append(res[:, RET])
+    result = run_compare({k: np.stack(v) for k, v in rows.items()}, reps=reps, seed=seed)
+    summary = {"suite": suite.name, "seconds": seconds, **result.summary}
+    pairs = list(zip(policies, labels, strict=True))
+    summary["policies"] = {label: [p for p, q in pairs if q == label] for label in rows}
+    if plot_path:
+        from pipefollow.evaluation.plot import plot_comparison
+
+        plot_comparison(summary, plot_path)
+        summary["plot"] = str(plot_path)
+    if as_json:
+        click.echo(json.dumps(summary))
+        return
+    click.echo(_format(summary))
+
+
+def _format(s: dict) -> str:
+    lines = [
+        f"{len(s['learners'])} learners on '{s['suite']}': {s['pipes']} pipes, {s['seconds']:g} s each; "
+        f"95 % stratified-bootstrap intervals over runs ({s['reps']} replicates)",
+        f"{'learner':<34} {'runs':>4} {'IQM':>8} {'95 % CI':>19} {'mean':>8} {'95 % CI':>19}",
+    ]
+    for label, r in s["learners"].items():
+        iq, mn = r["ci95_iqm"], r["ci95_mean"]
+        lines.append(
+            f"{label[:34]:<34} {r['runs']:>4} {r['iqm']:>8.2f} {iq[0]:>9.2f}–{iq[1]:<9.2f} "
+            f"{r['mean']:>8.2f} {mn[0]:>9.2f}–{mn[1]:<9.2f}"
+        )
+    if s["probability_of_improvement"]:
+        lines.append("probability of improvement P(X > Y), per pipe over runs, averaged over pipes:")
+        for p in s["probability_of_improvement"]:
+            lo, hi = p["ci95"]
+            lines.append(f"  P({p['x']} > {p['y']}) = {p['probability']:.2f}  (95 % CI {lo:.2f}–{hi:.2f})")
+    if any(r["runs"] == 1 for r in s["learners"].values()):
+        lines.append("note: a learner with one run has intervals of no width; train several seeds")
+    if "plot" in s:
+        lines.append(f"plot: {s['plot']}")
+    return "\n".join(lines)

@@ -1,0 +1,6 @@
+"""Perception: the downward camera's grey image of the footprint and a pipe detector on it.
+
+``water`` holds the one parameter record of water and camera settings, ``image`` renders the
+footprint as the camera sees it, ``detector`` finds the pipe in a grey image (OpenCV, the optional
+extra ``vision``) and ``camera`` joins the two to the simulation's observation slots.
+"""

@@ -1,0 +1,182 @@
+"""The vision camera of the environments: render the footprint, detect the pipe, write the observation.
+
+With ``camera="vision"`` the observation slots of the simulation state (``x1, y1, x2, y_near``,
+``e_dist``, ``e_angl``, the in-view flag and the side of the last sighting) come from
+:func:`~pipefollow.perception.detector.detect_pipe` on the rendered image instead of from the
+exact geometry; "not found" is a lost pipe, so the next decision runs the search behaviour and
+this one gets the lost reward. The reward (eq. 19) stays computed from the true geometry
+(``reward_from="truth"``, docs/design.md says why) unless ``reward_from="detected"``.
+``observation="image"`` hands the image itself to the agent, with either camera.
+
+The environments call :meth:`VisionCamera.reset` after their reset and :meth:`VisionCamera.step`
+after each decision; both draw from the environment's seeded generator only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pipefollow.perception.detector import NOT_FOUND, Detection, detect_pipe, require_cv2
+from pipefollow.perception.image import Renderer, Textures, make_textures
+from pipefollow.perception.water import Water, water_from
+from pipefollow.sim import decision as sim
+from pipefollow.sim.camera import CameraParams, tracking_errors
+from pipefollow.sim.reward import reward
+
+CAMERAS = ("ideal", "vision")
+OBSERVATIONS = ("state", "image")
+REWARD_FROM = ("truth", "detected")
+
+
+@dataclass(frozen=True)
+class CameraSettings:
+    """How the environment sees: the camera, what the agent observes, the reward's source, the water."""
+
+    camera: str = "ideal"  # "ideal" (the paper's exact visible piece) or "vision" (the detector)
+    observation: str = "state"  # "state" (x1, y1, x2, v_x) or "image" (the camera image, (1, H, W))
+    reward_from: str = "truth"  # eq. 19 from the true geometry, or from the detection
+    water: Water = Water()  # water and camera settings of the image
+
+    @property
+    def renders(self) -> bool:
+        """Whether the environment renders camera images at all."""
+        return self.camera == "vision" or self.observation == "image"
+
+
+IDEAL = CameraSettings()
+
+
+def camera_settings(
+    camera: str = "ideal",
+    observation: str = "state",
+    reward_from: str = "truth",
+    water: Water | str | dict[str, Any] | None = None,
+) -> CameraSettings:
+    """Checked settings; a one-line ``ValueError`` naming the argument otherwise.
+
+    The vision camera needs OpenCV (the extra ``vision``); without it this raises the one-line
+    ``ImportError`` of :func:`~pipefollow.perception.detector.require_cv2`.
+    """
+    for name, value, allowed in (
+        ("camera", camera, CAMERAS),
+        ("observation", observation, OBSERVATIONS),
+        ("reward_from", reward_from, REWARD_FROM),
+    ):
+        if value not in allowed:
+            raise ValueError(f"{name} must be one of {', '.join(allowed)}; got {value!r}")
+    if reward_from == "detected" and camera != "vision":
+        raise ValueError("reward_from='detected' needs camera='vision' (the ideal camera detects nothing)")
+    settings = CameraSettings(camera, observation, reward_from, water_from(water))
+    if camera == "vision":
+        require_cv2()
+    return settings
+
+
+class VisionCamera:
+    """One environment's camera image and detections (see the module docstring)."""
+
+    def __init__(self, settings: CameraSettings, camera: CameraParams, lost_reward: float) -> None:
+        self.settings = settings
+        self.camera = camera
+        self.lost_reward = lost_reward
+        self.renderer = Renderer(settings.water, camera)
+        self.image = np.zeros((settings.water.height, settings.water.width), dtype=np.uint8)
+        self.detection: Detection = NOT_FOUND
+        self.truth = (False, 0.0, 0.0, 0.0, 0.0)  # in view, x1, y1, x2, y_near of the exact camera
+        self._textures: Textures | None = None
+        self._last = np.zeros(7)  # the last detection's slots (x1, y1, x2, y_near, e_dist, e_angl, side)
+        self._last[6] = 1.0
+
+    def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
+        """A new scene (seabed and growth textures from ``rng``) and its first image."""
+        self._textures = make_textures(rng)
+        self._last[:] = 0.0
+        self._last[6] = 1.0
+        self._look(state, points, cum, rng)
+
+    def step(
+        self,
+        state: np.ndarray,
+        points: np.ndarray,
+        cum: np.ndarray,
+        rng: np.random.Generator,
+        sim_reward: float,
+        previous_action: float,
+    ) -> float:
+        """After a decision: the new image and detection; returns the decision's reward.
+
+        ``sim_reward`` is the simulation's reward from the true geometry; ``previous_action`` the
+        executed action before this decision (eq. 19's a_prev).
+        """
+        self._look(state, points, cum, rng)
+        s = state
+        if self.settings.camera != "vision":
+            return sim_reward
+        if s[sim.OVERRIDDEN] != 0.0 or s[sim.IN_VIEW] == 0.0:
+            return self.lost_reward
+        if self.settings.reward_from == "truth":
+            return sim_reward
+        return reward(s[sim.VX], s[sim.E_DIST], s[sim.E_ANGL], s[sim.A_PREV], previous_action)
+
+    def _look(self, s: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
+        self.truth = (bool(s[sim.IN_VIEW]), s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR])
+        self._true_errors = (s[sim.E_DIST], s[sim.E_ANGL])
+        pose = (s[sim.X], s[sim.Y], s[sim.PSI])
+        self.renderer.render(points, cum, pose, self._textures, rng, out=self.image)
+        if self.settings.camera != "vision":
+            return
+        wt, cam = self.settings.water, self.camera
+        det = detect_pipe(self.image, cam.half_width, cam.depth, wt.pipe_diameter)
+        self.detection = det
+        last = self._last
+        if det.found:
+            e_dist, e_angl = tracking_errors(det.x1, det.y1, det.x2, det.y_near)
+            last[:] = (det.x1, det.y1, det.x2, det.y_near, e_dist, e_angl, 1.0 if det.x1 >= 0.0 else -1.0)
+        # a lost pipe keeps the last detection, as the exact camera keeps its last sighting
+        s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR] = last[0], last[1], last[2], last[3]
+        s[sim.E_DIST], s[sim.E_ANGL], s[sim.LAST_SIDE] = last[4], last[5], last[6]
+        s[sim.IN_VIEW] = 1.0 if det.found else 0.0
+
+    def observation(self, state: np.ndarray, dtype=np.float64) -> np.ndarray:
+        """The agent's observation: ``state[:4]`` (as ``dtype``) or the image as ``(1, H, W)``."""
+        if self.settings.observation == "image":
+            return self.image[None].copy()
+        return state[:4].astype(dtype)
+
+    def info(self) -> dict[str, np.ndarray]:
+        """The camera's entries of ``info`` (0-d arrays): the detection and the exact camera's view."""
+        out: dict[str, np.ndarray] = {"true_pipe_in_view": np.array(self.truth[0])}
+        if self.settings.camera == "vision":
+            out["detected"] = np.array(self.detection.found, dtype=bool)
+            out["detection_confidence"] = np.array(float(self.detection.confidence))
+            out["true_e_dist"] = np.array(float(self._true_errors[0]))
+            out["true_e_angl"] = np.array(float(self._true_errors[1]))
+        return out
+
+    def panel(self, height: int) -> np.ndarray:
+        """The camera image as an RGB panel ``height`` pixels high: detection red, truth green."""
+        h, w = self.image.shape
+        k = max(1, height // h)
+        grey = np.repeat(np.repeat(self.image, k, axis=0), k, axis=1)
+        rgb = np.stack([grey] * 3, axis=-1)
+        cam = self.camera
+
+        def draw(x_a, y_a, x_b, y_b, colour):
+            for t in np.linspace(0.0, 1.0, 4 * k * max(h, w)):
+                x, y = x_a + t * (x_b - x_a), y_a + t * (y_b - y_a)
+                c = int((x + cam.half_width) / (2.0 * cam.half_width) * w * k)
+                r = int((cam.depth - y) / cam.depth * h * k)
+                rgb[min(max(r, 0), h * k - 1), min(max(c, 0), w * k - 1)] = colour
+
+        seen, x1, y1, x2, y_near = self.truth
+        if seen:
+            draw(x2, y_near, x1, y1, (40, 220, 40))
+        det = self.detection
+        if det.found:
+            draw(det.x2, det.y_near, det.x1, det.y1, (230, 30, 30))
+        out = np.zeros((height, w * k, 3), dtype=np.uint8)
+        out[: min(height, h * k)] = rgb[:height]
+        return out

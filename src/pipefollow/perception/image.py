@@ -1,0 +1,348 @@
+"""The downward camera's grey image of the footprint (issue 15, item 1).
+
+Pixel conventions, which tests and users rely on: the image covers the footprint
+``x ∈ [−hw, hw]`` (columns, column 0 at x = −hw, port) and ``y ∈ [0, depth]`` (rows, row 0 at the
+far edge y = depth, the last row at y = 0). Pixel ``(r, c)`` has its centre at
+``x = −hw + (c + ½)·2hw/W``, ``y = depth − (r + ½)·depth/H``; by default hw = 1 m, depth = 3 m,
+W × H = 64 × 96 (square pixels of 3.125 cm), grey ``uint8``.
+
+Contents, in the order they are made:
+
+* the seabed: a seeded texture tile (:class:`Textures`) fixed in the earth frame, so it moves
+  through the image as the AUV moves;
+* the pipe: a shaded cylinder of ``water.pipe_diameter`` around the pipeline's centre line
+  (brightness ∝ 0.55 + 0.45·n_z, n_z the surface normal's vertical part); ``water.burial`` covers
+  that share of its width with sand from its starboard edge (looking along the pipe); patches of
+  marine growth (a second texture fixed along the pipe's arc length) cover ``water.growth`` of it;
+* light and water: the vehicle's light falls off towards the edges (to ``1 − light_falloff`` at
+  the corners); along the light's path ``L = 2·√(altitude² + x² + (y − depth/2)²)`` the direct
+  signal is attenuated by ``exp(−c·L)`` and a veil ``V·(1 − exp(−c·L))`` rises (c =
+  ``turbidity``); the camera's gain holds the image centre's mean level where it is in clear water;
+* marine snow (Poisson count of bright specks), blur (the optics' σ plus forward scattering
+  ``2·c`` pixels), Gaussian sensor noise.
+
+All randomness comes from the ``numpy.random.Generator`` passed in.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from pipefollow.perception.water import CLEAR, Water
+from pipefollow.sim.camera import PAPER_CAMERA, CameraParams
+
+TILE = 256  # texture tile size (texels)
+TILE_RES = 0.025  # texel size (m): the seabed texture repeats every 6.4 m
+SEABED_ALBEDO = (0.36, 0.07)  # mean and s.d. of the seabed's albedo
+PIPE_ALBEDO = 0.78  # the pipe's coating
+SAND_ALBEDO = 0.44  # sand over a buried pipe
+GROWTH_ALBEDO = 0.22  # marine growth (dark)
+VEIL = 0.6  # backscatter level relative to an albedo of 1
+SCATTER_BLUR = 2.0  # forward-scattering blur σ per unit of turbidity (pixels per 1/m)
+SNOW_LEVEL = (60.0, 140.0)  # grey levels a marine-snow speck adds (uniform range)
+NOISE_BANK = 1 << 18  # standard normals a renderer draws once for its sensor noise
+
+
+class Textures(NamedTuple):
+    """The seabed and marine-growth textures of a scene (``TILE × TILE`` float32 tiles)."""
+
+    seabed: np.ndarray  # albedo, indexed by earth (x, y) / TILE_RES modulo TILE
+    growth: np.ndarray  # ranks in [0, 1), indexed by (arc length, position across the pipe)
+
+
+def _smooth_noise(rng: np.random.Generator, beta: float) -> np.ndarray:
+    """A periodic ``TILE × TILE`` field of 1/f^beta noise, mean 0 and s.d. 1."""
+    white = rng.standard_normal((TILE, TILE))
+    f = np.fft.fftfreq(TILE)
+    k = np.sqrt(f[:, None] ** 2 + f[None, :] ** 2)
+    k[0, 0] = 1.0
+    field = np.fft.ifft2(np.fft.fft2(white) / k**beta).real
+    field -= field.mean()
+    return field / field.std()
+
+
+def make_textures(rng: np.random.Generator) -> Textures:
+    """A new scene's textures drawn from ``rng``."""
+    seabed = SEABED_ALBEDO[0] + SEABED_ALBEDO[1] * _smooth_noise(rng, 1.2)
+    growth = _smooth_noise(rng, 1.6).ravel()
+    ranks = np.empty(growth.size)
+    ranks[np.argsort(growth)] = np.arange(growth.size) / growth.size  # uniform: share g covers g
+    return Textures(
+        np.clip(seabed, 0.05, 0.95).astype(np.float32), ranks.reshape(TILE, TILE).astype(np.float32)
+    )
+
+
+@njit(cache=True)
+def pipe_segments(points, cum, x, y, psi, hw, depth, margin):
+    """The pipeline's segments near the footprint, in camera coordinates.
+
+    Returns a ``(k, 5)`` array of rows ``(ax, ay, bx, by, s_a)`` (ends a, b and a's arc length)
+    for the segments whose bounding box comes within ``margin`` of the footprint.
+    """
+    n = points.shape[0] - 1
+    out = np.empty((n, 5))
+    k = 0
+    cs, sn = math.cos(psi), math.sin(psi)
+    dx, dy = points[0, 0] - x, points[0, 1] - y
+    ax, ay = -sn * dx + cs * dy, cs * dx + sn * dy
+    for i in range(n):
+        dx, dy = points[i + 1, 0] - x, points[i + 1, 1] - y
+        bx, by = -sn * dx + cs * dy, cs * dx + sn * dy
+        if not (
+            max(ax, bx) < -hw - margin
+            or min(ax, bx) > hw + margin
+            or max(ay, by) < -margin
+            or min(ay, by) > depth + margin
+        ):
+            out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4] = ax, ay, bx, by, cum[i]
+            k += 1
+        ax, ay = bx, by
+    return out[:k]
+
+
+@njit(cache=True)
+def _pipe_distance(segs, hw, depth, w, h, radius, dist, across, along):
+    """Per pixel: distance to the pipe's centre line, signed offset across it, arc length.
+
+    Only pixels within ``radius`` of a segment are visited (a row's column range per segment);
+    ``dist`` must hold ``inf`` on entry.
+    """
+    px = 2.0 * hw / w
+    py = depth / h
+    for j in range(segs.shape[0]):
+        ax, ay, bx, by, s0 = segs[j, 0], segs[j, 1], segs[j, 2], segs[j, 3], segs[j, 4]
+        ex, ey = bx - ax, by - ay
+        length2 = ex * ex + ey * ey
+        length = math.sqrt(length2)
+        r_lo = int((depth - (max(ay, by) + radius)) / py)
+        r_hi = int((depth - (min(ay, by) - radius)) / py) + 1
+        for r in range(max(r_lo, 0), min(r_hi, h)):
+            cy = depth - (r + 0.5) * py
+            # columns within the capsule: the segment's x at this row ± radius/|sin|, inside its box
+            x_lo, x_hi = min(ax, bx) - radius, max(ax, bx) + radius
+            if abs(ey) > 1e-12:
+                xc = ax + ex * (cy - ay) / ey
+                half = radius * length / abs(ey)
+                x_lo, x_hi = max(x_lo, xc - half - radius), min(x_hi, xc + half + radius)
+            c_lo = int((x_lo + hw) / px)
+            c_hi = int((x_hi + hw) / px) + 1
+            for c in range(max(c_lo, 0), min(c_hi, w)):
+                cx = -hw + (c + 0.5) * px
+                qx, qy = cx - ax, cy - ay
+                t = (qx * ex + qy * ey) / length2
+                t = min(max(t, 0.0), 1.0)
+                dx, dy = qx - t * ex, qy - t * ey
+                d = math.sqrt(dx * dx + dy * dy)
+                if d < dist[r, c]:
+                    dist[r, c] = d
+                    # positive to starboard of the pipe's direction (cross product a→b × a→p)
+                    across[r, c] = d if ex * qy - ey * qx < 0.0 else -d
+                    along[r, c] = s0 + t * length
+
+
+def light_and_water(water: Water, camera: CameraParams) -> tuple[np.ndarray, np.ndarray]:
+    """Per pixel, the gain ``a`` on the albedo and the veil ``b``: grey level = a·albedo + b.
+
+    They depend only on the water and the geometry, not on the pose, so a renderer computes them
+    once. The gain puts the seabed's mean albedo at the image centre at grey level 100.
+    """
+    xs, ys = pixel_centres(water, camera)
+    cx, cy = xs[None, :], ys[:, None] - 0.5 * camera.depth
+    k_light = -math.log(1.0 - water.light_falloff)
+    light = np.exp(-0.5 * k_light * ((cx / camera.half_width) ** 2 + (cy / (0.5 * camera.depth)) ** 2))
+    path = 2.0 * np.sqrt(water.altitude**2 + cx**2 + cy**2)
+    t = np.exp(-water.turbidity * path)
+    t0 = math.exp(-water.turbidity * 2.0 * water.altitude)
+    gain = 100.0 / (SEABED_ALBEDO[0] * t0 + VEIL * (1.0 - t0))
+    return (gain * light * t).astype(np.float32), (gain * light * VEIL * (1.0 - t)).astype(np.float32)
+
+
+@njit(cache=True, fastmath=True)
+def _compose(
+    img, x, y, psi, hw, depth, radius, burial, growth_share, seabed, growth, dist, across, along, a, b
+):
+    """Albedo per pixel (seabed, pipe, sand, growth) times the gain ``a`` plus the veil ``b``."""
+    h, w = img.shape
+    px, py = 2.0 * hw / w, depth / h
+    cs, sn = math.cos(psi), math.sin(psi)
+    mask = seabed.shape[0] - 1  # the tile's size is a power of two
+    sand_from = radius * (1.0 - 2.0 * burial)
+    for r in range(h):
+        cy = depth - (r + 0.5) * py
+        for c in range(w):
+            cx = -hw + (c + 0.5) * px
+            # the seabed, bilinear in the earth-fixed tile
+            ex = (x + cs * cy - sn * cx) / TILE_RES
+            ey = (y + sn * cy + cs * cx) / TILE_RES
+            fx, fy = math.floor(ex), math.floor(ey)
+            i0, j0 = int(fx) & mask, int(fy) & mask
+            i1, j1 = (i0 + 1) & mask, (j0 + 1) & mask
+            wx, wy = ex - fx, ey - fy
+            albedo = (1.0 - wx) * ((1.0 - wy) * seabed[i0, j0] + wy * seabed[i0, j1]) + wx * (
+                (1.0 - wy) * seabed[i1, j0] + wy * seabed[i1, j1]
+            )
+            if dist[r, c] < radius:
+                u = across[r, c]
+                if burial > 0.0 and u > sand_from:
+                    albedo = 0.5 * (albedo + SAND_ALBEDO)
+                else:
+                    nz = math.sqrt(max(1.0 - (u / radius) ** 2, 0.0))
+                    albedo = PIPE_ALBEDO * (0.55 + 0.45 * nz)
+                    if growth_share > 0.0:
+                        g = growth[int(along[r, c] / TILE_RES) & mask, int((u + radius) / TILE_RES) & mask]
+                        if g < growth_share:
+                            albedo = GROWTH_ALBEDO * (0.7 + 0.6 * g / growth_share)
+            img[r, c] = a[r, c] * albedo + b[r, c]
+
+
+@njit(cache=True, fastmath=True)
+def _blur(img, tmp, sigma):
+    """Separable Gaussian blur of ``img`` in place (edges replicated), ``tmp`` a same-size buffer."""
+    if sigma < 0.05:
+        return
+    rad = int(math.ceil(3.0 * sigma))
+    k = np.empty(2 * rad + 1, dtype=np.float32)
+    total = 0.0
+    for i in range(-rad, rad + 1):
+        k[i + rad] = math.exp(-0.5 * (i / sigma) ** 2)
+        total += k[i + rad]
+    k /= total
+    h, w = img.shape
+    for r in range(h):
+        for c in range(w):
+            acc = np.float32(0.0)
+            if rad <= c < w - rad:
+                for i in range(2 * rad + 1):
+                    acc += k[i] * img[r, c + i - rad]
+            else:
+                for i in range(2 * rad + 1):
+                    acc += k[i] * img[r, min(max(c + i - rad, 0), w - 1)]
+            tmp[r, c] = acc
+    for r in range(h):
+        if rad <= r < h - rad:
+            for c in range(w):
+                img[r, c] = 0.0
+            for i in range(2 * rad + 1):
+                ki = k[i]
+                for c in range(w):
+                    img[r, c] += ki * tmp[r + i - rad, c]
+        else:
+            for c in range(w):
+                acc = np.float32(0.0)
+                for i in range(2 * rad + 1):
+                    acc += k[i] * tmp[min(max(r + i - rad, 0), h - 1), c]
+                img[r, c] = acc
+
+
+@njit(cache=True)
+def _finish(img, noise, sd, out):
+    """Add sensor noise and quantize to ``uint8`` with saturation."""
+    h, w = img.shape
+    for r in range(h):
+        for c in range(w):
+            v = img[r, c] + sd * noise[r, c] + 0.5
+            out[r, c] = 0 if v < 0.0 else (255 if v >= 255.0 else np.uint8(v))
+
+
+@njit(cache=True)
+def _render(out, img, tmp, dist, across, along, a, b, segs, seabed, growth, snow, noise, scalars, x, y, psi):
+    """One frame in one compiled call (a Python call per stage cost more than some stages)."""
+    hw, depth, radius, burial, growth_share, sigma, sd = (
+        scalars[0], scalars[1], scalars[2], scalars[3], scalars[4], scalars[5], scalars[6],
+    )  # fmt: skip
+    h, w = img.shape
+    dist[:] = np.inf
+    _pipe_distance(segs, hw, depth, w, h, radius, dist, across, along)
+    _compose(
+        img, x, y, psi, hw, depth, radius, burial, growth_share, seabed, growth, dist, across, along, a, b
+    )
+    lo, span = SNOW_LEVEL[0], SNOW_LEVEL[1] - SNOW_LEVEL[0]
+    for i in range(snow.size // 3):
+        r = min(int(snow[3 * i] * h), h - 1)
+        c = min(int(snow[3 * i + 1] * w), w - 1)
+        img[r, c] += lo + span * snow[3 * i + 2]
+    _blur(img, tmp, sigma)
+    _finish(img, noise, np.float32(sd), out)
+
+
+class Renderer:
+    """Renders camera images of one geometry; holds its buffers so a frame allocates nothing."""
+
+    def __init__(self, water: Water = CLEAR, camera: CameraParams = PAPER_CAMERA) -> None:
+        self.water, self.camera = water, camera
+        shape = (water.height, water.width)
+        self._img = np.empty(shape, dtype=np.float32)
+        self._tmp = np.empty(shape, dtype=np.float32)
+        self._dist = np.empty(shape, dtype=np.float32)
+        self._across = np.zeros(shape, dtype=np.float32)
+        self._along = np.zeros(shape, dtype=np.float32)
+        self._a, self._b = light_and_water(water, camera)
+        self._no_pipe = np.zeros((0, 5))
+        # the scalars of a frame: footprint, pipe radius, burial, growth, blur σ, noise s.d.
+        sigma = math.hypot(water.blur, SCATTER_BLUR * water.turbidity)
+        self._scalars = np.array(
+            [
+                camera.half_width,
+                camera.depth,
+                0.5 * water.pipe_diameter,
+                water.burial,
+                water.growth,
+                sigma,
+                water.noise,
+            ]
+        )
+        self._noise_bank: np.ndarray | None = None  # drawn from the first frame's generator
+
+    def render(
+        self,
+        points: np.ndarray,
+        cum: np.ndarray,
+        pose: tuple[float, float, float],
+        textures: Textures,
+        rng: np.random.Generator,
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """The image (``uint8``, H × W) seen from ``pose`` = (x, y, ψ) above the pipeline.
+
+        ``points``/``cum``: the pipeline's vertices and cumulative arc lengths (an empty pipeline,
+        ``points`` of shape (0, 2), gives a frame without pipe).
+        """
+        wt, cam = self.water, self.camera
+        x, y, psi = pose
+        n_snow = rng.poisson(wt.snow) if wt.snow > 0.0 else 0
+        snow = rng.random(3 * n_snow)  # row, column and brightness of each speck
+        if out is None:
+            out = np.empty((wt.height, wt.width), dtype=np.uint8)
+        segs = self._no_pipe
+        if points.shape[0] >= 2:
+            segs = pipe_segments(points, cum, x, y, psi, cam.half_width, cam.depth, 0.5 * wt.pipe_diameter)
+        _render(
+            out, self._img, self._tmp, self._dist, self._across, self._along, self._a, self._b,
+            segs, textures.seabed, textures.growth, snow, self._noise_frame(rng), self._scalars, x, y, psi,
+        )  # fmt: skip
+        return out
+
+    def _noise_frame(self, rng: np.random.Generator) -> np.ndarray:
+        """A frame of standard normals: a window of a bank read from a random offset.
+
+        Drawing 6,144 fresh normals per frame cost ≈ 90 µs; the bank of :data:`NOISE_BANK` normals
+        is drawn once from the first frame's generator, and every frame reads it from an offset
+        drawn from its own generator.
+        """
+        size = self._img.size
+        if self._noise_bank is None:
+            self._noise_bank = rng.standard_normal(max(NOISE_BANK, 4 * size), dtype=np.float32)
+        start = int(rng.integers(0, self._noise_bank.size - size))
+        return self._noise_bank[start : start + size].reshape(self._img.shape)
+
+
+def pixel_centres(water: Water = CLEAR, camera: CameraParams = PAPER_CAMERA) -> tuple[np.ndarray, np.ndarray]:
+    """Camera coordinates (m) of the columns' and the rows' pixel centres (the conventions above)."""
+    hw, depth = camera.half_width, camera.depth
+    xs = -hw + (np.arange(water.width) + 0.5) * 2.0 * hw / water.width
+    ys = depth - (np.arange(water.height) + 0.5) * depth / water.height
+    return xs, ys

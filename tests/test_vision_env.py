@@ -1,0 +1,140 @@
+"""The environments with the vision camera and the image observation."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
+from pipefollow.sim.pipeline import Pipeline
+from pipefollow.sim.reward import LOST_REWARD, reward
+
+STRAIGHT = Pipeline(np.array([[0.0, 0.0], [40.0, 0.0]]), name="straight")
+
+
+def heuristic(obs):
+    return [math.atan2(obs[0], obs[1]) / (0.5 * math.pi)]
+
+
+def test_image_observation_with_the_ideal_camera_leaves_the_dynamics_alone():
+    plain = PipelineFollowingEnv("paper-validation", 30.0)
+    pixels = PipelineFollowingEnv("paper-validation", 30.0, observation="image")
+    assert pixels.observation_space == gym.spaces.Box(0, 255, (1, 96, 64), np.uint8)
+    obs, _ = plain.reset(seed=1)
+    img, info = pixels.reset(seed=1)
+    assert img.shape == (1, 96, 64) and img.dtype == np.uint8
+    for _ in range(30):
+        a = heuristic(obs)
+        obs, r, _, _, _ = plain.step(a)
+        img, r_img, _, _, info = pixels.step(a)
+        assert r_img == r and np.array_equal(info["pose"], plain.state[8:11])
+    assert img.std() > 5.0  # a picture, not a blank
+
+
+def test_vision_camera_in_clear_water_reads_a_straight_pipe_like_the_ideal_camera():
+    env = PipelineFollowingEnv(STRAIGHT, 20.0, start_lateral_noise=0.5, camera="vision", water="clear")
+    obs, info = env.reset(seed=3)
+    for _ in range(20):
+        assert info["detected"] and info["true_pipe_in_view"]
+        s = env.state
+        truth = env._vision.truth
+        assert abs(obs[0] - truth[1]) < 0.05 and abs(obs[2] - truth[3]) < 0.05
+        assert obs[3] == s[3]  # v_x is the vehicle's own
+        obs, r, _, _, info = env.step(heuristic(obs))
+
+
+@pytest.mark.parametrize("reward_from", ["truth", "detected"])
+def test_reward_comes_from_the_source_it_is_told(reward_from):
+    env = PipelineFollowingEnv(
+        STRAIGHT, 20.0, start_lateral_noise=0.5, camera="vision", reward_from=reward_from
+    )
+    obs, info = env.reset(seed=4)
+    a_prev = 0.0
+    for _ in range(10):
+        obs, r, _, _, info = env.step(heuristic(obs))
+        assert info["detected"]
+        if reward_from == "truth":
+            expected = reward(
+                obs[3], info["true_e_dist"], info["true_e_angl"], info["executed_action"], a_prev
+            )
+        else:
+            expected = reward(obs[3], info["e_dist"], info["e_angl"], info["executed_action"], a_prev)
+        assert r == pytest.approx(expected, abs=1e-12)
+        a_prev = info["executed_action"]
+
+
+def test_a_pipe_the_detector_cannot_see_is_a_lost_pipe():
+    # turbidity 3/m: a veil and nothing else; the true camera sees the pipe all along
+    env = PipelineFollowingEnv(STRAIGHT, 10.0, camera="vision", water={"turbidity": 3.0})
+    env.reset(seed=0)
+    for _ in range(10):
+        _, r, _, _, info = env.step([0.0])
+        assert r == LOST_REWARD and not info["detected"] and info["true_pipe_in_view"]
+        assert info["overridden"]  # the search flies every decision
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"camera": "stereo"}, "camera must be one of ideal, vision; got 'stereo'"),
+        ({"observation": "pixels"}, "observation must be one of state, image"),
+        ({"reward_from": "detected"}, "needs camera='vision'"),
+        ({"camera": "vision", "water": {"turbidity": math.nan}}, "water setting turbidity"),
+        ({"camera": "vision", "water": "murky"}, "water preset 'murky'"),
+    ],
+)
+def test_bad_camera_arguments_are_one_line_errors(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        PipelineFollowingEnv(**kwargs)
+
+
+@pytest.mark.parametrize("kwargs", [{"camera": "vision"}, {"observation": "image"}])
+def test_gymnasium_checker_passes(kwargs):
+    check_env(gym.make("pipefollow/PipelineFollowing-v0", **kwargs).unwrapped, skip_render_check=True)
+
+
+def test_vector_env_with_the_vision_camera_equals_single_environments():
+    kwargs = {"episode_seconds": 5.0, "camera": "vision", "water": "moderate", "start_lateral_noise": 0.4}
+    vec = PipelineFollowingVectorEnv(3, "random:medium", **kwargs)
+    singles = [PipelineFollowingEnv("random:medium", **kwargs) for _ in range(3)]
+    obs, infos = vec.reset(seed=10)
+    single_obs = [e.reset(seed=10 + i)[0] for i, e in enumerate(singles)]
+    for _ in range(7):  # across an autoreset
+        assert np.array_equal(obs, np.array(single_obs))
+        actions = np.array([heuristic(o)[0] for o in obs])
+        obs, rewards, _, truncated, infos = vec.step(actions)
+        stepped = []
+        for i, e in enumerate(singles):
+            if e._decisions >= e.max_decisions:
+                o, _ = e.reset()
+                assert rewards[i] == 0.0
+            else:
+                o, r, _, _, info = e.step([actions[i]])
+                assert rewards[i] == r and infos["detected"][i] == info["detected"]
+            stepped.append(o)
+        single_obs = stepped
+
+
+def test_vector_env_image_observations():
+    vec = PipelineFollowingVectorEnv(2, "paper-left", observation="image")
+    obs, _ = vec.reset(seed=0)
+    assert obs.shape == (2, 1, 96, 64) and obs.dtype == np.uint8
+    assert vec.observation_space.shape == (2, 1, 96, 64)
+
+
+def test_render_shows_the_camera_image_beside_the_map():
+    plain = PipelineFollowingEnv("paper-left", render_mode="rgb_array")
+    vision = PipelineFollowingEnv("paper-left", render_mode="rgb_array", camera="vision")
+    plain.reset(seed=0)
+    vision.reset(seed=0)
+    a, b = plain.render(), vision.render()
+    assert b.shape[0] == a.shape[0] and b.shape[1] > a.shape[1]
+    panel = b[:, a.shape[1] :]
+    assert (panel[..., 0] > 200).any() and (panel[..., 1] < 60).any()  # the red detection line
+    plain.close()
+    vision.close()
