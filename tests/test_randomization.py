@@ -173,6 +173,18 @@ def test_bad_tables_are_one_line_errors_naming_the_field(table, field):
     assert "\n" not in message
 
 
+def test_the_vision_preset_spans_the_calibrated_detector_up_to_turbidity_0_2():
+    import json
+    from pathlib import Path
+
+    rows = json.loads((Path(__file__).parents[1] / "docs" / "vision" / "calibration.json").read_text())
+    usable = [r for r in rows if r["turbidity"] <= 0.2]
+    r = rz.PRESETS["vision"]
+    assert r.camera_noise == (min(u["camera_noise"] for u in usable), max(u["camera_noise"] for u in usable))
+    assert r.miss_prob == (min(u["miss_prob"] for u in usable), max(u["miss_prob"] for u in usable))
+    assert r.current_speed == (0.0, 0.0)
+
+
 def test_unknown_preset_name_lists_the_presets():
-    with pytest.raises(DisturbanceError, match="choose from none, mild, moderate, harsh"):
+    with pytest.raises(DisturbanceError, match="choose from none, mild, moderate, vision, harsh"):
         rz.resolve("calm-ish")

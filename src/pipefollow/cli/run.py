@@ -306,7 +306,8 @@ def evaluate(
     metavar="PRESET|FILE.toml",
     default=None,
     help="Domain randomization: each episode draws its disturbances from a preset (mild, moderate, "
-    "harsh) or a TOML table (see pipefollow.sim.randomization); not with the fixed disturbance options.",
+    "vision, harsh) or a TOML table (see pipefollow.sim.randomization); not with the fixed disturbance "
+    "options.",
 )
 @disturbance_options
 @guard

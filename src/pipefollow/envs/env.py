@@ -121,7 +121,7 @@ class PipelineFollowingEnv(gym.Env):
       ``turbid``) or a dict of its fields (``preset`` allowed); ``clear`` by default.
     * ``randomization``: domain randomization, a
       :class:`~pipefollow.sim.randomization.Randomization`, a preset name (``mild``, ``moderate``,
-      ``harsh``) or a table of its keys: every reset draws the episode's disturbances from
+      ``vision``, ``harsh``) or a table of its keys: every reset draws the episode's disturbances from
       ``np_random`` (before the pipe of a ``random`` family); not with ``disturbance``.
 
     ## Info

@@ -90,7 +90,8 @@ class TrialConfig:
     randomization: dict | None = _f(
         None,
         "domain randomization in training: each episode draws its disturbances from a preset name "
-        "(mild, moderate, harsh) or a table of pipefollow.sim.randomization.KEYS; not with disturbance",
+        "(mild, moderate, vision, harsh) or a table of pipefollow.sim.randomization.KEYS; not with "
+        "disturbance",
     )
     evaluate_on: str = _f("", "after training, evaluate deterministically on this pipeline ('' = none)")
     evaluate_seconds: float = _f(60.0, "length of the evaluation episode (s) (paper §4.2)")
