@@ -32,6 +32,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "pipefollow.cli.experiments:reproduce",
         "Reproduce the paper's experiments: train every trial × seed, store results, draw the figures.",
     ),
+    "robustness": (
+        "pipefollow.cli.robustness:robustness",
+        "Success rate and mean return against current speed, and on fixed scenario sets.",
+    ),
     "suites": (
         "pipefollow.cli.suites:suites",
         "List the pipeline suites: training families and held-out test suites.",

@@ -183,9 +183,7 @@ def disturbance_options(fn):
         from pipefollow.sim.disturbance import make_disturbance
 
         speed, direction = current if current is not None else (0.0, 0.0)
-        d = make_disturbance(
-            speed, direction, camera_noise=camera_noise or 0.0, miss_prob=miss_prob or 0.0
-        )
+        d = make_disturbance(speed, direction, camera_noise=camera_noise or 0.0, miss_prob=miss_prob or 0.0)
         return fn(*args, disturbance=d, **kwargs)
 
     options = [

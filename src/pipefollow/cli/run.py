@@ -301,6 +301,13 @@ def evaluate(
     "see docs/design.md) [default: the project's readings, or those of --init]."
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
+@click.option(
+    "--randomization",
+    metavar="PRESET|FILE.toml",
+    default=None,
+    help="Domain randomization: each episode draws its disturbances from a preset (mild, moderate, "
+    "harsh) or a TOML table (see pipefollow.sim.randomization); not with the fixed disturbance options.",
+)
 @disturbance_options
 @guard
 def train(
@@ -317,6 +324,7 @@ def train(
     force,
     readings,
     as_json,
+    randomization,
     disturbance,
 ):
     """Train a learner; writes the policy and its learning curve.
@@ -329,8 +337,16 @@ def train(
     existing = [name for name in TRAINING_OUTPUTS if (Path(out_dir) / name).exists()]
     if existing and not force:
         raise UserError(f"--out '{out_dir}' already holds {existing[0]}; use --force to replace it")
+    if randomization is not None:
+        from pipefollow.sim.randomization import load
+
+        randomization = load(randomization)
+        if disturbance != _disturbance.NO_DISTURBANCE:
+            raise UserError("--randomization replaces --current, --camera-noise and --miss-prob: give one")
     if algorithm in ("ppo", "sac"):
-        return _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance)
+        return _train_deep(
+            algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization
+        )
     if steps is not None:
         raise UserError("--steps applies to --algorithm ppo and sac only (use --episodes)")
     from pipefollow.learners.registry import learner, taking
@@ -378,6 +394,7 @@ def train(
                 seed=seed,
                 readings=reading,
                 disturbance=disturbance,
+                randomization=randomization,
                 episode_seconds=seconds,
                 progress=progress,
             )
@@ -400,6 +417,10 @@ def train(
     }
     if disturbance != _disturbance.NO_DISTURBANCE:
         result["disturbance"] = _disturbance.to_dict(disturbance)
+    if randomization is not None:
+        from pipefollow.sim.randomization import to_dict
+
+        result["randomization"] = to_dict(randomization)
     if as_json:
         click.echo(json.dumps(result))
         return
@@ -435,7 +456,7 @@ def _check_init_options(agent, reading, init_policy, skew, supervised) -> None:
         )
 
 
-def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance) -> None:
+def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization=None):
     """``train --algorithm ppo|sac``: :func:`pipefollow.training.deep.train_to_folder`."""
     from click.core import ParameterSource
 
@@ -469,11 +490,17 @@ def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, dis
                 done[0] = min(n, steps)
 
         extra = {} if disturbance == _disturbance.NO_DISTURBANCE else {"disturbance": disturbance}
+        if randomization is not None:
+            extra["randomization"] = randomization
         result = deep.train_to_folder(
             algorithm, pipeline, out, steps=steps, seconds=seconds, seed=seed, progress=progress, **extra
         )
     if disturbance != _disturbance.NO_DISTURBANCE:
         result["disturbance"] = _disturbance.to_dict(disturbance)
+    if randomization is not None:
+        from pipefollow.sim.randomization import to_dict
+
+        result["randomization"] = to_dict(randomization)
     if as_json:
         click.echo(json.dumps(result))
         return

@@ -19,15 +19,19 @@ from pipefollow.envs.shell import (
     observation,
     parse_reset_options,
     pipeline_source,
+    randomized_setup,
     start_episode,
     state_infos,
 )
 from pipefollow.perception.camera import VisionCamera, camera_settings
 from pipefollow.sim import decision as sim
-from pipefollow.sim.disturbance import Disturbance
+from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
 from pipefollow.sim.pipeline import Pipeline
+from pipefollow.sim.randomization import Randomization
+from pipefollow.sim.randomization import resolve as resolve_randomization
 
 __all__ = ["MAX_EPISODE_SECONDS", "PipelineFollowingEnv"]
+
 
 class PipelineFollowingEnv(gym.Env):
     """An AUV following a subsea pipeline with a downward camera (Fjerdingen et al., 2010).
@@ -115,6 +119,10 @@ class PipelineFollowingEnv(gym.Env):
     * ``water``: the image's water and camera settings: a
       :class:`~pipefollow.perception.water.Water`, a preset name (``clear``, ``moderate``,
       ``turbid``) or a dict of its fields (``preset`` allowed); ``clear`` by default.
+    * ``randomization``: domain randomization, a
+      :class:`~pipefollow.sim.randomization.Randomization`, a preset name (``mild``, ``moderate``,
+      ``harsh``) or a table of its keys: every reset draws the episode's disturbances from
+      ``np_random`` (before the pipe of a ``random`` family); not with ``disturbance``.
 
     ## Info
 
@@ -150,6 +158,7 @@ class PipelineFollowingEnv(gym.Env):
         observation: str = "state",
         reward_from: str = "truth",
         water: Any = None,
+        randomization: Randomization | str | dict[str, Any] | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None, 'human' or 'rgb_array', got {render_mode!r}")
@@ -157,6 +166,12 @@ class PipelineFollowingEnv(gym.Env):
             episode_seconds, start_lateral_noise, start_heading_noise_deg, params, disturbance, obs_dtype
         )
         self.setup = setup
+        self.randomization = None
+        if randomization is not None:
+            self.randomization = resolve_randomization(randomization)
+            if setup.params.disturbance != NO_DISTURBANCE:
+                raise ValueError("give a disturbance or a randomization of the disturbances, not both")
+        self.episode_setup = setup  # this episode's: under a randomization, its own disturbances
         self.suite, self.pipeline = pipeline_source(pipeline)
         self.episode_seconds = setup.episode_seconds
         self.max_decisions = setup.max_decisions
@@ -189,8 +204,11 @@ class PipelineFollowingEnv(gym.Env):
         opts = parse_reset_options(options)
         if opts.switches_pipeline:
             self.suite, self.pipeline = pipeline_source(opts.pipeline)
+        if self.randomization is not None:  # drawn first, before the pipe
+            self.episode_setup = randomized_setup(self.setup, self.randomization, self.np_random)
+            self._z = np.zeros(self.episode_setup.noise_count)
         self.pipeline = start_episode(
-            self.state, self.suite, self.pipeline, self.np_random, self.setup, self._z,
+            self.state, self.suite, self.pipeline, self.np_random, self.episode_setup, self._z,
             opts.lateral_offset, opts.heading_offset_deg,
         )  # fmt: skip
         self._decisions = 0
@@ -224,7 +242,9 @@ class PipelineFollowingEnv(gym.Env):
         if z.size:
             self.np_random.standard_normal(out=z)
         a_prev = s[sim.A_PREV]
-        r = sim.decide_packed(s, a, self.pipeline.points, self.pipeline.cumulative, self.setup.packed, z)
+        r = sim.decide_packed(
+            s, a, self.pipeline.points, self.pipeline.cumulative, self.episode_setup.packed, z
+        )
         self._decisions += 1
         self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
         if s[sim.IN_VIEW] != 0.0:

@@ -30,7 +30,12 @@ MAX_EPISODE_SECONDS = 86_400.0
 
 # The constructor arguments of the single environment that the vector environment shares.
 SHARED_ARGUMENTS = (
-    "episode_seconds", "start_lateral_noise", "start_heading_noise_deg", "params", "disturbance", "obs_dtype",
+    "episode_seconds",
+    "start_lateral_noise",
+    "start_heading_noise_deg",
+    "params",
+    "disturbance",
+    "obs_dtype",
 )
 # the camera's arguments (pipefollow.perception.camera.camera_settings), shared too
 CAMERA_ARGUMENTS = ("camera", "observation", "reward_from", "water")
@@ -144,6 +149,21 @@ def make_setup(
     )
 
 
+def randomized_setup(setup: Setup, randomization, rng: np.random.Generator) -> Setup:
+    """The setup of one episode under a :class:`~pipefollow.sim.randomization.Randomization`.
+
+    Its disturbances are drawn from ``rng`` (:func:`pipefollow.sim.randomization.draw`, a fixed
+    count of uniforms) and replace ``setup.params.disturbance``.
+    """
+    from dataclasses import replace
+
+    from pipefollow.sim.randomization import draw
+
+    d = draw(randomization, rng)
+    params = setup.params._replace(disturbance=d)
+    return replace(setup, params=params, packed=sim.pack_params(params), noise_count=noise_count(d))
+
+
 def is_points(spec) -> bool:
     """Whether ``spec`` is a polyline given as numbers, shape (n, 2) (``[[0, 0], [5, 0], [5, 5]]``)."""
     if not isinstance(spec, list | tuple | np.ndarray):
@@ -190,9 +210,7 @@ def parse_reset_options(options: dict[str, Any] | None, extra: tuple[str, ...] =
     options = dict(options or {})
     unknown = sorted(set(options) - set(RESET_OPTIONS))
     if unknown:
-        raise ValueError(
-            f"unknown reset option(s) {unknown}; allowed: {', '.join(RESET_OPTIONS + extra)}"
-        )
+        raise ValueError(f"unknown reset option(s) {unknown}; allowed: {', '.join(RESET_OPTIONS + extra)}")
     out = {}
     for key in ("lateral_offset", "heading_offset_deg"):
         value = options.get(key)

@@ -66,12 +66,16 @@ from pipefollow.envs.shell import (
     observation,
     parse_reset_options,
     pipeline_source,
+    randomized_setup,
     start_episode,
     state_infos,
 )
 from pipefollow.perception.camera import VisionCamera, camera_settings
 from pipefollow.sim import decision as sim
+from pipefollow.sim.disturbance import NO_DISTURBANCE
 from pipefollow.sim.pipeline import Pipeline
+from pipefollow.sim.randomization import MAX_NOISE
+from pipefollow.sim.randomization import resolve as resolve_randomization
 
 
 @njit(cache=True)
@@ -79,6 +83,9 @@ def step_batch(
     states, actions, points, cum, n_points, packed, z, skip, rewards, decisions, seen, sum_e2, max_n, ended
 ):
     """One decision of every sub-environment not in ``skip``, with its episode counters.
+
+    ``packed[i]`` is sub-environment i's packed parameters (its own disturbances under a
+    randomization).
 
     Actions are clipped to [-1, 1]; returns False (stepping nothing) if one is NaN. Writes the
     rewards, counts decisions, decisions ending in view and their Σ e_dist², and marks in
@@ -95,7 +102,7 @@ def step_batch(
         n = n_points[i]
         a = min(1.0, max(-1.0, actions[i]))
         s = states[i]
-        rewards[i] = sim.decide_packed(s, a, points[i, :n], cum[i, :n], packed, z[i])
+        rewards[i] = sim.decide_packed(s, a, points[i, :n], cum[i, :n], packed[i], z[i])
         decisions[i] += 1
         if s[sim.IN_VIEW] != 0.0:
             seen[i] += 1
@@ -114,8 +121,10 @@ class PipelineFollowingVectorEnv(VectorEnv):
         autoreset_mode: a :class:`gymnasium.vector.AutoresetMode` or its value (``"NextStep"``,
             ``"SameStep"``, ``"Disabled"``); next-step by default.
         **kwargs: the single environment's arguments (``episode_seconds``, ``start_lateral_noise``,
-            ``start_heading_noise_deg``, ``params``, ``disturbance``, ``obs_dtype``), shared by all;
-            rendering is not offered (``render_mode`` must be ``None``).
+            ``start_heading_noise_deg``, ``params``, ``disturbance``, ``obs_dtype``, ``randomization``),
+            shared by all; rendering is not offered (``render_mode`` must be ``None``). Under a
+            ``randomization`` each sub-environment draws its episode's disturbances at its reset from
+            its own generator, as the single environment.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
@@ -138,11 +147,12 @@ class PipelineFollowingVectorEnv(VectorEnv):
         except ValueError:
             allowed = ", ".join(repr(m.value) for m in AutoresetMode)
             raise ValueError(f"autoreset_mode must be one of {allowed}, got {autoreset_mode!r}") from None
+        randomization = kwargs.pop("randomization", None)
         unknown = sorted(set(kwargs) - set(SHARED_ARGUMENTS) - set(CAMERA_ARGUMENTS))
         if unknown:
             raise TypeError(
                 f"unknown argument(s) {unknown} of the vector environment; allowed: num_envs, pipeline, "
-                f"autoreset_mode, {', '.join(SHARED_ARGUMENTS + CAMERA_ARGUMENTS)}"
+                f"autoreset_mode, {', '.join(SHARED_ARGUMENTS + CAMERA_ARGUMENTS)}, randomization"
             )
         camera = camera_settings(**{k: kwargs.pop(k) for k in CAMERA_ARGUMENTS if k in kwargs})
         n = int(num_envs)
@@ -159,6 +169,11 @@ class PipelineFollowingVectorEnv(VectorEnv):
                 f"({setup.max_decisions} decisions): set episode_seconds instead"
             )
         self.setup = setup
+        self.randomization = None
+        if randomization is not None:
+            self.randomization = resolve_randomization(randomization)
+            if setup.params.disturbance != NO_DISTURBANCE:
+                raise ValueError("give a disturbance or a randomization of the disturbances, not both")
         self.num_envs = n
         self.render_mode = None
         self.autoreset_mode = mode
@@ -185,7 +200,10 @@ class PipelineFollowingVectorEnv(VectorEnv):
         for i, pipe in enumerate(self.pipelines):
             self._load_pipe(i, pipe)
         self.states = np.zeros((n, sim.STATE_SIZE))
-        self._z = np.zeros((n, setup.noise_count))
+        # per sub-environment: packed parameters and normals per camera reading (its episode's)
+        self._packed = np.tile(setup.packed, (n, 1))
+        self._counts = np.full(n, setup.noise_count, dtype=np.int64)
+        self._z = np.zeros((n, MAX_NOISE if self.randomization is not None else setup.noise_count))
         self._rngs: list[np.random.Generator] | None = None
         self._decisions = np.zeros(n, dtype=np.int64)
         self._seen = np.zeros(n, dtype=np.int64)
@@ -275,9 +293,13 @@ class PipelineFollowingVectorEnv(VectorEnv):
 
     def _reset_one(self, i: int, lateral=None, heading_deg=None) -> None:
         """Sub-environment ``i``'s reset, with the single environment's draws in its order."""
+        setup, rng = self.setup, self.np_random_generators[i]
+        if self.randomization is not None:  # drawn first, before the pipe
+            setup = randomized_setup(setup, self.randomization, rng)
+            self._packed[i], self._counts[i] = setup.packed, setup.noise_count
         pipe = start_episode(
-            self.states[i], self.suites[i], self.pipelines[i], self.np_random_generators[i], self.setup,
-            self._z[i], lateral, heading_deg,
+            self.states[i], self.suites[i], self.pipelines[i], rng, setup, self._z[i, : self._counts[i]],
+            lateral, heading_deg,
         )  # fmt: skip
         if pipe is not self.pipelines[i]:
             self._load_pipe(i, pipe)
@@ -308,12 +330,12 @@ class PipelineFollowingVectorEnv(VectorEnv):
             rngs = self.np_random_generators
             for i in range(self.num_envs):
                 if not resetting[i]:
-                    rngs[i].standard_normal(out=self._z[i])
+                    rngs[i].standard_normal(out=self._z[i, : self._counts[i]])
         skip = resetting if any_reset else self._no_skip
         rewards, ended = self._rewards, self._ended
         a_prev = self.states[:, sim.A_PREV].copy()
         ok = step_batch(
-            self.states, a, self._points, self._cum, self._n_points, self.setup.packed, self._z, skip,
+            self.states, a, self._points, self._cum, self._n_points, self._packed, self._z, skip,
             rewards, self._decisions, self._seen, self._sum_e2, self.max_decisions, ended,
         )  # fmt: skip
         if not ok:

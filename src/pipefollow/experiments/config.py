@@ -87,6 +87,11 @@ class TrialConfig:
         "ocean current and camera faults in training and evaluation: a table of "
         "pipefollow.sim.disturbance.TOML_KEYS (m/s, degrees, m); none by default",
     )
+    randomization: dict | None = _f(
+        None,
+        "domain randomization in training: each episode draws its disturbances from a preset name "
+        "(mild, moderate, harsh) or a table of pipefollow.sim.randomization.KEYS; not with disturbance",
+    )
     evaluate_on: str = _f("", "after training, evaluate deterministically on this pipeline ('' = none)")
     evaluate_seconds: float = _f(60.0, "length of the evaluation episode (s) (paper §4.2)")
     figures: tuple[str, ...] = _f(
@@ -168,6 +173,9 @@ def _coerce(cls, data: dict, where: str):
             _check_disturbance(value, key)
             kwargs[f.name] = dict(value)
             continue
+        if f.name == "randomization":
+            kwargs[f.name] = _check_randomization(value, key, data.get("disturbance"))
+            continue
         if f.name in ("figures", "readings", "compare_readings"):
             if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
                 raise ConfigError(f"{key} must be a list of strings")
@@ -208,6 +216,23 @@ def _check_disturbance(table, where: str) -> None:
         disturbance_from_dict(table, where)
     except DisturbanceError as e:
         raise ConfigError(str(e)) from None
+
+
+def _check_randomization(value, where: str, disturbance) -> dict:
+    """A preset name or a table → the table (``{"preset": name}`` for a name); one-line errors."""
+    from pipefollow.sim.disturbance import DisturbanceError
+    from pipefollow.sim.randomization import resolve
+
+    table = {"preset": value} if isinstance(value, str) else value
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where} must be a preset name or a table, got {value!r}")
+    if disturbance:
+        raise ConfigError(f"{where}: give a disturbance or a randomization, not both")
+    try:
+        resolve(table, where)
+    except DisturbanceError as e:
+        raise ConfigError(str(e)) from None
+    return dict(table)
 
 
 def _check_readings(ids, where: str) -> None:

@@ -85,6 +85,7 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
         seed=seed,
         readings=config.reading,
         disturbance=disturbance,
+        randomization=config.randomization,
         episode_seconds=config.episode_seconds,
         sigma_start=config.sigma_start,
         sigma_end=config.sigma_end,

@@ -188,12 +188,20 @@ def train_chunks(
     progress: Callable[[int], None] | None = None,
     chunk: int = 50,
     env_rng: np.random.Generator | None = None,
+    randomization=None,
 ) -> np.ndarray:
     """Train ``agent`` in its learner's compiled loop, ``chunk`` episodes per call.
 
     ``tracks_for(lo, hi)`` gives the pipes of episodes ``lo`` to ``hi`` (one pipe for all, or one
     each). Reports the episodes done to ``progress``. Returns (episodes, 4) statistics.
+
+    With a ``randomization`` (:class:`~pipefollow.sim.randomization.Randomization`, domain
+    randomization) every episode draws its disturbances from ``env_rng`` before its pipe, as the
+    environment's reset draws them from ``np_random``, and runs in a call of its own.
     """
+    if randomization is not None:
+        return _train_randomized(agent, episodes, tracks_for, episode_seconds, sigma_start, sigma_end, params,
+                                 progress, env_rng, randomization)  # fmt: skip
     run = compiled_setup(agent, episodes, episode_seconds, sigma_start, sigma_end, params, env_rng)
     kind, sigmas, n_decisions, stats, simp, env_rng, dz = run
     for lo in range(0, episodes, max(1, chunk)):
@@ -202,6 +210,31 @@ def train_chunks(
         kind.run(agent, tracks_for(lo, hi), how, env_rng, dz, stats[lo:hi], no_poses())
         if progress is not None:
             progress(hi)
+    agent.begin_episode(sigmas[-1] if episodes else sigma_start)
+    return stats
+
+
+def _train_randomized(agent, episodes, tracks_for, episode_seconds, sigma_start, sigma_end, params, progress,
+                      env_rng, randomization):  # fmt: skip
+    """:func:`train_chunks` under domain randomization: a compiled call per episode, its own disturbances."""
+    from pipefollow.sim import randomization as rz
+    from pipefollow.sim.disturbance import NO_DISTURBANCE, noise_count
+
+    randomization = rz.resolve(randomization)
+    if params.disturbance != NO_DISTURBANCE:
+        raise ValueError("give a disturbance or a randomization of the disturbances, not both")
+    if env_rng is None:
+        raise ValueError("a randomization draws the disturbances: pass a seeded env_rng")
+    kind, sigmas, n_decisions, stats, _, env_rng, _ = compiled_setup(
+        agent, episodes, episode_seconds, sigma_start, sigma_end, params, env_rng
+    )
+    for e in range(episodes):
+        d = rz.draw(randomization, env_rng)
+        how = Run(sim.pack_params(params._replace(disturbance=d)), sigmas[e : e + 1], n_decisions, True)
+        kind.run(agent, tracks_for(e, e + 1), how, env_rng, np.zeros(noise_count(d)), stats[e : e + 1],
+                 no_poses())  # fmt: skip
+        if progress is not None and ((e + 1) % 50 == 0 or e + 1 == episodes):
+            progress(e + 1)
     agent.begin_episode(sigmas[-1] if episodes else sigma_start)
     return stats
 
@@ -218,17 +251,20 @@ def train_compiled(
     progress: Callable[[int], None] | None = None,
     chunk: int = 50,
     env_rng: np.random.Generator | None = None,
+    randomization=None,
 ) -> np.ndarray:
     """Train an agent of the learner registry in compiled code.
 
     It gives the same numbers as :func:`train` on ``PipelineFollowingEnv(pipeline, episode_seconds,
     params=params)`` with the same agent state and generator, and with ``env_rng`` in the state of
     the environment's ``np_random``. ``env_rng`` is required when ``params.disturbance`` has random
-    parts (camera noise, misses, a varying current). Runs ``chunk`` episodes per compiled call
+    parts (camera noise, misses, a varying current) and with a ``randomization`` (its
+    disturbances drawn per episode, :func:`train_chunks`). Runs ``chunk`` episodes per compiled call
     and reports the episodes done to ``progress``. Returns (episodes, 4) statistics.
     """
     tracks = tracks_of([pipeline])
     return train_chunks(
         agent, episodes, lambda lo, hi: tracks, episode_seconds=episode_seconds, sigma_start=sigma_start,
         sigma_end=sigma_end, params=params, progress=progress, chunk=chunk, env_rng=env_rng,
+        randomization=randomization,
     )  # fmt: skip

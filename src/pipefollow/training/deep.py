@@ -251,6 +251,7 @@ def train_deep(
     params=None,
     disturbance=None,
     progress: Callable[[int], None] | None = None,
+    randomization=None,
     **overrides,
 ) -> DeepRun:
     """Train PPO or SAC for ``steps`` environment steps (decisions) and export its actor.
@@ -263,6 +264,8 @@ def train_deep(
         seed: seeds torch, numpy and the sub-environments (``seed + i``).
         params: the simulated system (default: the paper's), as for the environment.
         disturbance: disturbances replacing ``params.disturbance``, as for the environment.
+        randomization: domain randomization, as for the vector environment (each sub-environment
+            draws its episode's disturbances at its reset).
         progress: called with the number of steps done.
         **overrides: hyper-parameters replacing :data:`DEFAULTS`.
     """
@@ -274,6 +277,8 @@ def train_deep(
         kwargs["params"] = params
     if disturbance is not None:
         kwargs["disturbance"] = disturbance
+    if randomization is not None:
+        kwargs["randomization"] = randomization
     venv = VecMonitor(SB3VecEnv(PipelineFollowingVectorEnv(hp["n_envs"], pipeline, **kwargs)))
     model = make_model(algorithm, venv, hp, seed)
     callback = _Progress(progress)
@@ -306,6 +311,7 @@ def train_to_folder(
     seed: int,
     disturbance=None,
     progress: Callable[[int], None] | None = None,
+    randomization=None,
 ) -> dict[str, Any]:
     """:func:`train_deep`, then write ``policy.npz``, ``hyperparameters.json`` and ``learning_curve.csv``.
 
@@ -325,6 +331,7 @@ def train_to_folder(
         seed=seed,
         disturbance=disturbance,
         progress=progress,
+        randomization=randomization,
     )
     record = {"pipeline": str(pipeline), "seconds": seconds, "steps": run.steps, "seed": seed}
     hp_path = write_hyperparameters(

@@ -42,6 +42,7 @@ def train_phases(
     seed: int,
     readings: rd.Readings = rd.DEFAULT,
     disturbance: Disturbance = NO_DISTURBANCE,
+    randomization=None,
     episode_seconds: float = 20.0,
     sigma_start: float = 1.0,
     sigma_end: float = 0.01,
@@ -51,12 +52,18 @@ def train_phases(
 
     A pipeline is a built-in name, a JSON file or ``random[:FAMILY]`` (a new pipe every episode).
     σ runs from ``sigma_start`` to ``sigma_end`` (the paper's units, scaled by the ``sigma_unit``
-    reading) over each phase. ``progress`` gets the episodes done over all phases. Returns one
-    (episodes, 4) statistics array per phase.
+    reading) over each phase. ``progress`` gets the episodes done over all phases. A
+    ``randomization`` (:mod:`pipefollow.sim.randomization`; a preset name, table or record) draws
+    every episode's disturbances from the disturbances' stream instead of ``disturbance``. Returns
+    one (episodes, 4) statistics array per phase.
     """
     from pipefollow.sim.suites import Suite, resolve_training
 
     pipes = [resolve_training(name) for name, _ in phases]  # a bad pipeline fails before any training
+    if randomization is not None:
+        from pipefollow.sim.randomization import resolve
+
+        randomization = resolve(randomization)
     scale = rd.sigma_scale(readings)
     schedule = dict(
         episode_seconds=episode_seconds,
@@ -64,6 +71,7 @@ def train_phases(
         sigma_end=sigma_end * scale,
         params=sim_under(readings, disturbance),
         env_rng=disturbance_rng(seed),
+        randomization=randomization,
     )
     out, done, pipe_rng = [], 0, None
     for pipe, (_, episodes) in zip(pipes, phases, strict=True):

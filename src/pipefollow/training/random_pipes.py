@@ -30,6 +30,7 @@ def train_random_compiled(
     progress: Callable[[int], None] | None = None,
     chunk: int = 50,
     env_rng: np.random.Generator | None = None,
+    randomization=None,
 ) -> np.ndarray:
     """:func:`train_compiled` on a new pipe of the training family ``suite`` every episode.
 
@@ -38,7 +39,10 @@ def train_random_compiled(
     disturbances the numbers equal :func:`train` on ``PipelineFollowingEnv("random:NAME",
     episode_seconds)`` whose generator ``np_random`` is ``pipe_rng`` (tested). Random disturbances
     (required ``env_rng``) draw from ``env_rng``, a stream of their own, where the environment
-    draws them from ``np_random`` between its pipes. Returns (episodes, 4) statistics.
+    draws them from ``np_random`` between its pipes. With a ``randomization`` each episode draws its
+    disturbances from ``env_rng`` before its pipe; with ``pipe_rng`` the same generator as
+    ``env_rng`` the numbers then equal the environment's with the randomization (tested). Returns
+    (episodes, 4) statistics.
     """
     from pipefollow.sim.suites import min_length_for
 
@@ -50,4 +54,5 @@ def train_random_compiled(
     return train_chunks(
         agent, episodes, tracks_for, episode_seconds=episode_seconds, sigma_start=sigma_start,
         sigma_end=sigma_end, params=params, progress=progress, chunk=chunk, env_rng=env_rng,
+        randomization=randomization,
     )  # fmt: skip

@@ -1,0 +1,216 @@
+"""Sample efficiency: held-out return against training decisions, for the paper's learners and PPO/SAC.
+
+Every variant trains on a new `random:mixed` pipe every 90-s episode with budgets of 10,000, 30,000
+and 100,000 decisions (one decision is one second at sea), 5 seeds, and every policy is judged on the
+`heldout` suite (100 pipes × 60 s, one deterministic episode each) calm and disturbed (a 0.1 m/s
+current towards 45° and 0.05 m camera noise, as examples/deep-vs-paper.py). Per (variant, budget)
+the return of a pipe is the mean over seeds; the 95 % intervals are BCa bootstraps over the pipes
+(of the mean, and of the paired difference to the heuristic).
+
+    python examples/sample_efficiency.py --out runs/sample-efficiency            # everything
+    python examples/sample_efficiency.py --out runs/sample-efficiency --variants ppo --seeds 0 1
+    python examples/sample_efficiency.py --out runs/sample-efficiency --table --plot curves.png
+
+Each (variant, budget, seed) writes one JSON file under OUT/runs/ with its per-pipe returns
+(resumable: done runs are skipped).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from pipefollow.evaluation.benchmark import IN_VIEW, RET, SUCCESS_IN_VIEW, run_episodes
+from pipefollow.evaluation.stats import bootstrap_ci, paired_difference
+from pipefollow.files.atomic import write_text_atomic
+from pipefollow.learners.heuristic import Heuristic
+from pipefollow.sim.decision import PAPER_SIM
+from pipefollow.sim.disturbance import make_disturbance
+from pipefollow.sim.suites import get_suite, min_length_for
+from pipefollow.training.agents import make_agent
+from pipefollow.training.phases import disturbance_rng
+from pipefollow.training.random_pipes import train_random_compiled
+
+TRAIN_FAMILY, EPISODE_S, TEST_SUITE, TEST_S = "mixed", 90.0, "heldout", 60.0
+BUDGETS, SEEDS = (10_000, 30_000, 100_000), (0, 1, 2, 3, 4)
+CONDITIONS = {
+    "calm": PAPER_SIM,
+    "disturbed": PAPER_SIM._replace(disturbance=make_disturbance(0.1, 45.0, camera_noise=0.05)),
+}
+
+
+def _paper(supervised: bool, **options) -> Callable[[int, int], tuple[object, int]]:
+    """A trainer of CACLA (or supervised CACLA) on random pipes: (budget, seed) → (agent, decisions)."""
+
+    def train(budget: int, seed: int):
+        rng = np.random.default_rng(seed)
+        agent = make_agent("cacla", supervised=supervised, rng=rng)
+        episodes = max(1, budget // int(EPISODE_S))
+        pipe_rng = rng.spawn(1)[0]
+        extra = dict(options)
+        if "randomization" in extra:  # the disturbances' stream of pipefollow train (training.phases)
+            extra["env_rng"] = disturbance_rng(seed)
+        train_random_compiled(agent, get_suite(TRAIN_FAMILY), episodes, pipe_rng=pipe_rng,
+                              episode_seconds=EPISODE_S, **extra)  # fmt: skip
+        return agent, episodes * int(EPISODE_S)
+
+    return train
+
+
+def _deep(algorithm: str) -> Callable[[int, int], tuple[object, int]]:
+    def train(budget: int, seed: int):
+        from pipefollow.training.deep import train_deep
+
+        run = train_deep(algorithm, f"random:{TRAIN_FAMILY}", steps=budget, seconds=EPISODE_S, seed=seed)
+        return run.policy, run.steps
+
+    return train
+
+
+VARIANTS: dict[str, tuple[str, Callable[[int, int], tuple[object, int]]]] = {
+    "cacla": ("CACLA (paper)", _paper(False)),
+    "supervised-cacla": ("supervised CACLA (paper)", _paper(True)),
+    "cacla-sigma0.3": ("CACLA, σ from 0.3", _paper(False, sigma_start=0.3)),
+    "supervised-cacla-sigma0.3": ("supervised CACLA, σ from 0.3", _paper(True, sigma_start=0.3)),
+    "cacla-mild": ("CACLA, trained under mild", _paper(False, randomization="mild")),
+    "supervised-cacla-mild": ("supervised CACLA, trained under mild", _paper(True, randomization="mild")),
+    "ppo": ("PPO", _deep("ppo")),
+    "sac": ("SAC", _deep("sac")),
+}
+
+
+def judge(agent) -> dict:
+    """Per-pipe returns and in-view shares on the held-out suite, per condition."""
+    pipes = get_suite(TEST_SUITE).pipes(None, min_length_for(TEST_S))
+    out = {}
+    for name, params in CONDITIONS.items():
+        res = run_episodes(agent, pipes, TEST_S, params)[0]
+        out[name] = {"returns": res[:, RET].tolist(), "in_view": res[:, IN_VIEW].tolist()}
+    return out
+
+
+def run_all(out: Path, variants, budgets, seeds) -> None:
+    """Train and judge every missing (variant, budget, seed); one JSON file each."""
+    (out / "runs").mkdir(parents=True, exist_ok=True)
+    heuristic = out / "runs" / "heuristic.json"
+    if not heuristic.exists():
+        write_text_atomic(heuristic, json.dumps({"variant": "heuristic", **judge(Heuristic())}))
+    for budget in budgets:
+        for variant in variants:
+            for seed in seeds:
+                path = out / "runs" / f"{variant}-{budget}-{seed}.json"
+                if path.exists():
+                    continue
+                t0 = time.perf_counter()
+                agent, steps = VARIANTS[variant][1](budget, seed)
+                wall = time.perf_counter() - t0
+                result = {"variant": variant, "budget": budget, "seed": seed, "steps": steps, "wall_s": wall}
+                result |= judge(agent)
+                write_text_atomic(path, json.dumps(result))
+                print(f"{variant:24s} {budget:>7} seed {seed}: {wall:6.1f} s, calm "
+                      f"{np.mean(result['calm']['returns']):7.2f}, disturbed "
+                      f"{np.mean(result['disturbed']['returns']):7.2f}", flush=True)  # fmt: skip
+
+
+def summaries(out: Path) -> list[dict]:
+    """One row per (variant, budget, condition): pooled over seeds (module docstring)."""
+    runs = [json.loads(p.read_text()) for p in sorted((out / "runs").glob("*.json"))]
+    h = next(r for r in runs if r["variant"] == "heuristic")
+    rows = []
+    for variant in VARIANTS:
+        for budget in sorted({r["budget"] for r in runs if r["variant"] == variant}):
+            rs = [r for r in runs if r["variant"] == variant and r["budget"] == budget]
+            for cond in CONDITIONS:
+                per_seed = np.array([r[cond]["returns"] for r in rs])
+                per_pipe = per_seed.mean(axis=0)
+                success = np.mean(np.array([r[cond]["in_view"] for r in rs]) >= SUCCESS_IN_VIEW)
+                lo, hi = bootstrap_ci(per_pipe)
+                d = paired_difference(per_pipe, h[cond]["returns"])
+                rows.append({
+                    "variant": variant, "budget": budget, "steps": rs[0]["steps"], "seeds": len(rs),
+                    "condition": cond, "mean_return": float(per_pipe.mean()), "ci95": [lo, hi],
+                    "success_rate": float(success),
+                    "vs_heuristic": d["mean_diff"], "vs_heuristic_ci95": d["ci95_diff"],
+                    "wall_s": float(np.mean([r["wall_s"] for r in rs])),
+                })  # fmt: skip
+    return rows
+
+
+def table(rows: list[dict], out: Path) -> str:
+    """The Markdown table: per (variant, budget) calm and disturbed, with the heuristic's line."""
+    h = json.loads((out / "runs" / "heuristic.json").read_text())
+    hc, hd = (np.mean(h[c]["returns"]) for c in CONDITIONS)
+    lines = [
+        "| variant | decisions | seeds | calm: mean return [95 % CI] | vs heuristic [95 % CI] | success "
+        "| disturbed: mean return [95 % CI] | vs heuristic [95 % CI] | success | train wall time per seed |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+        f"| heuristic | — | — | {hc:.1f} | — | — | {hd:.1f} | — | — | — |",
+    ]
+    by = {(r["variant"], r["budget"], r["condition"]): r for r in rows}
+    for variant, budget in dict.fromkeys((r["variant"], r["budget"]) for r in rows):
+        cells = []
+        for cond in CONDITIONS:
+            r = by[(variant, budget, cond)]
+            (lo, hi), (dlo, dhi) = r["ci95"], r["vs_heuristic_ci95"]
+            cells += [
+                f"{r['mean_return']:.1f} [{lo:.1f}, {hi:.1f}]",
+                f"{r['vs_heuristic']:+.1f} [{dlo:+.1f}, {dhi:+.1f}]",
+                f"{r['success_rate']:.0%}",
+            ]
+        lines.append(f"| {VARIANTS[variant][0]} | {r['steps']:,} | {r['seeds']} | " + " | ".join(cells)
+                     + f" | {r['wall_s']:.1f} s |")  # fmt: skip
+    return "\n".join(lines)
+
+
+def plot(rows: list[dict], out: Path, path: Path) -> None:
+    """Held-out mean return (95 % CI band) against training decisions, calm and disturbed."""
+    from pipefollow.envs.render import new_figure, save_figure
+
+    h = json.loads((out / "runs" / "heuristic.json").read_text())
+    fig = new_figure((11.0, 4.2))
+    for j, cond in enumerate(CONDITIONS):
+        ax = fig.add_subplot(1, 2, j + 1)
+        ax.axhline(np.mean(h[cond]["returns"]), color="k", lw=1, ls="--", label="heuristic")
+        for variant in dict.fromkeys(r["variant"] for r in rows):
+            rs = sorted((r for r in rows if r["variant"] == variant and r["condition"] == cond),
+                        key=lambda r: r["steps"])  # fmt: skip
+            x = [r["steps"] for r in rs]
+            (line,) = ax.plot(x, [r["mean_return"] for r in rs], marker="o", ms=3, label=VARIANTS[variant][0])
+            ax.fill_between(x, [r["ci95"][0] for r in rs], [r["ci95"][1] for r in rs], color=line.get_color(),
+                            alpha=0.18, lw=0)  # fmt: skip
+        ax.set_xscale("log")
+        ax.set_xlabel("training decisions (1 decision = 1 s at sea)")
+        ax.set_ylabel(f"held-out mean return, {cond} (95 % CI)")
+        ax.grid(alpha=0.3)
+        if j == 0:
+            ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    save_figure(fig, path)
+
+
+def main() -> None:
+    """Command line: see the module docstring."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument("--variants", nargs="+", default=["cacla", "supervised-cacla", "ppo"], choices=VARIANTS)
+    ap.add_argument("--budgets", nargs="+", type=int, default=list(BUDGETS))
+    ap.add_argument("--seeds", nargs="+", type=int, default=list(SEEDS))
+    ap.add_argument("--table", action="store_true", help="print the table of the finished runs and stop")
+    ap.add_argument("--plot", type=Path, default=None, help="also draw the learning curves to this file")
+    args = ap.parse_args()
+    if not args.table:
+        run_all(args.out, args.variants, args.budgets, args.seeds)
+    rows = summaries(args.out)
+    write_text_atomic(args.out / "summary.json", json.dumps(rows, indent=1) + "\n")
+    print(table(rows, args.out))
+    if args.plot:
+        plot(rows, args.out, args.plot)
+
+
+if __name__ == "__main__":
+    main()
