@@ -23,6 +23,7 @@ from pipefollow.cli.common import (
     reading_option,
     writable_folder,
 )
+from pipefollow.cli.vision import camera_options
 from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS
 from pipefollow.sim import disturbance as _disturbance
 
@@ -104,6 +105,7 @@ def _summary(stats) -> dict:
 @reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @disturbance_options
+@camera_options
 @guard
 def evaluate(
     controller,
@@ -119,8 +121,13 @@ def evaluate(
     readings,
     as_json,
     disturbance,
+    camera,
 ):
-    """Evaluate a controller deterministically (σ = 0) on a pipeline."""
+    """Evaluate a controller deterministically (σ = 0) on a pipeline.
+
+    With --camera vision the controller sees through the pipe detector on the rendered camera
+    image; "in view" is then the exact camera's.
+    """
     from pipefollow.envs.env import PipelineFollowingEnv
     from pipefollow.readings import sim_params
     from pipefollow.sim.pipeline import resolve
@@ -140,6 +147,7 @@ def evaluate(
         start_noise,
         heading_noise,
         params=sim_params(reading)._replace(disturbance=disturbance),
+        **(camera or {}),
     )
     stats, frames = [], []
     for e in range(episodes):
@@ -160,6 +168,9 @@ def evaluate(
     }
     if disturbance != _disturbance.NO_DISTURBANCE:
         result["disturbance"] = _disturbance.to_dict(disturbance)
+    if camera:
+        result["camera"] = "vision"
+        result["water"] = camera["water"]._asdict()
     if plot_path:
         from pipefollow.envs.render import plot_trajectories
 

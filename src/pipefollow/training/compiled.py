@@ -90,7 +90,7 @@ def run_episode(
         next_obs, r, terminated, truncated, info = env.step([a])
         total += r
         steps += 1
-        seen += info["pipe_in_view"]
+        seen += info.get("true_pipe_in_view", info["pipe_in_view"])  # the vision camera's truth
         done = terminated or truncated
         if learn:
             if visible:
