@@ -13,6 +13,7 @@ from pipefollow.cli.common import (
     SEED,
     UserError,
     apply_readings,
+    camera_options,
     check_plot_path,
     complete_pipeline,
     controller_options,
@@ -117,6 +118,7 @@ def _summary(stats) -> dict:
 @reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @disturbance_options
+@camera_options
 @guard
 def evaluate(
     controller,
@@ -132,8 +134,13 @@ def evaluate(
     readings,
     as_json,
     disturbance,
+    camera,
 ):
-    """Evaluate a controller deterministically (σ = 0) on a pipeline."""
+    """Evaluate a controller deterministically (σ = 0) on a pipeline.
+
+    With --camera vision the controller sees through the pipe detector on the rendered camera
+    image; "in view" is then the exact camera's.
+    """
     from pipefollow.envs.env import PipelineFollowingEnv
     from pipefollow.readings import sim_params
     from pipefollow.sim.pipe_names import resolve_pipeline
@@ -166,6 +173,7 @@ def evaluate(
         start_noise,
         heading_noise,
         params=sim_params(reading)._replace(disturbance=disturbance),
+        **(camera or {}),
     )
     stats, frames = [], []
     for e in range(episodes):
@@ -190,6 +198,9 @@ def evaluate(
         result["disturbance"] = _disturbance.to_dict(disturbance)
     if warnings:
         result["warnings"] = warnings
+    if camera:
+        result["camera"] = "vision"
+        result["water"] = camera["water"]._asdict()
     if plot_path:
         from pipefollow.envs.render import plot_trajectories
 
