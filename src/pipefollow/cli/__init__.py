@@ -32,6 +32,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "pipefollow.cli.experiments:reproduce",
         "Reproduce the paper's experiments: train every trial × seed, store results, draw the figures.",
     ),
+    "rollouts": (
+        "pipefollow.cli.rollouts:rollouts",
+        "Write a controller's episodes on a suite as a Minari dataset (offline RL, behaviour cloning).",
+    ),
     "suites": (
         "pipefollow.cli.suites:suites",
         "List the pipeline suites: training families and held-out test suites.",

@@ -55,7 +55,7 @@ PAPER_CACLA = CaclaParams()
 
 
 def pack(p: CaclaParams) -> np.ndarray:
-    """``p`` as a float array for compiled code (a NamedTuple argument costs µs per call)."""
+    """``p`` as a float array for compiled code (a NamedTuple argument costs microseconds per call)."""
     return np.array(p, dtype=np.float64)
 
 
