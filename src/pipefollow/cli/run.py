@@ -289,6 +289,14 @@ def evaluate(
     "right turns); its learner options are kept unless given.",
 )
 @click.option("--force", is_flag=True, help="Replace the policy and learning curve already in --out.")
+@click.option(
+    "--tensorboard",
+    "tensorboard_dir",
+    type=click.Path(file_okay=False),
+    default=None,
+    help="Also log return, pipe in view, progress and σ per episode for TensorBoard in this folder "
+    "(SARSA and CACLA; optional extra 'tensorboard').",
+)
 @reading_option(
     "Reading of an open point, e.g. skew_step=weights or skew_sample=centred (repeatable; "
     "see docs/design.md) [default: the project's readings, or those of --init]."
@@ -308,6 +316,7 @@ def train(
     out_dir,
     init_policy,
     force,
+    tensorboard_dir,
     readings,
     as_json,
     disturbance,
@@ -322,6 +331,15 @@ def train(
     existing = [name for name in TRAINING_OUTPUTS if (Path(out_dir) / name).exists()]
     if existing and not force:
         raise UserError(f"--out '{out_dir}' already holds {existing[0]}; use --force to replace it")
+    if tensorboard_dir:
+        from pipefollow.files.tensorboard import TensorBoardMissing, check_available
+
+        if algorithm in ("ppo", "sac"):
+            raise UserError(f"--tensorboard applies to --algorithm sarsa and cacla, not {algorithm}")
+        try:
+            check_available()
+        except TensorBoardMissing as e:
+            raise UserError(str(e)) from None
     if algorithm in ("ppo", "sac"):
         return _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance)
     if steps is not None:
@@ -381,6 +399,8 @@ def train(
         policy_path, curve_path = write_training_outputs(
             out, agent, stats, episodes, pipeline=pipe.name, seed=seed
         )
+        if tensorboard_dir:
+            _write_tensorboard(tensorboard_dir, stats, episodes, scale)
     except BaseException as e:
         remove_empty_folders(out, made)  # an interrupted or failed run leaves no empty --out behind
         if isinstance(e, KeyboardInterrupt):
@@ -406,6 +426,17 @@ def train(
         f"of the last {k} {stats[-k:, 0].mean():.2f}"
     )
     click.echo(f"policy: {policy_path}\nlearning curve: {curve_path}")
+
+
+def _write_tensorboard(folder, stats, episodes: int, scale: float) -> None:
+    """Per-episode return, pipe in view, progress, time lost and σ (the schedule train used)."""
+    from pipefollow.files.tensorboard import write_scalars
+    from pipefollow.learners.exploration import linear_sigma
+    from pipefollow.training.compiled import STAT_NAMES
+
+    series = {name: stats[:, i] for i, name in enumerate(STAT_NAMES)}
+    series["sigma"] = [linear_sigma(e, episodes, scale, 0.01 * scale) for e in range(episodes)]
+    write_scalars(folder, series)
 
 
 def _check_init_options(agent, reading, init_policy, skew, supervised, cacla_params) -> None:
