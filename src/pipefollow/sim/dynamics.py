@@ -1,4 +1,4 @@
-"""The AUV's 3-DOF model (paper §3, eq. 16), its kinematics and the RK4 integrator.
+"""The AUV's 3-DOF model (paper §3, eq. 16) and its kinematics (the RK4 steps are in ``sim.decision``).
 
 Frames follow Fossen: earth x north, y east, heading ψ clockwise from north; body x forward,
 y starboard. ``eta = (x, y, psi)`` is the pose, ``nu = (u, v, r)`` the body velocities and
