@@ -20,7 +20,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "Compare learners over training seeds × pipes: IQM, mean, probability of improvement.",
     ),
     "evaluate": (
-        "pipefollow.cli.run:evaluate",
+        "pipefollow.cli.evaluate:evaluate",
         "Evaluate a controller deterministically (σ = 0) on a pipeline.",
     ),
     "pipelines": ("pipefollow.cli.suites:pipelines", "List the named pipelines."),
