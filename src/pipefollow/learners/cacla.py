@@ -63,7 +63,7 @@ _N_PARAMS = records.size(PAPER_CACLA)
 
 
 def pack(p: CaclaParams) -> np.ndarray:
-    """``p`` as a float array for compiled code (a NamedTuple argument costs µs per call)."""
+    """``p`` as a float array for compiled code (a NamedTuple argument costs microseconds per call)."""
     return records.pack(p)
 
 
