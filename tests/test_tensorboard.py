@@ -11,6 +11,7 @@ from click.testing import CliRunner
 from pipefollow.cli import main
 
 pytest.importorskip("tensorboard")
+pytestmark = pytest.mark.tensorboard
 
 
 def _scalars(folder) -> dict[str, list[tuple[int, float]]]:
