@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig, from_dict, to_dict
+from pipefollow.experiments.schema import ConfigError, ExperimentConfig, TrialConfig, from_dict, to_dict
 from pipefollow.experiments.trial import TrialResult, build_agent
 from pipefollow.files.atomic import TMP_SUFFIX, atomic_file, read_npz_file, write_text_atomic
 from pipefollow.files.sources import imported_modules, source_hash
