@@ -6,8 +6,8 @@ Every controller runs one deterministic 60-s episode per held-out pipe with the 
 clear, moderate and turbid water (`pipefollow.evaluation.vision.closed_loop`), and is compared
 with the heuristic on the ideal camera on the same pipes (paired differences, bootstrap CIs).
 The row "ideal" is each controller on the ideal camera. With ``--policies FOLDER`` it also trains,
-if missing, CACLA on random pipes (the README's recipe: 5,000 episodes of 90 s on random:mixed)
-without camera faults and under the camera model calibrated for ``--calibrated`` water
+if missing, CACLA and supervised CACLA on random pipes (the README's recipe: 5,000 episodes of 90 s
+on random:mixed) without camera faults, and CACLA under the camera model calibrated for ``--calibrated`` water
 (``docs/vision/calibration.json``), and judges both.
 """
 
@@ -31,7 +31,7 @@ COLUMNS = (
 )  # fmt: skip
 
 
-def train(folder: Path, seed: int, noise: float, miss: float) -> str:
+def train(folder: Path, seed: int, noise: float, miss: float, supervised: bool = False) -> str:
     """The policy file in ``folder``, trained first if missing."""
     policy = folder / "policy.npz"
     if not policy.exists():
@@ -39,7 +39,7 @@ def train(folder: Path, seed: int, noise: float, miss: float) -> str:
             sys.executable, "-m", "pipefollow.cli", "train", "--algorithm", "cacla",
             "--pipeline", "random:mixed",
             "--seconds", "90", "--episodes", "5000", "--seed", str(seed), "--out", str(folder),
-            "--camera-noise", str(noise), "--miss-prob", str(miss),
+            "--camera-noise", str(noise), "--miss-prob", str(miss), *(["--supervised"] if supervised else []),
         ]  # fmt: skip
         subprocess.run(cmd, check=True)
     return str(policy)
@@ -61,6 +61,8 @@ def main() -> None:
         c = cal[round(WATER_PRESETS[args.calibrated].turbidity, 6)]
         base = Path(args.policies)
         controllers.append(("CACLA, random pipes", train(base / "plain", args.seed, 0.0, 0.0)))
+        supervised = train(base / "supervised", args.seed, 0.0, 0.0, supervised=True)
+        controllers.append(("supervised CACLA, random pipes", supervised))
         label = f"CACLA, random pipes, calibrated ({args.calibrated})"
         controllers.append((label, train(base / "calibrated", args.seed, c["camera_noise"], c["miss_prob"])))
     suite = get_suite("heldout")

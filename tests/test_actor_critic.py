@@ -66,3 +66,13 @@ def test_the_actor_critic_takes_no_skew_and_names_its_update():
     assert make_agent("ac", supervised=True, actor_update="sign").name == "supervised actor-critic, sgn(δ)"
     with pytest.raises(ValueError, match="actor_update applies to algorithm ac only"):
         make_agent("cacla", actor_update="sign")
+
+
+def test_cacla_code_reads_the_actor_critic_record():
+    # CACLA's compiled code reads the first fields of the packed record; the step factor goes beside it
+    from pipefollow.sim import records
+
+    p = ac.PAPER_AC._replace(supervised=True, alpha_pi=0.3, delta_k=0.07, actor_update=ac.SIGN)
+    assert cacla.unpack(records.pack(p)) == cacla.CaclaParams(supervised=True, alpha_pi=0.3, delta_k=0.07)
+    assert ac.ActorCritic(p).rule(p) == ac.SIGN
+    assert cacla.Cacla().rule(cacla.PAPER_CACLA) == cacla.SIGN_AND_MAX

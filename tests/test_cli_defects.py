@@ -206,8 +206,11 @@ def test_a_plot_without_suffix_says_so(runner):
     assert "--plot 'h': has no suffix to tell the file type; use one of" in line
 
 
-def test_one_worker_is_singular(runner, tmp_path):
+@pytest.mark.slow
+def test_reproduce_says_one_worker_and_prints_progress_lines_off_a_terminal(runner, tmp_path, monkeypatch):
+    monkeypatch.setattr(progress, "INTERVAL_S", 0.0)
     args = ["reproduce", "--trial", "sarsa", "--repeats", "1", "--episodes", "3", "--backend", "serial"]
     res = runner.invoke(main, [*args, "--no-figures", "--out", str(tmp_path / "r")])
     assert res.exit_code == 0, res.output
     assert "(1 worker)" in res.stdout and "(1 workers)" not in res.stdout
+    assert "paper: trials: 1/1 trials (100%)" in res.stderr

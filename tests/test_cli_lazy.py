@@ -50,7 +50,8 @@ def test_help_and_version_import_no_heavy_package_and_no_command(args):
 def test_a_command_imports_its_own_module_only():
     loaded = loaded_after(run_cli(["trials", "--help"]))
     assert "pipefollow.cli.experiments" in loaded["pipefollow"]
-    assert {"pipefollow.cli.run", "pipefollow.cli.suites"}.isdisjoint(loaded["pipefollow"])
+    others = {"pipefollow.cli.run", "pipefollow.cli.evaluate", "pipefollow.cli.suites"}
+    assert others.isdisjoint(loaded["pipefollow"])
     assert {"matplotlib", "scipy", "gymnasium"}.isdisjoint(loaded["top"])
 
 

@@ -11,16 +11,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pipefollow.experiments.config import (
+from pipefollow.experiments.config import load_experiment, with_overrides
+from pipefollow.experiments.schema import (
     ConfigError,
     ExperimentConfig,
     Phase,
     TrialConfig,
     field_help,
     from_dict,
-    load_experiment,
     to_dict,
-    with_overrides,
 )
 
 PAPER_TRIALS = [

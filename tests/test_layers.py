@@ -91,3 +91,12 @@ def test_the_walk_catches_an_upward_and_a_private_import(tmp_path):
     ]
     rank = {name: i for i, name in enumerate(layer_table())}
     assert rank[folder_of(found[0][1])] > rank["sim"]
+
+
+def test_every_package_with_compiled_code_sets_numba_s_cache_before_compiling():
+    # numba picks a function's cache folder when it is decorated: the package's __init__ must set it
+    for folder in sorted(p for p in ROOT.iterdir() if (p / "__init__.py").exists()):
+        texts = [m.read_text(encoding="utf-8") for m in folder.glob("*.py")]
+        if any(re.search(r"^@njit\b", text, re.MULTILINE) for text in texts):
+            init = (folder / "__init__.py").read_text(encoding="utf-8")
+            assert "configure_numba_cache()" in init, folder.name

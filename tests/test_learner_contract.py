@@ -16,7 +16,7 @@ from pipefollow import readings as rd
 from pipefollow.cli import main
 from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.evaluation.benchmark import _env_episodes, run_episodes
-from pipefollow.experiments.config import Phase, TrialConfig
+from pipefollow.experiments.schema import Phase, TrialConfig
 from pipefollow.experiments.trial import run_trial
 from pipefollow.learners.protocol import OPTIONS
 from pipefollow.learners.registry import LEARNERS, NAMES, learner, learner_of

@@ -10,7 +10,7 @@ from click.testing import CliRunner
 
 from pipefollow.cli import main
 from pipefollow.envs.env import PipelineFollowingEnv
-from pipefollow.experiments.config import Phase, TrialConfig
+from pipefollow.experiments.schema import Phase, TrialConfig
 from pipefollow.experiments.trial import run_trial
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim.suites import get_suite, min_length_for

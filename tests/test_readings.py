@@ -131,7 +131,7 @@ def test_a_policy_file_from_before_readings_loads_with_the_weights_step(tmp_path
 
 
 def test_a_trial_applies_its_readings_to_sigma_start_and_features():
-    from pipefollow.experiments.config import Phase, TrialConfig
+    from pipefollow.experiments.schema import Phase, TrialConfig
     from pipefollow.experiments.trial import build_agent, run_trial
 
     base = TrialConfig(name="t", phases=(Phase("paper-left", 3),), skew_deg=22.5)

@@ -18,8 +18,9 @@ import pytest
 from scipy import stats as sps
 
 from pipefollow.experiments import claims, report, summary
-from pipefollow.experiments.config import ExperimentConfig, Phase, TrialConfig, to_dict, with_overrides
+from pipefollow.experiments.config import with_overrides
 from pipefollow.experiments.figures import learning_curve_figure, sliding_average
+from pipefollow.experiments.schema import ExperimentConfig, Phase, TrialConfig, to_dict
 from pipefollow.sim.pipeline import builtin
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pipefollow.experiments import report
-from pipefollow.experiments.config import ExperimentConfig, Phase, TrialConfig
+from pipefollow.experiments.schema import ExperimentConfig, Phase, TrialConfig
 from test_report import EPISODES, REPEATS, make_run, provide_trial_files
 
 

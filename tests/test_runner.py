@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 
 from pipefollow.experiments import store
-from pipefollow.experiments.config import ConfigError, ExperimentConfig, load_experiment, with_overrides
+from pipefollow.experiments.config import load_experiment, with_overrides
 from pipefollow.experiments.runner import RunInterrupted, run_experiment
+from pipefollow.experiments.schema import ConfigError, ExperimentConfig
 from pipefollow.experiments.trial import run_trial
 
 # Two of the paper's trials (SARSA; supervised CACLA with skew, two phases and a validation run),

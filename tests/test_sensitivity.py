@@ -9,7 +9,8 @@ from click.testing import CliRunner
 from pipefollow.cli import main
 from pipefollow.experiments import sensitivity
 from pipefollow.experiments.claims import CONFIRMED, NOT_CONFIRMED, NOT_TESTED
-from pipefollow.experiments.config import ConfigError, load_experiment
+from pipefollow.experiments.config import load_experiment
+from pipefollow.experiments.schema import ConfigError
 
 SMALL = """
 [experiment]

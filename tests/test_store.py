@@ -10,7 +10,7 @@ import pytest
 
 import pipefollow
 from pipefollow.experiments import folder, store
-from pipefollow.experiments.config import ConfigError, ExperimentConfig, Phase, TrialConfig, to_dict
+from pipefollow.experiments.schema import ConfigError, ExperimentConfig, Phase, TrialConfig, to_dict
 from pipefollow.experiments.trial import TrialResult, build_agent
 from pipefollow.files.sources import source_hash
 from pipefollow.training.policy_files import load_policy
@@ -346,7 +346,7 @@ def test_the_code_stamp_covers_every_module_a_trial_imports():
 
     code = (
         "import sys\n"
-        "from pipefollow.experiments.config import Phase, TrialConfig\n"
+        "from pipefollow.experiments.schema import Phase, TrialConfig\n"
         "from pipefollow.experiments.trial import run_trial\n"
         "for algorithm in ('cacla', 'sarsa'):\n"
         "    run_trial(TrialConfig(name='t', algorithm=algorithm, phases=(Phase('random:easy', 2),), "

@@ -77,3 +77,16 @@ def test_benchmark_with_the_vision_camera_compares_with_the_ideal_heuristic():
     assert summary["camera"] == "vision" and summary["water"]["turbidity"] == 0.1
     assert "vs_heuristic" in summary and math.isfinite(summary["vs_heuristic"]["mean_diff"])
     assert 0.0 <= summary["success_rate"] <= 1.0 and np.isfinite(summary["mean_return"])
+
+
+def test_evaluate_takes_the_vision_camera_and_counts_the_true_pipe_in_view():
+    args = ["evaluate", "--controller", "heuristic", "--pipeline", "paper-left", "--json"]
+    ideal = json.loads(CliRunner().invoke(main, args).output)
+    result = CliRunner().invoke(main, [*args, "--camera", "vision", "--water", "turbid", "--turbidity", "3"])
+    assert result.exit_code == 0, result.output
+    blind = json.loads(result.output)
+    assert blind["camera"] == "vision" and blind["water"]["turbidity"] == 3.0
+    # at 3/m the detector sees nothing: every decision is −10, but the AUV, searching on the spot
+    # at the pipe's start, has the true pipe in view
+    assert blind["mean_return"] == pytest.approx(-10.0 * 20)
+    assert blind["mean_pipe_in_view"] > 0.0 and ideal["mean_return"] > blind["mean_return"]

@@ -20,7 +20,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "Compare learners over training seeds × pipes: IQM, mean, probability of improvement.",
     ),
     "evaluate": (
-        "pipefollow.cli.run:evaluate",
+        "pipefollow.cli.evaluate:evaluate",
         "Evaluate a controller deterministically (σ = 0) on a pipeline.",
     ),
     "pipelines": ("pipefollow.cli.suites:pipelines", "List the named pipelines."),
@@ -35,6 +35,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "robustness": (
         "pipefollow.cli.robustness:robustness",
         "Success rate and mean return against current speed, and on fixed scenario sets.",
+    ),
+    "rollouts": (
+        "pipefollow.cli.rollouts:rollouts",
+        "Write a controller's episodes on a suite as a Minari dataset (offline RL, behaviour cloning).",
     ),
     "suites": (
         "pipefollow.cli.suites:suites",

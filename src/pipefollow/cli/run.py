@@ -1,4 +1,4 @@
-"""``pipefollow evaluate`` and ``pipefollow train``: one controller, one pipeline."""
+"""``pipefollow train``: a learner on a pipeline or a family of random pipes."""
 
 from __future__ import annotations
 
@@ -13,15 +13,10 @@ from pipefollow.cli.common import (
     SEED,
     UserError,
     apply_readings,
-    check_plot_path,
     complete_pipeline,
-    controller_options,
     disturbance_options,
-    disturbance_text,
     finite,
     guard,
-    inert_readings,
-    load_controller,
     reading_option,
     writable_folder,
 )
@@ -30,197 +25,8 @@ from pipefollow.files.progress import progress as progress_report
 from pipefollow.learners.registry import NAMES as LEARNER_NAMES
 from pipefollow.sim import disturbance as _disturbance
 
-
-def _default_seconds(pipeline: str, seconds: float | None) -> float:
-    if seconds is not None:
-        return seconds
-    return 60.0 if pipeline == "paper-validation" else 20.0
-
-
-# step sizes of a policy that --init continues with, not train options
+# the learners' step sizes and discount: not options of train, kept from the policy under --init
 _LEARNING_RATES = ("alpha", "alpha_v", "alpha_pi", "discount", "delta_k", "k_max", "forgetting")
-
-
-def _summary(stats) -> dict:
-    rows = [
-        {
-            "return": s.ret,
-            "pipe_in_view": s.pipe_in_view,
-            "progress_m": s.progress_m,
-            "time_lost_s": s.time_lost_s,
-        }
-        for s in stats
-    ]
-    return {
-        "mean_return": float(np.mean([r["return"] for r in rows])),
-        "mean_pipe_in_view": float(np.mean([r["pipe_in_view"] for r in rows])),
-        "mean_progress_m": float(np.mean([r["progress_m"] for r in rows])),
-        "episodes": rows,
-    }
-
-
-@click.command()
-@controller_options
-@click.option(
-    "--pipeline",
-    default="paper-left",
-    show_default=True,
-    shell_complete=complete_pipeline,
-    help="Built-in name (paper-left, paper-right, paper-validation), a JSON file, a pipe of a suite "
-    "(e.g. heldout-003, as 'suites export' names it) or random[:FAMILY] for a new pipe every episode.",
-)
-@click.option(
-    "--episodes",
-    default=1,
-    show_default=True,
-    type=click.IntRange(min=1, max=MAX_EPISODES),
-    help="Number of episodes; they differ only with start noise, random disturbances or a random pipeline.",
-)
-@click.option(
-    "--seconds",
-    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
-    callback=finite,
-    default=None,
-    help="Episode length in seconds [default: 60 on paper-validation, else 20].",
-)
-@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the start perturbation.")
-@click.option(
-    "--start-noise",
-    default=0.0,
-    show_default=True,
-    type=click.FloatRange(min=0.0),
-    callback=finite,
-    help="Uniform random lateral start offset up to this many metres.",
-)
-@click.option(
-    "--heading-noise",
-    default=0.0,
-    show_default=True,
-    type=click.FloatRange(min=0.0),
-    callback=finite,
-    help="Uniform random start heading offset up to this many degrees.",
-)
-@click.option(
-    "--plot",
-    "plot_path",
-    type=click.Path(dir_okay=False),
-    default=None,
-    help="Save a trajectory plot of the first episode (.png, .svg, .pdf, .jpg, ...).",
-)
-@click.option(
-    "--animate",
-    "animate_path",
-    type=click.Path(dir_okay=False),
-    default=None,
-    help="Save an animation of the first episode in the Fig. 2 view (.gif, or .mp4 with ffmpeg).",
-)
-@reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
-@disturbance_options
-@guard
-def evaluate(
-    controller,
-    lookahead,
-    pipeline,
-    episodes,
-    seconds,
-    seed,
-    start_noise,
-    heading_noise,
-    plot_path,
-    animate_path,
-    readings,
-    as_json,
-    disturbance,
-):
-    """Evaluate a controller deterministically (σ = 0) on a pipeline."""
-    from pipefollow.envs.env import PipelineFollowingEnv
-    from pipefollow.readings import sim_params
-    from pipefollow.sim.pipe_names import resolve_pipeline
-    from pipefollow.sim.suites import Suite
-    from pipefollow.training.compiled import run_episode
-
-    check_plot_path(plot_path)
-    if animate_path:
-        from pipefollow.envs.animation import check_animation_path
-
-        check_animation_path(animate_path, "--animate")
-    seconds = _default_seconds(pipeline, seconds)
-    pipe = resolve_pipeline(pipeline, seconds)  # a Pipeline, or a Suite for random[:FAMILY]
-    agent = load_controller(controller, seed, lookahead)
-    reading = apply_readings(readings, getattr(agent, "readings", "default"))
-    warnings = inert_readings(readings)
-    if episodes > 1 and not (start_noise or heading_noise or isinstance(pipe, Suite)):
-        from pipefollow.sim.disturbance import noise_count
-
-        if not noise_count(disturbance):
-            warnings.append(
-                f"the {episodes} episodes are the same: nothing random differs between them "
-                "(see --start-noise, --heading-noise, random:FAMILY, --camera-noise, --miss-prob)"
-            )
-    for w in warnings:
-        click.echo(f"pipefollow: warning: {w}", err=True)
-    env = PipelineFollowingEnv(
-        pipeline if isinstance(pipe, Suite) else pipe,  # a family: the env draws a pipe every episode
-        seconds,
-        start_noise,
-        heading_noise,
-        params=sim_params(reading)._replace(disturbance=disturbance),
-    )
-    stats, frames = [], []
-    for e in range(episodes):
-        if e == 0 and animate_path:
-            from pipefollow.envs.animation import Recorder
-
-            recorder = Recorder(env)  # the same episode, with its states kept for the animation
-            stats.append(run_episode(recorder, agent, seed=seed))
-            frames = recorder.frames
-        else:
-            stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
-        if e == 0:
-            pipe = env.pipeline  # the first episode's pipe, for the plot and the animation
-    result = {
-        "controller": controller,
-        "pipeline": pipeline,
-        "seconds": env.episode_seconds,
-        "readings": reading.id,
-        **_summary(stats),
-    }
-    if disturbance != _disturbance.NO_DISTURBANCE:
-        result["disturbance"] = _disturbance.to_dict(disturbance)
-    if warnings:
-        result["warnings"] = warnings
-    if plot_path:
-        from pipefollow.envs.render import plot_trajectories
-
-        name = "heuristic" if controller == "heuristic" else Path(controller).stem
-        plot_trajectories(
-            pipe, {name: stats[0].poses}, plot_path, title=f"{name} on {pipe.name}: return {stats[0].ret:.2f}"
-        )
-        result["plot"] = str(plot_path)
-    if animate_path:
-        from pipefollow.envs.animation import write_animation
-
-        write_animation(pipe, frames, animate_path, env.params)
-        result["animation"] = str(animate_path)
-    if as_json:
-        click.echo(json.dumps(result))
-        return
-    click.echo(
-        f"{controller} on {pipeline}, {episodes} episode(s) of {env.episode_seconds:g} s"
-        f"{disturbance_text(disturbance)}"
-    )
-    click.echo(f"{'episode':>7} {'return':>9} {'in view':>8} {'progress':>9}")
-    for i, row in enumerate(result["episodes"]):
-        click.echo(f"{i:>7} {row['return']:>9.3f} {row['pipe_in_view']:>8.1%} {row['progress_m']:>8.2f}m")
-    click.echo(
-        f"{'mean':>7} {result['mean_return']:>9.3f} {result['mean_pipe_in_view']:>8.1%} "
-        f"{result['mean_progress_m']:>8.2f}m"
-    )
-    if plot_path:
-        click.echo(f"plot: {plot_path}")
-    if animate_path:
-        click.echo(f"animation: {animate_path}")
 
 
 @click.command()
@@ -296,6 +102,14 @@ def evaluate(
     "right turns); its learner options are kept unless given.",
 )
 @click.option("--force", is_flag=True, help="Replace the policy and learning curve already in --out.")
+@click.option(
+    "--tensorboard",
+    "tensorboard_dir",
+    type=click.Path(file_okay=False),
+    default=None,
+    help="Also log return, pipe in view, progress and σ per episode for TensorBoard in this folder "
+    "(SARSA and CACLA; optional extra 'tensorboard').",
+)
 @reading_option(
     "Reading of an open point, e.g. skew_step=weights or skew_sample=centred (repeatable; "
     "see docs/design.md) [default: the project's readings, or those of --init]."
@@ -323,6 +137,7 @@ def train(
     out_dir,
     init_policy,
     force,
+    tensorboard_dir,
     readings,
     as_json,
     randomization,
@@ -344,6 +159,15 @@ def train(
         randomization = load(randomization)
         if disturbance != _disturbance.NO_DISTURBANCE:
             raise UserError("--randomization replaces --current, --camera-noise and --miss-prob: give one")
+    if tensorboard_dir:
+        from pipefollow.files.tensorboard import TensorBoardMissing, check_available
+
+        if algorithm in ("ppo", "sac"):
+            raise UserError(f"--tensorboard applies to --algorithm sarsa and cacla, not {algorithm}")
+        try:
+            check_available()
+        except TensorBoardMissing as e:
+            raise UserError(str(e)) from None
     if algorithm in ("ppo", "sac"):
         return _train_deep(
             algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization
@@ -402,6 +226,10 @@ def train(
         policy_path, curve_path = write_training_outputs(
             out, agent, stats, episodes, pipeline=pipe.name, seed=seed
         )
+        if tensorboard_dir:
+            from pipefollow.readings import sigma_scale
+
+            _write_tensorboard(tensorboard_dir, stats, episodes, sigma_scale(reading))
     except BaseException as e:
         remove_empty_folders(out, made)  # an interrupted or failed run leaves no empty --out behind
         if isinstance(e, KeyboardInterrupt):
@@ -431,6 +259,17 @@ def train(
         f"of the last {k} {stats[-k:, 0].mean():.2f}"
     )
     click.echo(f"policy: {policy_path}\nlearning curve: {curve_path}")
+
+
+def _write_tensorboard(folder, stats, episodes: int, scale: float) -> None:
+    """Per-episode return, pipe in view, progress, time lost and σ (the schedule train used)."""
+    from pipefollow.files.tensorboard import write_scalars
+    from pipefollow.learners.exploration import linear_sigma
+    from pipefollow.training.compiled import STAT_NAMES
+
+    series = {name: stats[:, i] for i, name in enumerate(STAT_NAMES)}
+    series["sigma"] = [linear_sigma(e, episodes, scale, 0.01 * scale) for e in range(episodes)]
+    write_scalars(folder, series)
 
 
 def _check_init_options(agent, reading, init_policy, skew, supervised) -> None:

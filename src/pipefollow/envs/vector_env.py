@@ -333,7 +333,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
                     rngs[i].standard_normal(out=self._z[i, : self._counts[i]])
         skip = resetting if any_reset else self._no_skip
         rewards, ended = self._rewards, self._ended
-        a_prev = self.states[:, sim.A_PREV].copy()
+        a_prev = self.states[:, sim.A_PREV].copy() if self._cams is not None else None
         ok = step_batch(
             self.states, a, self._points, self._cum, self._n_points, self._packed, self._z, skip,
             rewards, self._decisions, self._seen, self._sum_e2, self.max_decisions, ended,

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pipefollow.experiments.config import ExperimentConfig, TrialConfig
+from pipefollow.experiments.schema import ExperimentConfig, TrialConfig
 from pipefollow.experiments.summary import (
     CONVERGE_EPISODES,
     EARLY_EPISODES,
@@ -154,24 +154,38 @@ def claim_fig5(trials: Sequence[TrialConfig], summaries: Mapping[str, list[Phase
     return Claim(1, "Fig. 5", paper, tuple(parts))
 
 
-def _baseline_and_variants(group: Sequence[TrialConfig], supervised: bool):
-    base = [t for t in group if t.algorithm == "cacla" and t.supervised == supervised and t.skew_deg == 0]
-    variants = [t for t in group if t.algorithm == "cacla" and t.supervised == supervised and t.skew_deg > 0]
-    return (base[0] if base else None), variants
+def _skew_figure(trials, summaries, key: str, supervised: bool, converge_statement: str):
+    """A skew figure's CACLA trials with results: the baseline (or None), the skew variants, convergence.
+
+    The last is the part that every set-up of the figure converges in every repeat.
+    """
+    group = _group(trials, key, summaries)
+    cacla = [t for t in group if t.algorithm == "cacla" and t.supervised == supervised]
+    base = [t for t in cacla if t.skew_deg == 0]
+    converge = _convergence_part([summaries[t.name][0] for t in group], converge_statement)
+    return (base[0] if base else None), [t for t in cacla if t.skew_deg > 0], converge
 
 
-def _comparisons(base: TrialConfig, variants, summaries, stat: str) -> list[tuple[TrialConfig, float, float]]:
-    """(variant, mean difference variant − baseline, Welch SE) of a per-repeat statistic, first phase."""
-    b = summaries[base.name][0].values(stat)
-    return [(v, *welch(summaries[v.name][0].values(stat), b)) for v in variants]
+def _against_baseline(base: TrialConfig, variants, summaries, stat: str, variant_better: bool):
+    """Each variant against the baseline on a per-repeat statistic of the first phase.
+
+    Returns the comparisons ``(variant, mean difference variant − baseline, Welch SE)``, the lines
+    of the report (the baseline's mean ± sd, then each variant's with its difference) and the
+    paired counts of :func:`_paired`, summed over the variants.
+    """
+    b0 = summaries[base.name][0]
+    comps = [(v, *welch(summaries[v.name][0].values(stat), b0.values(stat))) for v in variants]
+    lines = [f"{base.title}: {pm(b0.values(stat))}"]
+    lines += [f"{v.title}: {pm(summaries[v.name][0].values(stat))}, {_se_text(d, se)}" for v, d, se in comps]
+    counts = [_paired(b0, summaries[v.name][0], stat, variant_better) for v in variants]
+    return comps, lines, tuple(map(sum, zip(*counts, strict=True)))
 
 
 def claim_fig6(trials: Sequence[TrialConfig], summaries: Mapping[str, list[PhaseSummary]]) -> Claim:
     """Claim 2: CACLA with skew converges; skew helps in the early, high-exploration episodes."""
-    group = _group(trials, "fig6", summaries)
-    base, variants = _baseline_and_variants(group, supervised=False)
-    first = [summaries[t.name][0] for t in group]
-    converge = _convergence_part(first, "every set-up (plain and skewed CACLA) converges in every repeat")
+    base, variants, converge = _skew_figure(
+        trials, summaries, "fig6", False, "every set-up (plain and skewed CACLA) converges in every repeat"
+    )
     statement = (
         f"skew helps early: each skew variant's mean return over the first {EARLY_EPISODES} "
         f"episodes is above plain CACLA's by more than {SE_FACTOR:g} standard errors"
@@ -179,13 +193,8 @@ def claim_fig6(trials: Sequence[TrialConfig], summaries: Mapping[str, list[Phase
     if base is None or not variants:
         helps = Part(statement, "needs plain CACLA and at least one skew variant in fig6", NOT_TESTED)
     else:
-        comps = _comparisons(base, variants, summaries, "first_return")
+        comps, lines, counts = _against_baseline(base, variants, summaries, "first_return", True)
         better = [not math.isnan(se) and d > SE_FACTOR * se for _, d, se in comps]
-        lines = [f"{base.title}: {pm(summaries[base.name][0].values('first_return'))}"]
-        lines += [
-            f"{v.title}: {pm(summaries[v.name][0].values('first_return'))}, {_se_text(d, se)}"
-            for v, d, se in comps
-        ]
         if all(better):
             tally = f"all {len(comps)} variants better by more than {SE_FACTOR:g} SE"
         elif any(better):
@@ -194,9 +203,7 @@ def claim_fig6(trials: Sequence[TrialConfig], summaries: Mapping[str, list[Phase
             tally = f"none of the {len(comps)} variants better by more than {SE_FACTOR:g} SE"
         head = f"first {EARLY_EPISODES} episodes, mean return over repeats: "
         ours = head + "; ".join(lines) + f" — {tally}"
-        b0 = summaries[base.name][0]
-        counts = [_paired(b0, summaries[v.name][0], "first_return", True) for v in variants]
-        helps = Part(statement, ours, _verdict(all(better)), *map(sum, zip(*counts, strict=True)))
+        helps = Part(statement, ours, _verdict(all(better)), *counts)
     paper = (
         '"All cases converged to a successful policy in all instances." (§5.1) "Adding skew '
         "exploration also seems to have a positive effect on early stages of the tabula rasa CACLA "
@@ -207,10 +214,9 @@ def claim_fig6(trials: Sequence[TrialConfig], summaries: Mapping[str, list[Phase
 
 def claim_fig7(trials: Sequence[TrialConfig], summaries: Mapping[str, list[PhaseSummary]]) -> Claim:
     """Claim 3: supervised CACLA with and without skew both converge; no advantage from skew."""
-    group = _group(trials, "fig7", summaries)
-    base, variants = _baseline_and_variants(group, supervised=True)
-    first = [summaries[t.name][0] for t in group]
-    converge = _convergence_part(first, "supervised CACLA with and without skew converges in every repeat")
+    base, variants, converge = _skew_figure(
+        trials, summaries, "fig7", True, "supervised CACLA with and without skew converges in every repeat"
+    )
     statement = (
         f"no advantage from skew: the last-{CONVERGE_EPISODES}-episode mean returns with and "
         f"without skew differ by less than {SE_FACTOR:g} standard errors"
@@ -218,17 +224,10 @@ def claim_fig7(trials: Sequence[TrialConfig], summaries: Mapping[str, list[Phase
     if base is None or not variants:
         same = Part(statement, "needs supervised CACLA with and without skew in fig7", NOT_TESTED)
     else:
-        comps = _comparisons(base, variants, summaries, "last_return")
+        comps, lines, counts = _against_baseline(base, variants, summaries, "last_return", False)
         alike = [not math.isnan(se) and abs(d) < SE_FACTOR * se for _, d, se in comps]
-        lines = [f"{base.title}: {pm(summaries[base.name][0].values('last_return'))}"]
-        lines += [
-            f"{v.title}: {pm(summaries[v.name][0].values('last_return'))}, {_se_text(d, se)}"
-            for v, d, se in comps
-        ]
         ours = f"last {CONVERGE_EPISODES} episodes, mean return over repeats: " + "; ".join(lines)
-        b0 = summaries[base.name][0]
-        counts = [_paired(b0, summaries[v.name][0], "last_return", False) for v in variants]
-        same = Part(statement, ours, _verdict(all(alike)), *map(sum, zip(*counts, strict=True)))
+        same = Part(statement, ours, _verdict(all(alike)), *counts)
     paper = (
         '"Both cases converged to a successful policy in all instances." (§5.1) "Comparing the '
         "supervised CACLA algorithm with and without skew, we see no advantage of using the skew "

@@ -18,14 +18,13 @@ from __future__ import annotations
 
 import json
 import os
-import zipfile
 from pathlib import Path
 
 import numpy as np
 
-from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig, from_dict, to_dict
+from pipefollow.experiments.schema import ConfigError, ExperimentConfig, TrialConfig, from_dict, to_dict
 from pipefollow.experiments.trial import TrialResult, build_agent
-from pipefollow.files.atomic import TMP_SUFFIX, atomic_file, write_text_atomic
+from pipefollow.files.atomic import TMP_SUFFIX, atomic_file, read_npz_file, write_text_atomic
 from pipefollow.files.sources import imported_modules, source_hash
 from pipefollow.training.compiled import STAT_NAMES
 from pipefollow.training.outputs import csv_text
@@ -211,16 +210,7 @@ def load_trial(run_dir: str | os.PathLike, trial: str, seed: int) -> TrialResult
     """Read a stored trial; any problem raises :class:`StoreError` naming the file."""
     path = trial_path(run_dir, trial, seed)
     src = f"trial file '{path}'"
-    try:
-        # Our own file object: np.load leaks the one it opens when the zip is damaged.
-        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except FileNotFoundError:
-        raise StoreError(f"{src}: no such file") from None
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
-        raise StoreError(f"{src}: not a readable .npz file ({type(e).__name__})") from None
-    if str(data.get("format", "")) != FORMAT:
-        raise StoreError(f"{src}: not a pipefollow trial file (no '{FORMAT}' marker)")
+    data = read_npz_file(path, src, StoreError, FORMAT, "trial file")
     try:
         if int(data["format_version"]) > FORMAT_VERSION:
             raise StoreError(f"{src}: format version {int(data['format_version'])} is newer than this reads")

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipefollow.experiments.config import TrialConfig
+from pipefollow.experiments.schema import TrialConfig
 from pipefollow.readings import DEFAULT
 
 # "Converged to a pipe-tracking policy" (docs/design.md, claims 1-3), measured on a repeat's phase.

@@ -2,8 +2,8 @@
 
 ``rbf`` (eqs. 17–18), ``exploration`` (eqs. 8, 14), ``sums`` (fixed-order dot products),
 ``heuristic`` and ``los`` (fixed controllers), ``episodes`` (the episode protocol of every compiled
-loop), ``protocol`` (what a learner module gives the layers above), ``actor_agent`` (the agent
-class of the actor-critic learners), the learners ``cacla``
+loop), ``protocol`` (what a learner module gives the layers above, the agents' base), ``actor_agent``
+(what the actor-critic learners share: the actor's step factor, the agent class), the learners ``cacla``
 (eqs. 5–8, 10–15), ``sarsa`` (eq. 3) and ``actor_critic`` (eqs. 9, 11), ``registry`` (the learners
 by name), ``mlp`` (an exported network policy). May import ``files`` and ``sim``.
 """

@@ -1,5 +1,6 @@
-"""The Python side of the actor-critic learners (CACLA, the general actor-critic): one agent class.
+"""What the actor-critic learners (CACLA, the general actor-critic) share: the actor's step, one agent class.
 
+The two differ in the actor's step factor on (a − A(s)) only (paper §2.1; :func:`step_factor`).
 :class:`ActorAgent` holds the weights (rows :data:`V`, :data:`A`, :data:`G`, :data:`K`: critic,
 actor mean, skew, supervisor trust), draws the exploration's standard normals, caches the features
 of the last update's next state (the usual next action's state) and calls its learner's compiled
@@ -14,10 +15,15 @@ import numpy as np
 from numba import njit
 
 from pipefollow.learners.heuristic import heuristic_action
+from pipefollow.learners.protocol import Agent
 from pipefollow.learners.rbf import STATE_GRID, RBFGrid
 from pipefollow.learners.sums import dot
 
 V, A, G, K = 0, 1, 2, 3  # rows of the weight matrix: critic, actor, skew, supervisor trust
+
+# The actor's step factor on (a − A(s)) (paper §2.1): eq. 9's δ; max(δ, 0), eq. 7's max term alone;
+# sgn(δ), its sign term alone; both terms, max(sgn δ, 0): CACLA's eq. 7, no step at all when δ ≤ 0.
+DELTA, POSITIVE, SIGN, SIGN_AND_MAX = 0, 1, 2, 3
 
 
 @njit(cache=True)
@@ -26,12 +32,25 @@ def clip1(x):
     return min(1.0, max(-1.0, x))
 
 
-class ActorAgent:
+@njit(cache=True)
+def step_factor(delta, rule):
+    """The actor's factor on (a − A(s)) under ``rule``: δ, max(δ, 0), sgn(δ) or max(sgn δ, 0)."""
+    if rule == POSITIVE:
+        return max(delta, 0.0)
+    if rule == SIGN:
+        return float(np.sign(delta))
+    if rule == SIGN_AND_MAX:
+        return 1.0 if delta > 0.0 else 0.0
+    return delta
+
+
+class ActorAgent(Agent):
     """An agent with a critic and a linear actor on RBF features; any Gymnasium env with a Box observation.
 
-    A subclass names its learner (``algorithm``), its label (``name``), its parameter record and
-    its compiled entry points: ``pack`` (record → array), ``act_packed`` and
-    ``act_heuristic_packed`` (the policy), ``update_packed`` and ``update_next_packed`` (the rule).
+    A subclass names its learner (``algorithm``), its label (``name``), its parameter record, the
+    actor's step (``rule(params)``, a code of :func:`step_factor`) and its compiled entry points:
+    ``pack`` (record → array), ``act_packed`` and ``act_heuristic_packed`` (the policy),
+    ``update_packed`` and ``update_next_packed`` (the update, taking the step's code).
 
     Args:
         params: step sizes and options (a record with ``discount``, ``supervised`` and ``skew``).
@@ -50,13 +69,10 @@ class ActorAgent:
         seed: int | None = None,
         supervisor: Callable[[np.ndarray], float] | None = None,
     ) -> None:
-        self.params = params
-        self.grid = grid
-        self.readings = "default"  # id of the readings it learns under (set by make_agent)
-        self.rng = rng if rng is not None else np.random.default_rng(seed)
+        super().__init__(params, grid, rng, seed)
         self.weights = np.zeros((4, grid.n_features))
-        self.sigma = 1.0
         self._packed = self.pack(params)
+        self._rule = self.rule(params)
         self._draws = 2 if params.skew > 0.0 else 1  # skew-normal samples take two standard normals
         self.default_supervisor = supervisor is None  # the compiled training loop knows only this one
         if supervisor is None:
@@ -65,27 +81,12 @@ class ActorAgent:
                 return heuristic_action(float(obs[0]), float(obs[1]))
 
         self.supervisor = supervisor
-        self._pending = None
         self._phi_cache: tuple[bytes, np.ndarray] | None = None  # φ(s') of the last update
 
     @property
     def supervised(self) -> bool:
         """Whether a supervisor shares the actions (eq. 10)."""
         return bool(self.params.supervised)
-
-    @property
-    def discount(self) -> float:
-        """The discount factor γ_d."""
-        return self.params.discount
-
-    def begin_episode(self, sigma: float) -> None:
-        """Set the exploration σ for the coming episode."""
-        self.sigma = float(sigma)
-        self._pending = None
-
-    def features(self, obs) -> np.ndarray:
-        """φ(obs)."""
-        return self.grid.features(obs)
 
     def _cached_features(self, obs, key: bytes) -> np.ndarray:
         """φ(obs), reusing φ(s') of the last update when ``obs`` is that s' (the usual case)."""
@@ -138,25 +139,15 @@ class ActorAgent:
         next_obs = np.asarray(next_obs, dtype=np.float64)
         next_key = next_obs.tobytes()
         cache = self._phi_cache
+        w, r, d, hp, rule = self.weights, float(reward), float(discount), self._packed, self._rule
         if cache is not None and cache[0] == next_key:
-            return self.update_packed(
-                self.weights, phi, a_rl, a_sup, float(reward), float(discount), cache[1], self._packed
-            )
+            return self.update_packed(w, phi, a_rl, a_sup, r, d, cache[1], hp, rule)
         if next_obs.shape != (self.grid.ndim,):
             raise ValueError(f"next_obs must have {self.grid.ndim} entries, got shape {next_obs.shape}")
         phi_next = np.empty(self.grid.n_features)
+        grid, normalized = self.grid.packed, self.grid.form == "normalized"
         delta, finite = self.update_next_packed(
-            self.weights,
-            phi,
-            a_rl,
-            a_sup,
-            float(reward),
-            float(discount),
-            next_obs,
-            self.grid.packed,
-            self.grid.form == "normalized",
-            phi_next,
-            self._packed,
+            w, phi, a_rl, a_sup, r, d, next_obs, grid, normalized, phi_next, hp, rule
         )
         if not finite:
             raise ValueError(f"next_obs must be finite, got {next_obs}")

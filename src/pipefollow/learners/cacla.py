@@ -7,8 +7,9 @@ All four heads are linear in the same RBF state features φ(s) (paper §4):
 * supervisor trust ``k(s) = w_k·φ(s)`` (eq. 13, only when ``supervised``).
 
 The update rules are compiled functions of plain arrays, so that the agent class below and the
-compiled training loop (:mod:`pipefollow.training.compiled`) run the very same code. Random numbers are
-drawn by the caller from a ``numpy.random.Generator`` and passed in as standard normals.
+compiled episode loop run the very same code; the general actor-critic (:mod:`.actor_critic`), CACLA
+with another actor step factor, runs them too. Random numbers are drawn by the caller from a
+``numpy.random.Generator`` and passed in as standard normals.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from numba import njit
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from pipefollow.learners import episodes as ep
-from pipefollow.learners.actor_agent import A, ActorAgent, G, K, V, clip1
+from pipefollow.learners.actor_agent import SIGN_AND_MAX, A, ActorAgent, G, K, V, clip1, step_factor
 from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals, skew_step_to_gamma
 from pipefollow.learners.heuristic import heuristic_action
 from pipefollow.learners.protocol import LearnerKind
@@ -57,19 +58,21 @@ class CaclaParams(NamedTuple):
 
 
 PAPER_CACLA = CaclaParams()
-
-
 _N_PARAMS = records.size(PAPER_CACLA)
 
 
 def pack(p: CaclaParams) -> np.ndarray:
-    """``p`` as a float array for compiled code (a NamedTuple argument costs µs per call)."""
+    """``p`` as a float array for compiled code (a NamedTuple argument costs microseconds per call)."""
     return records.pack(p)
 
 
 @njit(cache=True)
 def unpack(a):
-    """Inverse of :func:`pack` inside compiled code: the record, its flags and codes as floats."""
+    """Inverse of :func:`pack` inside compiled code: the record, its flags and codes as floats.
+
+    A record that extends :class:`CaclaParams` by fields after its own (the actor-critic's) packs
+    into an array that starts with CACLA's; ``unpack`` reads those.
+    """
     return CaclaParams(*to_fixed_tuple(a, _N_PARAMS))
 
 
@@ -105,10 +108,12 @@ def act(w, phi, sigma, z0, z1, a_sup, p):
 
 
 @njit(cache=True)
-def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p):
+def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX):
     """One CACLA update for the transition from φ(s) with reward and bootstrap ``discount``·V(s').
 
     ``discount`` is γ_d^n for a transition of n decisions (semi-Markov, docs/design.md). Returns δ.
+    The actor's step ``rule`` (:func:`.actor_agent.step_factor`) is eq. 7's (eq. 12 when supervised)
+    or the actor-critic's: eq. 9 (eq. 11), or one of eq. 7's terms alone.
 
     Eq. 15 (``skew > 0``) moves γ(s) by ``Δγ·sgn(δ)·sgn(a_rl − A(s))``: with the default step
     reading the weights move along ``φ(s)/‖φ(s)‖²``, which changes γ(s) = w_γ·φ(s) by exactly that
@@ -117,12 +122,14 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p):
     v = dot(w[V], phi)
     delta = reward + discount * dot(w[V], phi_next) - v  # eq. 4, pre-update critic
     mu = dot(w[A], phi)
+    f = step_factor(delta, rule)
+    moves = rule != SIGN_AND_MAX or delta > 0.0  # eq. 7's max term: no step at all when δ ≤ 0
     if p.supervised:
         k = min(p.k_max, max(0.0, dot(w[K], phi)))
-        rl = k * (a_rl - mu) if delta > 0.0 else 0.0
-        step = p.alpha_pi * (rl + (1.0 - k) * (a_sup - mu))  # eq. 12
+        rl = k * f * (a_rl - mu) if moves else 0.0
+        step = p.alpha_pi * (rl + (1.0 - k) * (a_sup - mu))  # eq. 12 (eq. 11)
     else:
-        step = p.alpha_pi * (a_rl - mu) if delta > 0.0 else 0.0  # eq. 7
+        step = p.alpha_pi * f * (a_rl - mu) if moves else 0.0  # eq. 7 (eq. 9: Gaussian score, 1/σ² in α_π)
     cv = p.alpha_v * delta  # eqs. 5-6
     for i in range(phi.shape[0]):
         w[V, i] += cv * phi[i]
@@ -163,9 +170,9 @@ def act_packed(w, phi, sigma, z0, z1, a_sup, hp):
 
 
 @njit(cache=True)
-def update_packed(w, phi, a_rl, a_sup, reward, discount, phi_next, hp):
+def update_packed(w, phi, a_rl, a_sup, reward, discount, phi_next, hp, rule):
     """:func:`update` with packed parameters: the cheap entry point from Python."""
-    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp))
+    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule)
 
 
 @njit(cache=True)
@@ -178,11 +185,11 @@ def act_heuristic_packed(w, phi, sigma, z0, z1, x1, y1, hp):
 
 
 @njit(cache=True)
-def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, normalized, phi_next, hp):
+def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, normalized, phi_next, hp, rule):
     """φ(s') into ``phi_next`` and :func:`update`, in one call; ``(δ, False)`` if s' is not finite."""
     if not features_if_finite(next_obs, grid[0], grid[1], grid[2], normalized, phi_next):
         return 0.0, False
-    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp)), True
+    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule), True
 
 
 class Cacla(ActorAgent):
@@ -211,6 +218,11 @@ class Cacla(ActorAgent):
         supervisor: Callable[[np.ndarray], float] | None = None,
     ) -> None:
         super().__init__(params, grid, rng, seed, supervisor)
+
+    @staticmethod
+    def rule(params) -> int:
+        """The actor's step factor: eq. 7's sign and max terms."""
+        return SIGN_AND_MAX
 
     @property
     def name(self) -> str:
@@ -263,9 +275,10 @@ def params_under(r, skew_deg: float = 0.0, **fields) -> CaclaParams:
 
 
 @njit(cache=True)
-def episodes(w, hp, tracks, run, grid, rng, env_rng, dz, stats, poses):
+def episodes(w, hp, rule, tracks, run, grid, rng, env_rng, dz, stats, poses):
     """CACLA's episodes in compiled code: the same numbers as its agent in the environment.
 
+    ``rule`` is the actor's step factor (:meth:`Cacla.rule`; the actor-critic's runs here too).
     ``rng`` draws the exploration, ``env_rng`` the disturbances (:mod:`pipefollow.learners.episodes`).
     """
     p = unpack(hp)
@@ -305,7 +318,7 @@ def episodes(w, hp, tracks, run, grid, rng, env_rng, dz, stats, poses):
                 a_rl_p, a_sup_p = a_rl, a_sup
             if ep.due(book, s[sim.IN_VIEW] != 0.0, t == n - 1):
                 grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
-                update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p)
+                update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p, rule)
                 book[ep.PENDING] = 0.0
                 phi, phi_next = phi_next, phi  # φ(s') is the next decision's φ(s)
                 have_phi = True
@@ -325,9 +338,9 @@ def check_compiled(agent: Cacla) -> None:
 
 
 def run_compiled(agent: Cacla, tracks, run, env_rng, dz, stats, poses) -> None:
-    """:func:`episodes` for ``agent``."""
-    episodes(agent.weights, pack(agent.params), tracks, run, ep.features_of(agent.grid), agent.rng, env_rng,
-             dz, stats, poses)  # fmt: skip
+    """:func:`episodes` for ``agent`` (a CACLA or an actor-critic agent)."""
+    episodes(agent.weights, pack(agent.params), agent.rule(agent.params), tracks, run,
+             ep.features_of(agent.grid), agent.rng, env_rng, dz, stats, poses)  # fmt: skip
 
 
 def policy_fields(agent: Cacla) -> dict:

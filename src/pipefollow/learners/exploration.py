@@ -1,9 +1,10 @@
 """Exploration: Gaussian (eq. 8) and skew-normal (eq. 14) action noise, and the σ schedule.
 
 The exploring action is ``a = clip(μ + σ z, −1, 1)`` in normalized action units (a = 1 ↦ 90°),
-with ``z ~ N(0, 1)`` (eq. 8) or ``z ~ SkewNormal(γ)`` (eq. 14). The skew-normal is used in its
-location/scale form, *not* re-centred: with γ ≠ 0 the mean of ``z`` is ``δ √(2/π)``, so exploration
-leans towards the side that has earned positive TD-errors (docs/design.md, "skew-normal").
+with ``z ~ N(0, 1)`` (eq. 8) or ``z ~ SkewNormal(γ)`` (eq. 14). By default (reading
+``skew_sample=location``) the skew-normal is used in its location/scale form: with γ ≠ 0 the mean
+of ``z`` is ``δ √(2/π)``, so exploration leans towards the side that has earned positive TD-errors;
+the readings ``centred`` and ``moments`` shift (and scale) ``z`` instead (docs/design.md, "Readings").
 
 σ falls linearly from 1 to 0.01 over the episodes of a trial (paper §4; docs/design.md, "exploration σ").
 

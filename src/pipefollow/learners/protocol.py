@@ -10,13 +10,15 @@ a learner is one module and one registry entry.
 An agent (an instance of ``agent_class``) has ``begin_episode(sigma)``, ``act(obs, explore)``,
 ``update(obs, action, reward, next_obs, discount) -> δ``, ``discount``, ``weights``, ``grid``,
 ``rng``, ``readings`` (the id of the readings it learns under), ``algorithm`` (its kind's name),
-``name`` (a label) and ``supervised``.
+``name`` (a label) and ``supervised``; :class:`Agent` gives the parts every learner's agent shares.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+
+import numpy as np
 
 # Options of the command line and experiment files, each with its off value; a learner names the
 # ones it takes in ``LearnerKind.options``, and an option set for another learner is refused.
@@ -57,3 +59,38 @@ class LearnerKind:
     run: Callable
     policy_fields: Callable
     from_policy: Callable
+
+
+class Agent:
+    """What every learner's agent shares: its record, its RBF state grid, its generator and σ.
+
+    Args:
+        params: the learner's parameter record (with ``discount``).
+        grid: the RBF grid of the observation (:class:`~pipefollow.learners.rbf.RBFGrid`).
+        rng: generator for exploration noise (or ``seed``).
+        seed: seed of a new generator when ``rng`` is None.
+    """
+
+    algorithm = ""
+
+    def __init__(self, params, grid, rng: np.random.Generator | None = None, seed: int | None = None) -> None:
+        self.params = params
+        self.grid = grid
+        self.readings = "default"  # id of the readings it learns under (set by the learner's make)
+        self.rng = rng if rng is not None else np.random.default_rng(seed)
+        self.sigma = 1.0
+        self._pending = None
+
+    @property
+    def discount(self) -> float:
+        """The discount factor γ_d."""
+        return self.params.discount
+
+    def begin_episode(self, sigma: float) -> None:
+        """Set the exploration σ for the coming episode and forget any pending action."""
+        self.sigma = float(sigma)
+        self._pending = None
+
+    def features(self, obs) -> np.ndarray:
+        """φ(obs)."""
+        return self.grid.features(obs)

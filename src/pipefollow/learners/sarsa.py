@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from pipefollow.learners import episodes as ep
-from pipefollow.learners.protocol import LearnerKind
+from pipefollow.learners.protocol import Agent, LearnerKind
 from pipefollow.learners.rbf import (
     ACTION_GRID,
     STATE_GRID,
@@ -100,7 +100,7 @@ def update(W, phi, psi, reward, discount, phi_next, psi_next, alpha):
     return delta
 
 
-class Sarsa:
+class Sarsa(Agent):
     """A SARSA agent on RBF state × action features.
 
     It works on any environment with a Box observation and a 1-D action in [-1, 1].
@@ -117,37 +117,18 @@ class Sarsa:
         rng: np.random.Generator | None = None,
         seed: int | None = None,
     ) -> None:
-        self.params = params
-        self.grid = grid
+        super().__init__(params, grid, rng, seed)
         self.action_grid = action_grid
-        self.readings = "default"  # id of the readings it learns under (set by make_agent)
-        self.rng = rng if rng is not None else np.random.default_rng(seed)
         # Q(s, a) = Σ_ji W_ji ψ_j(a) φ_i(s): one row of state weights per action centre
         self.weights = np.zeros((action_grid.n_features, grid.n_features))
-        self.sigma = 1.0
         self.search_actions, self.search_psi = search_table(params, action_grid)
         ac, _, aw = action_grid.packed
         self._action_centres, self._action_width = ac, float(aw[0])
         self._action_normalized = action_grid.form == "normalized"
-        self._pending = None  # (obs, phi, action) chosen by the last update
 
     algorithm = "sarsa"
     name = "SARSA"
     supervised = False
-
-    @property
-    def discount(self) -> float:
-        """The discount factor γ_d."""
-        return self.params.discount
-
-    def begin_episode(self, sigma: float) -> None:
-        """Set the exploration σ for the coming episode and forget any pending action."""
-        self.sigma = float(sigma)
-        self._pending = None
-
-    def features(self, obs) -> np.ndarray:
-        """φ(obs)."""
-        return self.grid.features(obs)
 
     def _psi(self, a: float) -> np.ndarray:
         return action_features(a, self._action_centres, self._action_width, self._action_normalized)

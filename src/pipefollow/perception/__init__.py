@@ -4,3 +4,7 @@
 footprint as the camera sees it, ``detector`` finds the pipe in a grey image (OpenCV, the optional
 extra ``vision``) and ``camera`` joins the two to the simulation's observation slots.
 """
+
+from pipefollow.files.compile_cache import configure_numba_cache
+
+configure_numba_cache()  # before any compiled module of this package is decorated

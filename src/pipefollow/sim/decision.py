@@ -232,8 +232,8 @@ _DISTURBANCE, _START_SPEED = OFFSETS["disturbance"], OFFSETS["start_speed"]
 def pack_params(p: SimParams) -> np.ndarray:
     """Flatten ``p`` into a float64 array, the cheap way to hand parameters to compiled code.
 
-    Passing a nested NamedTuple from Python into a numba function costs ≈7 µs of argument
-    checking per call; an array costs a fraction of a microsecond. :func:`unpack_params`
+    Passing a nested NamedTuple from Python into a numba function costs microseconds of argument
+    checking per call, an array far less (figures in benchmarks/README.md). :func:`unpack_params`
     rebuilds the record inside compiled code; :data:`OFFSETS` says where each field starts.
     """
     return records.pack(p)

@@ -21,13 +21,12 @@ from __future__ import annotations
 
 import json
 import os
-import zipfile
 from pathlib import Path
 
 import numpy as np
 
 import pipefollow
-from pipefollow.files.atomic import atomic_file
+from pipefollow.files.atomic import atomic_file, read_npz_file
 from pipefollow.learners.mlp import MLPPolicy
 from pipefollow.learners.registry import LEARNERS, NAMES, learner_of
 
@@ -118,16 +117,7 @@ def load_policy(path: str | os.PathLike, seed: int | None = None):
     """Read a policy file written by :func:`save_policy`; problems raise :class:`PolicyError`."""
     path = Path(path)
     src = f"policy file '{path}'"
-    try:
-        # Our own file object: np.load leaks the one it opens when the zip is damaged.
-        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except FileNotFoundError:
-        raise PolicyError(f"{src}: no such file") from None
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
-        raise PolicyError(f"{src}: not a readable .npz file ({type(e).__name__})") from None
-    if str(data.get("format", "")) != FORMAT:
-        raise PolicyError(f"{src}: not a pipefollow policy (no '{FORMAT}' marker)")
+    data = read_npz_file(path, src, PolicyError, FORMAT, "policy")
     if str(data.get("algorithm", "")) == "mlp":
         version = int(data.get("format_version", 0))
         if version > FORMAT_VERSION:

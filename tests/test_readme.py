@@ -1,0 +1,67 @@
+"""The README's commands: what they write is ignored by git, and the options they use exist."""
+
+from __future__ import annotations
+
+import re
+import shlex
+import shutil
+import subprocess
+from pathlib import Path
+
+import click
+import pytest
+
+from pipefollow import cli
+
+ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text(encoding="utf-8")
+OUTPUT_OPTIONS = ("--out", "--plot", "--animate")
+
+
+def _commands() -> list[list[str]]:
+    """Every ``pipefollow ...`` command line of the README's bash blocks (continuations joined)."""
+    blocks = re.findall(r"```bash\n(.*?)```", README, flags=re.DOTALL)
+    lines = "\n".join(blocks).replace("\\\n", " ").splitlines()
+    found = []
+    for line in lines:
+        for part in line.split("&&"):
+            words = shlex.split(part, comments=True)
+            if words and words[0].endswith("pipefollow"):
+                found.append(words[1:])
+    return found
+
+
+def _outputs() -> list[str]:
+    out = []
+    for words in _commands():
+        for opt, value in zip(words, words[1:], strict=False):
+            if opt in OUTPUT_OPTIONS:
+                out.append(value)
+        if words[:1] == ["reproduce"] and "--out" not in words:
+            out.append("reproduction-quick" if "--quick" in words else "reproduction")
+    return out
+
+
+def test_the_readme_has_commands_that_write_files():
+    assert len(_outputs()) >= 8
+
+
+@pytest.mark.skipif(shutil.which("git") is None or not (ROOT / ".git").exists(), reason="not a git checkout")
+@pytest.mark.parametrize("path", sorted(set(_outputs())))
+def test_what_the_readme_commands_write_is_ignored_by_git(path):
+    probe = path.rstrip("/") + ("/x" if not Path(path).suffix else "")
+    res = subprocess.run(["git", "check-ignore", "-q", probe], cwd=ROOT)
+    assert res.returncode == 0, f"{path} is not in .gitignore"
+
+
+def test_every_option_the_readme_uses_exists():
+    unknown = []
+    for words in _commands():
+        if not words or words[0] not in cli.COMMANDS:
+            continue
+        cmd = cli.main.get_command(click.Context(cli.main), words[0])
+        if isinstance(cmd, click.Group) and len(words) > 1 and words[1] in cmd.commands:
+            cmd, words = cmd.commands[words[1]], words[1:]
+        known = {o for p in cmd.params for o in (*p.opts, *p.secondary_opts)} | {"--help", "-h"}
+        unknown += [f"{words[0]} {w}" for w in words if w.startswith("--") and w.split("=")[0] not in known]
+    assert unknown == []
