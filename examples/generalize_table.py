@@ -51,8 +51,9 @@ def rows(run_dir: Path, suite_name: str, seconds: float, seed: int):
     for scenario, d in SCENARIOS.items():
         params = PAPER_SIM._replace(disturbance=d)
         for name, s, spec in controllers:
+            agent = load_controller(spec)
             run = benchmark(
-                load_controller(spec), suite, controller=name, seconds=seconds, params=params, seed=seed, noise_seed=seed
+                agent, suite, controller=name, seconds=seconds, params=params, seed=seed, noise_seed=seed
             )
             r = run.summary
             v = r.get("vs_heuristic", {"mean_diff": 0.0, "ci95_diff": [0.0, 0.0], "win_rate": 0.0})
