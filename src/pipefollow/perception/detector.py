@@ -110,10 +110,6 @@ def detect_pipe(
     if float(cv2.meanStdDev(img)[1][0, 0]) < 2.0:  # blank or saturated: no edges to find
         return NOT_FOUND
     smooth = cv2.GaussianBlur(img, (5, 5), 1.0)
-    # flatten the illumination (the vehicle's light falls off towards the edges): divide by a
-    # heavy blur, so an edge in a dim corner stands out as much as one in the centre
-    background = cv2.GaussianBlur(img, (0, 0), 0.25 * min(h, w))
-    smooth = cv2.divide(smooth, background, scale=float(cv2.mean(background)[0]))
     # thresholds from the image's own gradients: their mean is the texture's and the noise's (the
     # pipe's edges are a few percent of the pixels); an edge must stand out of it
     high = max(EDGE_FACTOR * SOBEL_GAIN * gradient_level(smooth), MIN_EDGE)
