@@ -1,6 +1,7 @@
 import csv
 import json
 
+import click
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -376,3 +377,26 @@ def test_shell_completion_scripts_come_from_click(runner):
     env = {"_PIPEFOLLOW_COMPLETE": "bash_complete", "COMP_WORDS": "pipefollow pip", "COMP_CWORD": "1"}
     res = runner.invoke(main, [], prog_name="pipefollow", env=env)
     assert res.stdout.split() == ["plain,pipelines"]
+
+
+def test_the_shared_seconds_option_has_the_experiments_limit():
+    from pipefollow.cli.common import MAX_EPISODE_SECONDS
+    from pipefollow.experiments.schema import MAX_SECONDS
+
+    assert MAX_EPISODE_SECONDS == MAX_SECONDS
+
+
+@pytest.mark.parametrize("as_json", [True, False])
+def test_echo_result_prints_json_or_the_text_and_formats_only_what_it_prints(as_json):
+    from pipefollow.cli.common import echo_result, json_option
+
+    formatted = []
+
+    @click.command()
+    @json_option()
+    def show(as_json):
+        echo_result({"a": "é"}, as_json, lambda: formatted.append(1) or "a table", ensure_ascii=False)
+
+    out = CliRunner().invoke(show, ["--json"] if as_json else []).output
+    assert out == ('{"a": "é"}\n' if as_json else "a table\n")
+    assert formatted == ([] if as_json else [1])

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import click
@@ -88,6 +89,75 @@ def writable_folder(path: str, option: str) -> Path:
     except OSError as e:
         raise UserError(f"{option} '{path}': cannot write there ({e.strerror or e})") from None
     return folder
+
+
+# The longest episode an option takes: experiments.schema.MAX_SECONDS, kept here so that the
+# command line imports no experiment machinery to build its options (a test holds them equal)
+MAX_EPISODE_SECONDS = 86_400.0
+
+
+SUITE_HELP = (
+    "A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
+    "(repeatable) [default: heldout]."
+)
+
+
+def json_option(help_text: str = "Print one JSON object instead of a table."):
+    """``--json`` (``as_json``): print the result as one JSON object (see :func:`echo_result`)."""
+    return click.option("--json", "as_json", is_flag=True, help=help_text)
+
+
+def echo_result(result, as_json: bool, text: Callable[[], str], **dumps) -> None:
+    """Print ``result`` as one JSON object under ``--json``, else the lines ``text()`` formats."""
+    import json
+
+    click.echo(json.dumps(result, **dumps) if as_json else text())
+
+
+def suite_option(help_text: str = SUITE_HELP):
+    """``--suite SUITE|PATH`` (``suite_specs``, repeatable): a suite or pipeline files."""
+    return click.option(
+        "--suite", "suite_specs", multiple=True, metavar="SUITE|PATH", shell_complete=complete_suite,
+        help=help_text,
+    )  # fmt: skip
+
+
+def pipes_option(
+    help_text: str = "Number of pipes [default: all of a held-out suite, 100 of a training family].",
+):
+    """``--pipes N``: how many pipes of a suite (None: its default, see :func:`pipe_count`)."""
+    return click.option("--pipes", type=click.IntRange(min=1, max=100_000), default=None, help=help_text)
+
+
+def pipe_count(suite, pipes: int | None) -> int:
+    """The pipes ``--pipes`` asks of ``suite`` (its default if None); a one-line error past its end."""
+    n = pipes if pipes is not None else (suite.count or 100)
+    if suite.count is not None and n > suite.count:
+        raise UserError(f"--pipes {n}: suite '{suite.name}' has {suite.count} pipes")
+    return n
+
+
+def seconds_option(help_text: str = "Episode length in seconds.", default: float | None = 60.0):
+    """``--seconds S``: the episode length, 1 s to :data:`MAX_EPISODE_SECONDS`, finite."""
+    return click.option(
+        "--seconds", type=click.FloatRange(min=1.0, max=MAX_EPISODE_SECONDS), callback=finite,
+        default=default, show_default=default is not None, help=help_text,
+    )  # fmt: skip
+
+
+def seed_option(help_text: str):
+    """``--seed N``: a non-negative seed, 0 by default."""
+    return click.option("--seed", default=0, show_default=True, type=SEED, help=help_text)
+
+
+def plot_option(help_text: str):
+    """``--plot FILE`` (``plot_path``): a figure file (check it with :func:`check_plot_path`)."""
+    return click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None, help=help_text)
+
+
+def out_option(help_text: str):
+    """``--out FOLDER`` (``out_dir``, required): where a command writes its files."""
+    return click.option("--out", "out_dir", type=click.Path(file_okay=False), required=True, help=help_text)
 
 
 def reading_option(help_text: str):

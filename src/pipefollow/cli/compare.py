@@ -2,19 +2,22 @@
 
 from __future__ import annotations
 
-import json
-
 import click
 
 from pipefollow.cli.common import (
-    SEED,
     UserError,
     check_plot_path,
-    complete_suite,
     disturbance_options,
-    finite,
+    echo_result,
     guard,
+    json_option,
     load_controller,
+    pipe_count,
+    pipes_option,
+    plot_option,
+    seconds_option,
+    seed_option,
+    suite_option,
 )
 
 
@@ -27,29 +30,9 @@ from pipefollow.cli.common import (
     help="Learner of each POLICY, in order (repeat once per POLICY); policies with the same label "
     "are runs of one learner [default: the learner and options the policy was trained with].",
 )
-@click.option(
-    "--suite",
-    "suite_specs",
-    multiple=True,
-    metavar="SUITE|PATH",
-    shell_complete=complete_suite,
-    help="A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
-    "(repeatable) [default: heldout].",
-)
-@click.option(
-    "--seconds",
-    type=click.FloatRange(min=1.0, max=86_400.0),
-    callback=finite,
-    default=60.0,
-    show_default=True,
-    help="Episode length in seconds.",
-)
-@click.option(
-    "--pipes",
-    type=click.IntRange(min=1, max=100_000),
-    default=None,
-    help="Number of pipes [default: all of a held-out suite or folder, 100 of a training family].",
-)
+@suite_option()
+@seconds_option()
+@pipes_option("Number of pipes [default: all of a held-out suite or folder, 100 of a training family].")
 @click.option(
     "--reps",
     type=click.IntRange(min=100, max=1_000_000),
@@ -57,21 +40,9 @@ from pipefollow.cli.common import (
     show_default=True,
     help="Bootstrap replicates of the IQM and mean intervals (rliable's default).",
 )
-@click.option(
-    "--seed",
-    default=0,
-    show_default=True,
-    type=SEED,
-    help="Seed of the bootstrap and of the random disturbances.",
-)
-@click.option(
-    "--plot",
-    "plot_path",
-    type=click.Path(dir_okay=False),
-    default=None,
-    help="Save the intervals and performance profiles as a figure (.png, .svg, .pdf, ...).",
-)
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@seed_option("Seed of the bootstrap and of the random disturbances.")
+@plot_option("Save the intervals and performance profiles as a figure (.png, .svg, .pdf, ...).")
+@json_option()
 @disturbance_options
 @guard
 def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path, as_json, disturbance):
@@ -94,9 +65,7 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
     if labels and len(labels) != len(policies):
         raise UserError(f"--label given {len(labels)} times for {len(policies)} policies (one per policy)")
     suite = resolve_suite(suite_specs or ["heldout"])
-    n = pipes if pipes is not None else (suite.count or 100)
-    if suite.count is not None and n > suite.count:
-        raise UserError(f"--pipes {n}: suite '{suite.name}' has {suite.count} pipes")
+    n = pipe_count(suite, pipes)
     agents = [load_controller(p, seed) for p in policies]  # every file checked before any episode
     pipe_list = suite.pipes(n, min_length_for(seconds))
     if not labels:  # the learner and options each policy was trained with
@@ -116,10 +85,7 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
 
         plot_comparison(summary, plot_path)
         summary["plot"] = str(plot_path)
-    if as_json:
-        click.echo(json.dumps(summary))
-        return
-    click.echo(_format(summary))
+    echo_result(summary, as_json, lambda: _format(summary))
 
 
 def _format(s: dict) -> str:

@@ -9,7 +9,6 @@ import click
 import numpy as np
 
 from pipefollow.cli.common import (
-    SEED,
     apply_readings,
     camera_options,
     check_plot_path,
@@ -20,10 +19,14 @@ from pipefollow.cli.common import (
     finite,
     guard,
     inert_readings,
+    json_option,
     load_controller,
+    plot_option,
     reading_option,
+    seconds_option,
+    seed_option,
 )
-from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS
+from pipefollow.experiments.config import MAX_EPISODES
 from pipefollow.sim import disturbance as _disturbance
 
 
@@ -68,14 +71,8 @@ def _summary(stats) -> dict:
     type=click.IntRange(min=1, max=MAX_EPISODES),
     help="Number of episodes; they differ only with start noise, random disturbances or a random pipeline.",
 )
-@click.option(
-    "--seconds",
-    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
-    callback=finite,
-    default=None,
-    help="Episode length in seconds [default: 60 on paper-validation, else 20].",
-)
-@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the start perturbation.")
+@seconds_option("Episode length in seconds [default: 60 on paper-validation, else 20].", default=None)
+@seed_option("Seed of the start perturbation.")
 @click.option(
     "--start-noise",
     default=0.0,
@@ -92,13 +89,7 @@ def _summary(stats) -> dict:
     callback=finite,
     help="Uniform random start heading offset up to this many degrees.",
 )
-@click.option(
-    "--plot",
-    "plot_path",
-    type=click.Path(dir_okay=False),
-    default=None,
-    help="Save a trajectory plot of the first episode (.png, .svg, .pdf, .jpg, ...).",
-)
+@plot_option("Save a trajectory plot of the first episode (.png, .svg, .pdf, .jpg, ...).")
 @click.option(
     "--animate",
     "animate_path",
@@ -107,7 +98,7 @@ def _summary(stats) -> dict:
     help="Save an animation of the first episode in the Fig. 2 view (.gif, or .mp4 with ffmpeg).",
 )
 @reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@json_option()
 @disturbance_options
 @camera_options
 @guard

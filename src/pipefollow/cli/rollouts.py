@@ -2,49 +2,36 @@
 
 from __future__ import annotations
 
-import json
 import re
 
 import click
 
 from pipefollow.cli.common import (
-    SEED,
     UserError,
-    complete_suite,
     controller_options,
     disturbance_options,
+    echo_result,
     finite,
     guard,
+    json_option,
     load_controller,
+    out_option,
+    pipe_count,
+    pipes_option,
+    seconds_option,
+    seed_option,
+    suite_option,
     writable_folder,
 )
 
 
 @click.command()
 @controller_options
-@click.option(
-    "--suite",
-    "suite_specs",
-    multiple=True,
-    metavar="SUITE|PATH",
-    shell_complete=complete_suite,
-    help="A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
-    "(repeatable) [default: heldout].",
+@suite_option()
+@pipes_option(
+    "Number of pipes, one episode each [default: all of a held-out suite or folder, 100 of a family]."
 )
-@click.option(
-    "--pipes",
-    type=click.IntRange(min=1, max=100_000),
-    default=None,
-    help="Number of pipes, one episode each [default: all of a held-out suite or folder, 100 of a family].",
-)
-@click.option(
-    "--seconds",
-    type=click.FloatRange(min=1.0, max=86_400.0),
-    callback=finite,
-    default=60.0,
-    show_default=True,
-    help="Episode length in seconds.",
-)
+@seconds_option()
 @click.option(
     "--sigma",
     type=click.FloatRange(min=0.0, max=1.0),
@@ -53,19 +40,15 @@ from pipefollow.cli.common import (
     show_default=True,
     help="Exploration σ of a learned policy (0: deterministic episodes).",
 )
-@click.option(
-    "--seed", default=0, show_default=True, type=SEED, help="Seed of episode k's environment: SEED + k."
-)
-@click.option(
-    "--out", "out_dir", type=click.Path(file_okay=False), required=True, help="Folder for the dataset."
-)
+@seed_option("Seed of episode k's environment: SEED + k.")
+@out_option("Folder for the dataset.")
 @click.option(
     "--name",
     "dataset_id",
     default=None,
     help="Minari dataset id, namespace/name-vN [default: pipefollow/SUITE-CONTROLLER-v0].",
 )
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object: the dataset's id and folder.")
+@json_option("Print one JSON object: the dataset's id and folder.")
 @disturbance_options
 @guard
 def rollouts(controller, lookahead, suite_specs, pipes, seconds, sigma, seed, out_dir, dataset_id, as_json,
@@ -83,9 +66,7 @@ def rollouts(controller, lookahead, suite_specs, pipes, seconds, sigma, seed, ou
     from pipefollow.sim.suites import min_length_for
 
     suite = resolve_suite(suite_specs or ["heldout"])
-    n = pipes if pipes is not None else (suite.count or 100)
-    if suite.count is not None and n > suite.count:
-        raise UserError(f"--pipes {n}: suite '{suite.name}' has {suite.count} pipes")
+    n = pipe_count(suite, pipes)
     agent = load_controller(controller, seed, lookahead)
     name = re.sub(r"[^a-z0-9-]+", "-", Path(controller).stem.lower()).strip("-") or "controller"
     dataset_id = dataset_id or f"pipefollow/{suite.name}-{name}-v0"
@@ -102,7 +83,7 @@ def rollouts(controller, lookahead, suite_specs, pipes, seconds, sigma, seed, ou
         )  # fmt: skip
     except RolloutsExtraMissing as e:
         raise UserError(str(e)) from None
-    if as_json:
-        click.echo(json.dumps({"dataset_id": dataset_id, "folder": str(path), "episodes": n}))
-        return
-    click.echo(f"wrote {n} episodes of {controller} on '{suite.name}' as {dataset_id} to {path}")
+    echo_result(
+        {"dataset_id": dataset_id, "folder": str(path), "episodes": n}, as_json,
+        lambda: f"wrote {n} episodes of {controller} on '{suite.name}' as {dataset_id} to {path}",
+    )  # fmt: skip

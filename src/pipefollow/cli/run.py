@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -10,17 +9,21 @@ import click
 import numpy as np
 
 from pipefollow.cli.common import (
-    SEED,
     UserError,
     apply_readings,
     complete_pipeline,
     disturbance_options,
+    echo_result,
     finite,
     guard,
+    json_option,
+    out_option,
     reading_option,
+    seconds_option,
+    seed_option,
     writable_folder,
 )
-from pipefollow.experiments.config import MAX_EPISODES, MAX_SECONDS
+from pipefollow.experiments.config import MAX_EPISODES
 from pipefollow.files.progress import progress as progress_report
 from pipefollow.learners.registry import NAMES as LEARNER_NAMES
 from pipefollow.sim import disturbance as _disturbance
@@ -65,34 +68,15 @@ _LEARNING_RATES = ("alpha", "alpha_v", "alpha_pi", "discount", "delta_k", "k_max
     type=click.IntRange(min=1, max=MAX_EPISODES),
     help="Training episodes (σ falls linearly from 1 to 0.01 over them); SARSA and CACLA.",
 )
-@click.option(
-    "--seconds",
-    default=20.0,
-    show_default=True,
-    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
-    callback=finite,
-    help="Episode length in seconds.",
-)
+@seconds_option(default=20.0)
 @click.option(
     "--steps",
     type=click.IntRange(min=1, max=100_000_000),
     default=None,
     help="PPO and SAC: budget in environment steps (decisions) [default: 100,000].",
 )
-@click.option(
-    "--seed",
-    default=0,
-    show_default=True,
-    type=SEED,
-    help="Seed of the learner's exploration, its initial weights and any random pipes and disturbances.",
-)
-@click.option(
-    "--out",
-    "out_dir",
-    type=click.Path(file_okay=False),
-    required=True,
-    help="Folder for policy.npz and learning_curve.csv.",
-)
+@seed_option("Seed of the learner's exploration, its initial weights and any random pipes and disturbances.")
+@out_option("Folder for policy.npz and learning_curve.csv.")
 @click.option(
     "--init",
     "init_policy",
@@ -114,7 +98,7 @@ _LEARNING_RATES = ("alpha", "alpha_v", "alpha_pi", "discount", "delta_k", "k_max
     "Reading of an open point, e.g. skew_step=weights or skew_sample=centred (repeatable; "
     "see docs/design.md) [default: the project's readings, or those of --init]."
 )
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object at the end.")
+@json_option("Print one JSON object at the end.")
 @click.option(
     "--randomization",
     metavar="PRESET|FILE.toml",
@@ -244,21 +228,12 @@ def train(
         "returns": stats[:, 0].tolist(),
         **{f"final_mean_{n}": float(stats[-min(50, episodes) :, i].mean()) for i, n in enumerate(STAT_NAMES)},
     }
-    if disturbance != _disturbance.NO_DISTURBANCE:
-        result["disturbance"] = _disturbance.to_dict(disturbance)
-    if randomization is not None:
-        from pipefollow.sim.randomization import to_dict
-
-        result["randomization"] = to_dict(randomization)
-    if as_json:
-        click.echo(json.dumps(result))
-        return
     k = min(10, episodes)
-    click.echo(
-        f"{agent.name}: mean return of the first {k} episodes {stats[:k, 0].mean():.2f}, "
-        f"of the last {k} {stats[-k:, 0].mean():.2f}"
-    )
-    click.echo(f"policy: {policy_path}\nlearning curve: {curve_path}")
+    _echo_trained(
+        result, disturbance, randomization, as_json,
+        lambda: f"{agent.name}: mean return of the first {k} episodes {stats[:k, 0].mean():.2f}, "
+        f"of the last {k} {stats[-k:, 0].mean():.2f}\npolicy: {policy_path}\nlearning curve: {curve_path}",
+    )  # fmt: skip
 
 
 def _write_tensorboard(folder, stats, episodes: int, scale: float) -> None:
@@ -335,20 +310,23 @@ def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, dis
         result = deep.train_to_folder(
             algorithm, pipeline, out, steps=steps, seconds=seconds, seed=seed, progress=progress, **extra
         )
+    r = result["returns"]
+    k = min(10, len(r))
+    _echo_trained(
+        result, disturbance, randomization, as_json,
+        lambda: f"{algorithm.upper()}: {result['steps']} steps in {result['wall_s']:.1f} s; "
+        f"mean return of the first {k} episodes {np.mean(r[:k]) if k else float('nan'):.2f}, of the last {k} "
+        f"{np.mean(r[-k:]) if k else float('nan'):.2f}\n"
+        f"policy: {result['policy']}\nhyper-parameters: {result['hyperparameters']}",
+    )  # fmt: skip
+
+
+def _echo_trained(result: dict, disturbance, randomization, as_json: bool, text) -> None:
+    """Print a training's ``result`` (with its disturbance and randomization, if any) or ``text()``."""
     if disturbance != _disturbance.NO_DISTURBANCE:
         result["disturbance"] = _disturbance.to_dict(disturbance)
     if randomization is not None:
         from pipefollow.sim.randomization import to_dict
 
         result["randomization"] = to_dict(randomization)
-    if as_json:
-        click.echo(json.dumps(result))
-        return
-    r = result["returns"]
-    k = min(10, len(r))
-    click.echo(
-        f"{algorithm.upper()}: {result['steps']} steps in {result['wall_s']:.1f} s; mean return of the "
-        f"first {k} episodes {np.mean(r[:k]) if k else float('nan'):.2f}, of the last {k} "
-        f"{np.mean(r[-k:]) if k else float('nan'):.2f}"
-    )
-    click.echo(f"policy: {result['policy']}\nhyper-parameters: {result['hyperparameters']}")
+    echo_result(result, as_json, text)

@@ -2,48 +2,39 @@
 
 from __future__ import annotations
 
-import json
-
 import click
 
+from pipefollow.cli import common
 from pipefollow.cli.common import (
-    SEED,
-    UserError,
     apply_readings,
     camera_options,
     check_plot_path,
-    complete_suite,
     controller_options,
     disturbance_options,
     disturbance_text,
-    finite,
+    echo_result,
     guard,
     inert_readings,
+    json_option,
     load_controller,
+    out_option,
+    pipe_count,
+    plot_option,
     reading_option,
+    seconds_option,
+    seed_option,
+    suite_option,
     writable_folder,
 )
-from pipefollow.experiments.config import MAX_SECONDS
 from pipefollow.sim import disturbance as _disturbance
 
-pipes_option = click.option(
-    "--pipes",
-    type=click.IntRange(min=1, max=100_000),
-    default=None,
-    help="Number of pipes [default: all of a held-out suite, 100 of a training family].",
-)
-
-
-def _pipe_count(suite, pipes: int | None) -> int:
-    """The pipes ``--pipes`` asks of ``suite`` (its default if None); a one-line error past its end."""
-    n = pipes if pipes is not None else (suite.count or 100)
-    if suite.count is not None and n > suite.count:
-        raise UserError(f"--pipes {n}: suite '{suite.name}' has {suite.count} pipes")
-    return n
+# benchmark's and robustness's --pipes and its count (cli/robustness.py takes both from here)
+pipes_option = common.pipes_option()
+_pipe_count = common.pipe_count
 
 
 @click.group(invoke_without_command=True)
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@json_option()
 @click.pass_context
 def suites(ctx, as_json):
     """List the pipeline suites: training families and held-out test suites."""
@@ -52,52 +43,46 @@ def suites(ctx, as_json):
     from pipefollow.sim.suites import SUITES
 
     rows = [s.summary() for s in SUITES.values()]
-    if as_json:
-        click.echo(json.dumps({"suites": rows}))
-        return
+    echo_result({"suites": rows}, as_json, lambda: _suite_table(rows))
+
+
+def _suite_table(rows: list[dict]) -> str:
+    """The rows of ``pipefollow suites``, one suite a line under a header."""
     head = ("suite", "kind", "pipes", "turns", "straights", "arc radii")
-    click.echo("{:<15} {:<8} {:>5} {:>9} {:>10} {:>10}  description".format(*head))
+    lines = ["{:<15} {:<8} {:>5} {:>9} {:>10} {:>10}  description".format(*head)]
     for r in rows:
         count = "∞" if r["count"] is None else str(r["count"])
         turns = "{:g}–{:g}°".format(*r["turn_deg"])
         straights = "{:g}–{:g} m".format(*r["straight_m"])
         radii = "{:g}–{:g} m".format(*r["arc_radius_m"])
         cells = (r["name"], r["kind"], count, turns, straights, radii, r["description"])
-        click.echo("{:<15} {:<8} {:>5} {:>9} {:>10} {:>10}  {}".format(*cells))
+        lines.append("{:<15} {:<8} {:>5} {:>9} {:>10} {:>10}  {}".format(*cells))
+    return "\n".join(lines)
 
 
 @suites.command("export")
 @click.argument("name")
-@click.option(
-    "--out", "out_dir", type=click.Path(file_okay=False), required=True, help="Folder for the JSON files."
-)
+@out_option("Folder for the JSON files.")
 @pipes_option
-@click.option(
-    "--seconds",
-    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
-    callback=finite,
-    default=60.0,
-    show_default=True,
-    help="Episode length the pipes must be long enough for.",
-)
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object: the files written.")
+@seconds_option("Episode length the pipes must be long enough for.")
+@json_option("Print one JSON object: the files written.")
 @guard
 def suites_export(name, out_dir, pipes, seconds, as_json):
     """Write the pipes of suite NAME as pipeline JSON files (NAME-000.json, ...)."""
     from pipefollow.sim.suites import export_suite, get_suite, min_length_for
 
     suite = get_suite(name)
-    n = _pipe_count(suite, pipes)
+    n = pipe_count(suite, pipes)
     out = writable_folder(out_dir, "--out")
     paths = export_suite(suite, out, n, min_length_for(seconds))
-    if as_json:
-        click.echo(json.dumps({"suite": name, "files": [str(p) for p in paths]}))
-        return
-    click.echo(f"wrote {len(paths)} pipes of '{name}' to {out}")
+    echo_result(
+        {"suite": name, "files": [str(p) for p in paths]}, as_json,
+        lambda: f"wrote {len(paths)} pipes of '{name}' to {out}",
+    )  # fmt: skip
 
 
 @click.command()
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
+@json_option("Print one JSON list instead of a table.")
 def pipelines(as_json):
     """List the named pipelines.
 
@@ -107,50 +92,26 @@ def pipelines(as_json):
     from pipefollow.cli.tables import pipelines as entries
 
     rows = pipeline_rows(entries())
-    if as_json:
-        click.echo(json.dumps(rows, ensure_ascii=False))
-        return
     columns = [("name", "name"), ("group", "group"), ("segments", "segments"), ("length_m", "length (m)")]
-    click.echo(table(rows, [*columns, ("description", "description")]))
+    columns.append(("description", "description"))
+    echo_result(rows, as_json, lambda: table(rows, columns), ensure_ascii=False)
 
 
 @click.command()
 @controller_options
-@click.option(
-    "--suite",
-    "suite_specs",
-    multiple=True,
-    metavar="SUITE|PATH",
-    shell_complete=complete_suite,
-    help="A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
-    "(repeatable; what 'suites export' writes) [default: heldout].",
+@suite_option(
+    "A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
+    "(repeatable; what 'suites export' writes) [default: heldout]."
 )
-@click.option(
-    "--seconds",
-    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
-    callback=finite,
-    default=60.0,
-    show_default=True,
-    help="Episode length in seconds.",
-)
+@seconds_option()
 @pipes_option
-@click.option(
-    "--seed",
-    default=0,
-    show_default=True,
-    type=SEED,
-    help="Seed of the bootstrap resampling and of the random disturbances.",
-)
-@click.option(
-    "--plot",
-    "plot_path",
-    type=click.Path(dir_okay=False),
-    default=None,
-    help="Save a plot of the per-pipe return differences to the heuristic and a few trajectories "
-    "(.png, .svg, .pdf, ...).",
+@seed_option("Seed of the bootstrap resampling and of the random disturbances.")
+@plot_option(
+    "Save a plot of the per-pipe return differences to the heuristic and a few trajectories "
+    "(.png, .svg, .pdf, ...)."
 )
 @reading_option("Reading of an open point, e.g. start_speed=cruise (repeatable) [default: the policy's].")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@json_option()
 @disturbance_options
 @camera_options
 @guard
@@ -173,7 +134,7 @@ def benchmark(
 
     check_plot_path(plot_path)
     suite = resolve_suite(suite_specs or ["heldout"])
-    _pipe_count(suite, pipes)
+    pipe_count(suite, pipes)
     agent = load_controller(controller, seed, lookahead)
     reading = apply_readings(readings, getattr(agent, "readings", "default"))
     warnings = inert_readings(readings)
@@ -203,9 +164,8 @@ def benchmark(
 
         plot_benchmark(run, plot_path)
         run.summary["plot"] = str(plot_path)
-    if as_json:
-        click.echo(json.dumps(run.summary))
-        return
-    click.echo(format_summary(run.summary, seconds) + disturbance_text(disturbance, "\n  disturbances   "))
-    if plot_path:
-        click.echo(f"plot: {plot_path}")
+    echo_result(
+        run.summary, as_json,
+        lambda: format_summary(run.summary, seconds) + disturbance_text(disturbance, "\n  disturbances   ")
+        + (f"\nplot: {plot_path}" if plot_path else ""),
+    )  # fmt: skip

@@ -37,6 +37,7 @@ from pipefollow.sim.pipeline import Pipeline
 # Columns of the per-episode statistics of a training run.
 RETURN, IN_VIEW, PROGRESS, TIME_LOST = ep.RETURN, ep.IN_VIEW, ep.PROGRESS, ep.TIME_LOST
 STAT_NAMES = ep.STAT_NAMES[:TRAINING_STATS]
+EPISODE_SECONDS = 20.0  # the training episode's length when none is given (the paper's, §4)
 
 
 @dataclass(frozen=True)
@@ -181,7 +182,7 @@ def train_chunks(
     episodes: int,
     tracks_for: Callable[[int, int], Tracks],
     *,
-    episode_seconds: float = 20.0,
+    episode_seconds: float = EPISODE_SECONDS,
     sigma_start: float = 1.0,
     sigma_end: float = 0.01,
     params: sim.SimParams = sim.PAPER_SIM,
@@ -239,20 +240,7 @@ def _train_randomized(agent, episodes, tracks_for, episode_seconds, sigma_start,
     return stats
 
 
-def train_compiled(
-    agent,
-    pipeline: Pipeline,
-    episodes: int,
-    *,
-    episode_seconds: float = 20.0,
-    sigma_start: float = 1.0,
-    sigma_end: float = 0.01,
-    params: sim.SimParams = sim.PAPER_SIM,
-    progress: Callable[[int], None] | None = None,
-    chunk: int = 50,
-    env_rng: np.random.Generator | None = None,
-    randomization=None,
-) -> np.ndarray:
+def train_compiled(agent, pipeline: Pipeline, episodes: int, **options) -> np.ndarray:
     """Train an agent of the learner registry in compiled code.
 
     It gives the same numbers as :func:`train` on ``PipelineFollowingEnv(pipeline, episode_seconds,
@@ -260,11 +248,10 @@ def train_compiled(
     the environment's ``np_random``. ``env_rng`` is required when ``params.disturbance`` has random
     parts (camera noise, misses, a varying current) and with a ``randomization`` (its
     disturbances drawn per episode, :func:`train_chunks`). Runs ``chunk`` episodes per compiled call
-    and reports the episodes done to ``progress``. Returns (episodes, 4) statistics.
+    and reports the episodes done to ``progress``. ``options`` are the keywords of
+    :func:`train_chunks` (``episode_seconds``, ``sigma_start``, ``sigma_end``, ``params``,
+    ``progress``, ``chunk``, ``env_rng``, ``randomization``) with its defaults. Returns (episodes, 4)
+    statistics.
     """
     tracks = tracks_of([pipeline])
-    return train_chunks(
-        agent, episodes, lambda lo, hi: tracks, episode_seconds=episode_seconds, sigma_start=sigma_start,
-        sigma_end=sigma_end, params=params, progress=progress, chunk=chunk, env_rng=env_rng,
-        randomization=randomization,
-    )  # fmt: skip
+    return train_chunks(agent, episodes, lambda lo, hi: tracks, **options)

@@ -8,29 +8,14 @@ compiled loop, episode ``e`` on pipe ``e``.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 
 from pipefollow.learners.episodes import tracks_of
-from pipefollow.sim import decision as sim
-from pipefollow.training.compiled import train_chunks
+from pipefollow.training.compiled import EPISODE_SECONDS, train_chunks
 
 
 def train_random_compiled(
-    agent,
-    suite,
-    episodes: int,
-    *,
-    pipe_rng: np.random.Generator,
-    episode_seconds: float = 20.0,
-    sigma_start: float = 1.0,
-    sigma_end: float = 0.01,
-    params: sim.SimParams = sim.PAPER_SIM,
-    progress: Callable[[int], None] | None = None,
-    chunk: int = 50,
-    env_rng: np.random.Generator | None = None,
-    randomization=None,
+    agent, suite, episodes: int, *, pipe_rng: np.random.Generator, **options
 ) -> np.ndarray:
     """:func:`train_compiled` on a new pipe of the training family ``suite`` every episode.
 
@@ -41,18 +26,15 @@ def train_random_compiled(
     (required ``env_rng``) draw from ``env_rng``, a stream of their own, where the environment
     draws them from ``np_random`` between its pipes. With a ``randomization`` each episode draws its
     disturbances from ``env_rng`` before its pipe; with ``pipe_rng`` the same generator as
-    ``env_rng`` the numbers then equal the environment's with the randomization (tested). Returns
+    ``env_rng`` the numbers then equal the environment's with the randomization (tested). ``options``
+    are the keywords of :func:`~pipefollow.training.compiled.train_chunks` with its defaults. Returns
     (episodes, 4) statistics.
     """
     from pipefollow.sim.suites import min_length_for
 
-    min_length = min_length_for(episode_seconds)
+    min_length = min_length_for(options.get("episode_seconds", EPISODE_SECONDS))
 
     def tracks_for(lo: int, hi: int):
         return tracks_of([suite.draw(pipe_rng, min_length) for _ in range(lo, hi)])
 
-    return train_chunks(
-        agent, episodes, tracks_for, episode_seconds=episode_seconds, sigma_start=sigma_start,
-        sigma_end=sigma_end, params=params, progress=progress, chunk=chunk, env_rng=env_rng,
-        randomization=randomization,
-    )  # fmt: skip
+    return train_chunks(agent, episodes, tracks_for, **options)
