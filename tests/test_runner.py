@@ -487,3 +487,17 @@ def test_a_refused_folder_is_left_as_it_is(serial_run, tmp_path):
     with pytest.raises(ConfigError, match="different configuration"):
         run_experiment(with_overrides(TINY, repeats=3), copy, backend="serial", show_progress=False)
     assert sorted(p.relative_to(copy).as_posix() for p in copy.rglob("*")) == before
+
+
+def test_process_backend_hands_out_the_longest_trials_first():
+    from pipefollow.experiments.runner import longest_first
+
+    exp = load_experiment("paper")
+    work = [(t, s) for t in exp.trials for s in exp.seeds()]
+    ordered = longest_first(work)
+    assert sorted(ordered, key=work.index) == work  # the same work, reordered
+    names = [c.name for c, _ in ordered]
+    assert names[: exp.repeats] == ["validation"] * exp.repeats  # two phases and an evaluation
+    assert names[exp.repeats : 2 * exp.repeats] == ["sarsa"] * exp.repeats
+    assert names[-exp.repeats :] == ["cacla"] * exp.repeats  # plain CACLA, one phase: the shortest
+    assert [s for c, s in ordered if c.name == "cacla"] == list(exp.seeds())  # stable among equals
