@@ -23,7 +23,9 @@ def test_figures_drawn_in_workers_are_the_bytes_drawn_here(tmp_path):
     parallel.mkdir()
     for i in range(3):
         learning_curve_figure(_curves(i), serial / f"f{i}.png", f"figure {i}", reference=-1.0)
-    jobs = [(learning_curve_figure, (_curves(i), parallel / f"f{i}.png", f"figure {i}", -1.0)) for i in range(3)]
+    jobs = [
+        (learning_curve_figure, (_curves(i), parallel / f"f{i}.png", f"figure {i}", -1.0)) for i in range(3)
+    ]
     draw_figures(jobs, workers=2)
     for i in range(3):
         data = (parallel / f"f{i}.png").read_bytes()
