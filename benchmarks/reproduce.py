@@ -56,10 +56,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5, help="timed runs of each code")
     parser.add_argument("--baseline", type=Path, default=None, help="src folder of the code to compare")
+    parser.add_argument(
+        "--baseline-cache", default=None, help="NUMBA_CACHE_DIR of the baseline [default: the same as this]"
+    )
     parser.add_argument("--cold", action="store_true", help="an empty compile cache for every run")
     parser.add_argument("--no-figures", action="store_true", help="time reproduce --no-figures")
     args = parser.parse_args()
     codes = {"this": ROOT / "src"}
+    caches = {"this": None, "baseline": args.baseline_cache}
     if args.baseline is not None:
         codes["baseline"] = args.baseline.resolve()
     times: dict[str, list[tuple[float, float]]] = {name: [] for name in codes}
@@ -67,10 +71,10 @@ def main() -> None:
         tmp = Path(tmp)
         if not args.cold:
             for name, src in codes.items():  # fill the compile cache; not timed
-                run_once(src, tmp / f"warm-{name}", None, figures=False)
+                run_once(src, tmp / f"warm-{name}", caches[name], figures=False)
         for i in range(args.repeats):
             for name, src in codes.items():
-                cache = tempfile.mkdtemp(dir=tmp) if args.cold else None
+                cache = tempfile.mkdtemp(dir=tmp) if args.cold else caches[name]
                 wall, cpu = run_once(src, tmp / f"{name}-{i}", cache, not args.no_figures)
                 times[name].append((wall, cpu))
                 print(f"run {i + 1} {name:<8} wall {wall:6.2f} s  CPU {cpu:6.2f} s", flush=True)
