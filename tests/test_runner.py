@@ -16,7 +16,7 @@ import pytest
 
 from pipefollow.experiments import store
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, load_experiment, with_overrides
-from pipefollow.experiments.runner import RunInterrupted, run_experiment
+from pipefollow.experiments.runner import RunInterrupted, longest_first, run_experiment
 from pipefollow.experiments.trial import run_trial
 
 # Two of the paper's trials (SARSA; supervised CACLA with skew, two phases and a validation run),
@@ -144,12 +144,16 @@ def test_a_failing_trial_keeps_the_others_and_says_where(tmp_path):
     assert store.finished(tmp_path, TINY) == {("sarsa", 2010)}
 
 
+# The process backend hands out the longest trials first (runner.longest_first).
+FIRST = next((c.name, s) for c, s in longest_first([(t, s) for t in TINY.trials for s in TINY.seeds()]))
+
+
 def _interrupting_trial(config, seed):
     """A worker's trial: the first one runs; the next one presses Ctrl-C (once) and then hangs."""
     run_dir = Path(os.environ["PIPEFOLLOW_TEST_RUN"])
-    if (config.name, seed) == PAIRS[0]:
+    if (config.name, seed) == FIRST:
         return run_trial(config, seed)
-    while not store.trial_path(run_dir, *PAIRS[0]).exists():
+    while not store.trial_path(run_dir, *FIRST).exists():
         time.sleep(0.01)
     try:
         os.close(os.open(run_dir / "ctrl-c", os.O_CREAT | os.O_EXCL))
@@ -181,7 +185,7 @@ def test_ctrl_c_stops_the_process_pool_without_waiting(tmp_path, monkeypatch):
     assert time.perf_counter() - t0 < 60  # the hung workers were stopped, not waited for
     assert e.value.saved == 1
     assert multiprocessing.active_children() == []
-    assert store.finished(tmp_path, TINY) == {PAIRS[0]}
+    assert store.finished(tmp_path, TINY) == {FIRST}
 
 
 def test_bad_backend_and_workers_are_config_errors(tmp_path):
@@ -490,8 +494,6 @@ def test_a_refused_folder_is_left_as_it_is(serial_run, tmp_path):
 
 
 def test_process_backend_hands_out_the_longest_trials_first():
-    from pipefollow.experiments.runner import longest_first
-
     exp = load_experiment("paper")
     work = [(t, s) for t in exp.trials for s in exp.seeds()]
     ordered = longest_first(work)

@@ -10,9 +10,7 @@ so drawing works headless and in worker processes.
 from __future__ import annotations
 
 import os
-import sys
-import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -47,46 +45,6 @@ def sliding_average(x, window: int = SMOOTHING_EPISODES) -> np.ndarray:
     hi = np.arange(1, n + 1)
     lo = np.maximum(hi - window, 0)
     return (cum[..., hi] - cum[..., lo]) / (hi - lo)
-
-
-def _draw(function: Callable, args: tuple) -> None:
-    function(*args)  # the figure stays in the worker; only its file matters
-
-
-def draw_figures(jobs: Sequence[tuple[Callable, tuple]], workers: int | None = None) -> None:
-    """Run ``function(*args)`` for every job, each drawing and saving one figure, on all cores.
-
-    Drawing a figure is single-threaded CPU work (text layout, rasterising, PNG encoding), so the
-    figures of a run folder are drawn side by side in worker processes forked from this one (after
-    Matplotlib is imported here, so that no worker imports it again). Every figure file is written
-    atomically by its worker. With one job, one core, or no ``fork`` (not Linux), they are drawn
-    here, one after the other.
-
-    Args:
-        jobs: (function, args) pairs; the functions save their figure themselves.
-        workers: processes at most [default: the cores].
-
-    Raises:
-        Whatever a job raises.
-    """
-    n = min(len(jobs), workers or os.cpu_count() or 1)
-    if n <= 1 or not sys.platform.startswith("linux"):
-        for function, args in jobs:
-            _draw(function, args)
-        return
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
-    import matplotlib.backends.backend_agg  # noqa: F401 - imported once, inherited by the workers
-    import matplotlib.figure  # noqa: F401
-
-    with warnings.catch_warnings():
-        # The only threads are NumPy's idle BLAS pool; the workers draw and exit without BLAS.
-        warnings.filterwarnings("ignore", message=r".*use of fork\(\) may lead to deadlocks")
-        with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork")) as pool:
-            futures = [pool.submit(_draw, function, args) for function, args in jobs]
-    for f in futures:
-        f.result()
 
 
 def _new_figure(size=(7.0, 4.5)):

@@ -345,27 +345,16 @@ def _wall_seconds(run_dir: Path, config: ExperimentConfig, load: Callable) -> fl
 
 
 def draw_learning_curves(
-    run_dir: Path,
-    config: ExperimentConfig,
-    results: Rows | Training,
-    evaluations: Mapping[str, Evaluation],
-    jobs: list | None = None,
+    run_dir: Path, config: ExperimentConfig, results: Rows | Training, evaluations: Mapping[str, Evaluation]
 ) -> dict[str, str]:
-    """Draw fig5/6/7.png for the groups with results; returns key → file name of those drawn.
-
-    With ``jobs``, the drawing is appended to it (for :func:`figures.draw_figures`) instead of done.
-    """
+    """Draw fig5/6/7.png for the groups with results; returns key → file name of those drawn."""
     drawn = {}
     for key, title in FIGURES.items():
         group = [t for t in config.trials if key in t.figures]
         curves = {t.title: c for t in group if (c := learning_curves(results, t.name)).size}
         if not curves:
             continue
-        args = (curves, run_dir / f"{key}.png", title, _reference(group, evaluations))
-        if jobs is None:
-            figures.learning_curve_figure(*args)
-        else:
-            jobs.append((figures.learning_curve_figure, args))
+        figures.learning_curve_figure(curves, run_dir / f"{key}.png", title, _reference(group, evaluations))
         drawn[key] = f"{key}.png"
     return drawn
 
@@ -380,12 +369,8 @@ def _reference(group: Sequence[TrialConfig], evaluations: Mapping[str, Evaluatio
     return float(h.mean()) if h.size else None
 
 
-def draw_trajectories(
-    run_dir: Path, table: Table1, load: Callable = _load_trial, jobs: list | None = None
-) -> str:
+def draw_trajectories(run_dir: Path, table: Table1, load: Callable = _load_trial) -> str:
     """Draw the validation trajectories of the median repeat; returns the PNG's file name.
-
-    With ``jobs``, the drawing is appended to it (for :func:`figures.draw_figures`) instead of done.
 
     Raises:
         ImportError, OSError, KeyError, ValueError: the trial file cannot be read.
@@ -402,11 +387,7 @@ def draw_trajectories(
         for c in order
     }
     title = f"{table.pipeline}, {table.seconds:g} s, σ = 0, seed {table.median_seed} (median learned return)"
-    args = (table.pipeline, trajectories, run_dir / TRAJECTORIES_PNG, title)
-    if jobs is None:
-        figures.trajectories_figure(*args)
-    else:
-        jobs.append((figures.trajectories_figure, args))
+    figures.trajectories_figure(table.pipeline, trajectories, run_dir / TRAJECTORIES_PNG, title)
     return TRAJECTORIES_PNG
 
 
@@ -431,15 +412,13 @@ def write_outputs(run_dir: str | Path) -> list[Path]:
     results = read_training(run_dir / "results.csv")
     evaluation = read_rows(run_dir / "evaluation.csv")
     findings = compute_findings(config, results, evaluation, _wall_seconds(run_dir, config, _load_trial))
-    jobs: list = []  # drawn side by side below (figures.draw_figures)
-    drawn = draw_learning_curves(run_dir, config, results, findings.evaluations, jobs)
+    drawn = draw_learning_curves(run_dir, config, results, findings.evaluations)
     trajectories = None
     if findings.table1 is not None:
         try:
-            trajectories = draw_trajectories(run_dir, findings.table1, _load_trial, jobs)
+            trajectories = draw_trajectories(run_dir, findings.table1, _load_trial)
         except _LOAD_ERRORS as e:
             findings = _with_note(findings, f"The validation trajectories were not drawn: {e}.")
-    figures.draw_figures(jobs)
     written = [run_dir / name for name in drawn.values()]
     if trajectories:
         written.append(run_dir / trajectories)
