@@ -27,6 +27,7 @@ def test_the_recorder_keeps_the_episode_it_wraps(episode):
     np.testing.assert_array_equal([f.state[8:10] for f in frames], plain.poses[:, :2])
 
 
+@pytest.mark.slow  # ≈ 6 s; a GIF is also written in test_cli.py::test_evaluate_animates_the_first_episode
 def test_a_gif_has_one_frame_per_decision_and_shows_the_motion(episode, tmp_path):
     env, frames, _ = episode
     path = write_animation(env.pipeline, frames, tmp_path / "ep.gif", fps=4, hold_seconds=1.0)

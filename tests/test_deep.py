@@ -25,6 +25,7 @@ def random_obs(n, seed=0):
     return np.random.default_rng(seed).uniform([-2, -1, -2, -2], [2, 4, 2, 2], size=(n, 4))
 
 
+@pytest.mark.slow  # ≈ 20 s; training and export also run in test_cli_trains_ppo_and_sac_...
 @pytest.mark.parametrize("algorithm", ["ppo", "sac"])
 def test_exported_actor_equals_the_models_deterministic_predict(algorithm):
     _sb3()

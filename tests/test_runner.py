@@ -16,7 +16,7 @@ import pytest
 
 from pipefollow.experiments import store
 from pipefollow.experiments.config import load_experiment, with_overrides
-from pipefollow.experiments.runner import RunInterrupted, run_experiment
+from pipefollow.experiments.runner import RunInterrupted, longest_first, run_experiment
 from pipefollow.experiments.schema import ConfigError, ExperimentConfig
 from pipefollow.experiments.trial import run_trial
 
@@ -145,12 +145,16 @@ def test_a_failing_trial_keeps_the_others_and_says_where(tmp_path):
     assert store.finished(tmp_path, TINY) == {("sarsa", 2010)}
 
 
+# The process backend hands out the longest trials first (runner.longest_first).
+FIRST = next((c.name, s) for c, s in longest_first([(t, s) for t in TINY.trials for s in TINY.seeds()]))
+
+
 def _interrupting_trial(config, seed):
     """A worker's trial: the first one runs; the next one presses Ctrl-C (once) and then hangs."""
     run_dir = Path(os.environ["PIPEFOLLOW_TEST_RUN"])
-    if (config.name, seed) == PAIRS[0]:
+    if (config.name, seed) == FIRST:
         return run_trial(config, seed)
-    while not store.trial_path(run_dir, *PAIRS[0]).exists():
+    while not store.trial_path(run_dir, *FIRST).exists():
         time.sleep(0.01)
     try:
         os.close(os.open(run_dir / "ctrl-c", os.O_CREAT | os.O_EXCL))
@@ -182,7 +186,7 @@ def test_ctrl_c_stops_the_process_pool_without_waiting(tmp_path, monkeypatch):
     assert time.perf_counter() - t0 < 60  # the hung workers were stopped, not waited for
     assert e.value.saved == 1
     assert multiprocessing.active_children() == []
-    assert store.finished(tmp_path, TINY) == {PAIRS[0]}
+    assert store.finished(tmp_path, TINY) == {FIRST}
 
 
 def test_bad_backend_and_workers_are_config_errors(tmp_path):
@@ -488,3 +492,15 @@ def test_a_refused_folder_is_left_as_it_is(serial_run, tmp_path):
     with pytest.raises(ConfigError, match="different configuration"):
         run_experiment(with_overrides(TINY, repeats=3), copy, backend="serial", show_progress=False)
     assert sorted(p.relative_to(copy).as_posix() for p in copy.rglob("*")) == before
+
+
+def test_process_backend_hands_out_the_longest_trials_first():
+    exp = load_experiment("paper")
+    work = [(t, s) for t in exp.trials for s in exp.seeds()]
+    ordered = longest_first(work)
+    assert sorted(ordered, key=work.index) == work  # the same work, reordered
+    names = [c.name for c, _ in ordered]
+    assert names[: exp.repeats] == ["validation"] * exp.repeats  # two phases and an evaluation
+    assert names[exp.repeats : 2 * exp.repeats] == ["sarsa"] * exp.repeats
+    assert names[-exp.repeats :] == ["cacla"] * exp.repeats  # plain CACLA, one phase: the shortest
+    assert [s for c, s in ordered if c.name == "cacla"] == list(exp.seeds())  # stable among equals

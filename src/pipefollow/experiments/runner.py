@@ -222,7 +222,24 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
             p.terminate()
 
 
+def longest_first(work: Work) -> Work:
+    """``work`` with the trials likely to take longest first (stable among equals).
+
+    Handing the long trials out first keeps a worker from starting one while the others have
+    nothing left, so the last trials end together. The estimate: the episodes of all phases, then
+    an evaluation run after training, SARSA (its update of all actions), skew or supervision.
+    """
+
+    def cost(item: tuple[TrialConfig, int]) -> tuple:
+        c = item[0]
+        episodes = sum(p.episodes for p in c.phases)
+        return (episodes, bool(c.evaluate_on), c.algorithm == "sarsa", c.skew_deg > 0 or c.supervised)
+
+    return sorted(work, key=cost, reverse=True)
+
+
 def _process(work: Work, trial_fn: TrialFn, workers: int) -> Iterator[tuple[TrialConfig, TrialResult]]:
+    work = longest_first(work)
     ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
     pool = ProcessPoolExecutor(
         max_workers=workers, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(),)

@@ -16,6 +16,7 @@ the Python and the compiled training paths consume the same numbers in the same 
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -44,12 +45,18 @@ def linear_sigma(episode, n_episodes, start=1.0, end=0.01):
     return (1.0 - t) * start + t * end  # exact at both ends
 
 
-@vectorize(["float64(float64, float64, float64, float64)"], cache=True)
-def _skew_normal_pdf(x, mu, sigma, gamma):
+def _skew_normal_kernel(x, mu, sigma, gamma):
     z = (x - mu) / sigma
     # ∫_{−∞}^{γz} e^{−t²/2} dt = √(2π) Φ(γz) = √(π/2) erfc(−γz/√2); erfc keeps the far tail accurate.
     integral = math.sqrt(0.5 * math.pi) * math.erfc(-gamma * z / math.sqrt(2.0))
     return math.exp(-0.5 * z * z) * integral / (sigma * math.pi)
+
+
+@functools.cache
+def _skew_normal_ufunc():
+    # Built on first use: a typed ``vectorize`` compiles (or loads its cache) when it is applied,
+    # which at import cost every command, and every trial worker, a few tenths of a second.
+    return vectorize(["float64(float64, float64, float64, float64)"], cache=True)(_skew_normal_kernel)
 
 
 def skew_normal_pdf(x, mu, sigma, gamma):
@@ -73,7 +80,7 @@ def skew_normal_pdf(x, mu, sigma, gamma):
     sigma_arr = np.asarray(sigma, dtype=np.float64)
     if not np.all(np.isfinite(sigma_arr) & (sigma_arr > 0.0)):
         raise ValueError(f"sigma must be positive and finite, got {sigma}")
-    out = _skew_normal_pdf(x, mu, sigma_arr, gamma)
+    out = _skew_normal_ufunc()(x, mu, sigma_arr, gamma)
     return float(out) if np.ndim(out) == 0 else out
 
 
