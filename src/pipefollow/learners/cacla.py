@@ -37,6 +37,11 @@ from pipefollow.sim import records
 SAMPLE_LOCATION, SAMPLE_CENTRED, SAMPLE_MOMENTS = 0, 1, 2  # skew sample: location/scale, centred, mean/s.d.
 STEP_GAMMA, STEP_WEIGHTS = 0, 1  # eqs. 13, 15: the head's value moves by the step, or its weights by step·φ
 K_EVERY, K_POSITIVE = 0, 1  # eq. 13: k(s) grows at every visit, or only when δ > 0
+# Beyond the paper: one actor update per δ > 0 (eq. 7), or ⌈δ/√var⌉ of them (CACLA+Var, Van Hasselt &
+# Wiering 2007), var a running variance of δ; at most MAX_REPEATS (a guard against var → 0).
+REPEAT_ONCE, REPEAT_VAR = 0, 1
+ACTOR_REPEATS = {"once": REPEAT_ONCE, "var": REPEAT_VAR}
+MAX_REPEATS = 100
 
 
 class CaclaParams(NamedTuple):
@@ -55,6 +60,8 @@ class CaclaParams(NamedTuple):
     skew_step: int = STEP_GAMMA  # eq. 15 step: γ(s) moves by Δγ (default) or w_γ by Δγ·φ(s)
     k_update: int = K_EVERY  # eq. 13: k(s) grows at every visit (default) or only when δ > 0
     k_step: int = STEP_WEIGHTS  # eq. 13 step: w_k by Δk·φ(s) (default) or k(s) by Δk (STEP_GAMMA)
+    actor_repeats: int = REPEAT_ONCE  # beyond the paper: REPEAT_VAR makes ⌈δ/√var⌉ actor updates (CACLA+Var)
+    var_rate: float = 0.001  # β of CACLA+Var: var ← (1 − β) var + β δ² (Van Hasselt & Wiering 2007)
 
 
 PAPER_CACLA = CaclaParams()
@@ -108,12 +115,41 @@ def act(w, phi, sigma, z0, z1, a_sup, p):
 
 
 @njit(cache=True)
-def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX):
+def actor_step(w, phi, a_rl, a_sup, f, moves, p):
+    """The actor's step of eq. 7 (eq. 12 when supervised) with factor ``f``, as a multiple of φ(s)."""
+    mu = dot(w[A], phi)
+    if p.supervised:
+        k = min(p.k_max, max(0.0, dot(w[K], phi)))
+        rl = k * f * (a_rl - mu) if moves else 0.0
+        return p.alpha_pi * (rl + (1.0 - k) * (a_sup - mu))  # eq. 12 (eq. 11)
+    return p.alpha_pi * f * (a_rl - mu) if moves else 0.0  # eq. 7 (eq. 9: Gaussian score, 1/σ² in α_π)
+
+
+@njit(cache=True)
+def repeats(delta, var, p):
+    """CACLA+Var: the number of actor updates for δ, ⌈δ/√var⌉ if δ > 0 (else 1), and var's update.
+
+    ``var[0]`` is the running variance of δ before this transition; it becomes
+    ``(1 − β) var + β δ²``. With ``actor_repeats`` once: 1, and ``var`` is left alone.
+    """
+    if p.actor_repeats != REPEAT_VAR:
+        return 1
+    n = 1
+    if delta > 0.0:
+        n = min(MAX_REPEATS, max(1, math.ceil(delta / math.sqrt(var[0]))))
+    var[0] = (1.0 - p.var_rate) * var[0] + p.var_rate * delta * delta
+    return n
+
+
+@njit(cache=True)
+def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX, var=None):
     """One CACLA update for the transition from φ(s) with reward and bootstrap ``discount``·V(s').
 
     ``discount`` is γ_d^n for a transition of n decisions (semi-Markov, docs/design.md). Returns δ.
     The actor's step ``rule`` (:func:`.actor_agent.step_factor`) is eq. 7's (eq. 12 when supervised)
-    or the actor-critic's: eq. 9 (eq. 11), or one of eq. 7's terms alone.
+    or the actor-critic's: eq. 9 (eq. 11), or one of eq. 7's terms alone. With ``actor_repeats``
+    var and the running variance ``var`` (a one-entry array, :func:`repeats`), the actor's step is
+    made ⌈δ/√var⌉ times when δ > 0, A(s) recomputed before each (CACLA+Var).
 
     Eq. 15 (``skew > 0``) moves γ(s) by ``Δγ·sgn(δ)·sgn(a_rl − A(s))``: with the default step
     reading the weights move along ``φ(s)/‖φ(s)‖²``, which changes γ(s) = w_γ·φ(s) by exactly that
@@ -124,16 +160,16 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX
     mu = dot(w[A], phi)
     f = step_factor(delta, rule)
     moves = rule != SIGN_AND_MAX or delta > 0.0  # eq. 7's max term: no step at all when δ ≤ 0
-    if p.supervised:
-        k = min(p.k_max, max(0.0, dot(w[K], phi)))
-        rl = k * f * (a_rl - mu) if moves else 0.0
-        step = p.alpha_pi * (rl + (1.0 - k) * (a_sup - mu))  # eq. 12 (eq. 11)
-    else:
-        step = p.alpha_pi * f * (a_rl - mu) if moves else 0.0  # eq. 7 (eq. 9: Gaussian score, 1/σ² in α_π)
+    step = actor_step(w, phi, a_rl, a_sup, f, moves, p)
     cv = p.alpha_v * delta  # eqs. 5-6
     for i in range(phi.shape[0]):
         w[V, i] += cv * phi[i]
         w[A, i] += step * phi[i]
+    if var is not None:
+        for _ in range(repeats(delta, var, p) - 1):  # CACLA+Var's further actor updates
+            step = actor_step(w, phi, a_rl, a_sup, f, moves, p)
+            for i in range(phi.shape[0]):
+                w[A, i] += step * phi[i]
     if p.skew > 0.0:  # eq. 15
         # the side of the executed sample: compared with the clipped mean, as a_rl is clipped too
         inc = p.skew * np.sign(delta) * np.sign(a_rl - clip1(mu))
@@ -170,9 +206,9 @@ def act_packed(w, phi, sigma, z0, z1, a_sup, hp):
 
 
 @njit(cache=True)
-def update_packed(w, phi, a_rl, a_sup, reward, discount, phi_next, hp, rule):
+def update_packed(w, phi, a_rl, a_sup, reward, discount, phi_next, hp, rule, var):
     """:func:`update` with packed parameters: the cheap entry point from Python."""
-    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule)
+    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule, var)
 
 
 @njit(cache=True)
@@ -185,11 +221,12 @@ def act_heuristic_packed(w, phi, sigma, z0, z1, x1, y1, hp):
 
 
 @njit(cache=True)
-def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, normalized, phi_next, hp, rule):
+def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, normalized, phi_next, hp, rule,
+                       var):  # fmt: skip
     """φ(s') into ``phi_next`` and :func:`update`, in one call; ``(δ, False)`` if s' is not finite."""
     if not features_if_finite(next_obs, grid[0], grid[1], grid[2], normalized, phi_next):
         return 0.0, False
-    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule), True
+    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule, var), True
 
 
 class Cacla(ActorAgent):
@@ -236,6 +273,8 @@ SAMPLE_SUFFIX = {SAMPLE_LOCATION: "", SAMPLE_CENTRED: " centred", SAMPLE_MOMENTS
 def cacla_label(p: CaclaParams) -> str:
     """Label such as ``supervised CACLA, skew 22.5°``."""
     name = "supervised CACLA" if p.supervised else "CACLA"
+    if p.actor_repeats == REPEAT_VAR:
+        name += "+Var"
     if p.skew > 0.0:
         name += f", skew {p.skew * DEGREES_PER_GAMMA:g}°" + SAMPLE_SUFFIX[p.skew_sample]
     return name
@@ -275,10 +314,11 @@ def params_under(r, skew_deg: float = 0.0, **fields) -> CaclaParams:
 
 
 @njit(cache=True)
-def episodes(w, hp, rule, tracks, run, grid, rng, env_rng, dz, stats, poses):
+def episodes(w, hp, rule, var, tracks, run, grid, rng, env_rng, dz, stats, poses):
     """CACLA's episodes in compiled code: the same numbers as its agent in the environment.
 
-    ``rule`` is the actor's step factor (:meth:`Cacla.rule`; the actor-critic's runs here too).
+    ``rule`` is the actor's step factor (:meth:`Cacla.rule`; the actor-critic's runs here too),
+    ``var`` the running variance of δ of CACLA+Var (a one-entry array, updated in place).
     ``rng`` draws the exploration, ``env_rng`` the disturbances (:mod:`pipefollow.learners.episodes`).
     """
     p = unpack(hp)
@@ -318,7 +358,7 @@ def episodes(w, hp, rule, tracks, run, grid, rng, env_rng, dz, stats, poses):
                 a_rl_p, a_sup_p = a_rl, a_sup
             if ep.due(book, s[sim.IN_VIEW] != 0.0, t == n - 1):
                 grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
-                update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p, rule)
+                update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p, rule, var)
                 book[ep.PENDING] = 0.0
                 phi, phi_next = phi_next, phi  # φ(s') is the next decision's φ(s)
                 have_phi = True
@@ -339,18 +379,21 @@ def check_compiled(agent: Cacla) -> None:
 
 def run_compiled(agent: Cacla, tracks, run, env_rng, dz, stats, poses) -> None:
     """:func:`episodes` for ``agent`` (a CACLA or an actor-critic agent)."""
-    episodes(agent.weights, pack(agent.params), agent.rule(agent.params), tracks, run,
+    episodes(agent.weights, pack(agent.params), agent.rule(agent.params), agent.td_var, tracks, run,
              ep.features_of(agent.grid), agent.rng, env_rng, dz, stats, poses)  # fmt: skip
 
 
 def policy_fields(agent: Cacla) -> dict:
-    """The arrays of a policy file: parameters and grid as JSON, the weights."""
+    """The arrays of a policy file: parameters and grid as JSON, the weights (and CACLA+Var's variance)."""
     params = {k: (bool(v) if isinstance(v, bool) else v) for k, v in agent.params._asdict().items()}
-    return {
+    fields = {
         "params": np.array(json.dumps(params)),
         "grid": np.array(json.dumps(agent.grid.to_dict())),
         "weights": agent.weights,
     }
+    if agent.params.actor_repeats == REPEAT_VAR:
+        fields["td_var"] = agent.td_var
+    return fields
 
 
 def from_policy(
@@ -377,13 +420,24 @@ def from_policy(
             trained = "skew_step=weights" + (",skew_sample=centred" if centred else "")
     agent = (agent_class or Cacla)(params_class(**params), grid=grid, seed=seed)
     agent.readings = trained
+    if "td_var" in data:  # CACLA+Var's running variance of δ, for training on
+        agent.td_var[...] = np.asarray(data["td_var"], dtype=np.float64).reshape(1)
     return agent, weights
 
 
 def make(r, rng: np.random.Generator | None = None, *, skew_deg: float = 0.0, supervised: bool = False,
-         **fields) -> Cacla:  # fmt: skip
-    """A fresh CACLA agent under the readings ``r`` (fields: those of :class:`CaclaParams`)."""
-    params = params_under(r, skew_deg, supervised=supervised, **fields)
+         actor_repeats: str = "once", **fields) -> Cacla:  # fmt: skip
+    """A fresh CACLA agent under the readings ``r`` (fields: those of :class:`CaclaParams`).
+
+    ``actor_repeats``: ``once`` (eq. 7) or ``var`` (CACLA+Var, beyond the paper; :func:`repeats`).
+
+    Raises:
+        ValueError: an unknown ``actor_repeats``.
+    """
+    if actor_repeats not in ACTOR_REPEATS:
+        raise ValueError(f"actor_repeats must be one of {', '.join(ACTOR_REPEATS)}, got {actor_repeats!r}")
+    params = params_under(r, skew_deg, supervised=supervised, actor_repeats=ACTOR_REPEATS[actor_repeats],
+                          **fields)  # fmt: skip
     agent = Cacla(params, grid=state_grid(r.rbf, r.rbf_width), rng=rng)
     agent.readings = r.id
     return agent
@@ -394,7 +448,7 @@ LEARNER = LearnerKind(
     title="CACLA",
     summary="CACLA (eqs. 5-8; skew-normal exploration eqs. 14-15; supervised eqs. 10-13)",
     agent_class=Cacla,
-    options=frozenset({"skew_deg", "supervised"}),
+    options=frozenset({"skew_deg", "supervised", "actor_repeats"}),
     step_sizes={
         "alpha_v": "alpha_v",
         "alpha_pi": "alpha_pi",
