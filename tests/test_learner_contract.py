@@ -34,6 +34,7 @@ ON = {
     "supervised": [True],
     "actor_update": ["positive", "sign"],
     "actor_repeats": ["var"],
+    "critic_lambda": [0.6],
 }  # OPTIONS switched on
 SETUPS = [(name, {}) for name in NAMES] + [
     (name, {option: value})

@@ -62,6 +62,7 @@ class CaclaParams(NamedTuple):
     k_step: int = STEP_WEIGHTS  # eq. 13 step: w_k by Δk·φ(s) (default) or k(s) by Δk (STEP_GAMMA)
     actor_repeats: int = REPEAT_ONCE  # beyond the paper: REPEAT_VAR makes ⌈δ/√var⌉ actor updates (CACLA+Var)
     var_rate: float = 0.001  # β of CACLA+Var: var ← (1 − β) var + β δ² (Van Hasselt & Wiering 2007)
+    critic_lambda: float = 0.0  # beyond the paper: λ of the critic's TD(λ) trace; 0 = eqs. 5-6 (TD(0))
 
 
 PAPER_CACLA = CaclaParams()
@@ -142,14 +143,16 @@ def repeats(delta, var, p):
 
 
 @njit(cache=True)
-def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX, var=None):
+def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX, var=None, trace=None):
     """One CACLA update for the transition from φ(s) with reward and bootstrap ``discount``·V(s').
 
     ``discount`` is γ_d^n for a transition of n decisions (semi-Markov, docs/design.md). Returns δ.
     The actor's step ``rule`` (:func:`.actor_agent.step_factor`) is eq. 7's (eq. 12 when supervised)
     or the actor-critic's: eq. 9 (eq. 11), or one of eq. 7's terms alone. With ``actor_repeats``
     var and the running variance ``var`` (a one-entry array, :func:`repeats`), the actor's step is
-    made ⌈δ/√var⌉ times when δ > 0, A(s) recomputed before each (CACLA+Var).
+    made ⌈δ/√var⌉ times when δ > 0, A(s) recomputed before each (CACLA+Var). With ``critic_lambda``
+    λ > 0 and the critic's eligibility trace ``trace`` (zero at an episode's start), the critic steps
+    along the trace, ``e ← discount·λ·e + φ(s)``, ``w_V += α_V δ e`` (TD(λ), accumulating traces).
 
     Eq. 15 (``skew > 0``) moves γ(s) by ``Δγ·sgn(δ)·sgn(a_rl − A(s))``: with the default step
     reading the weights move along ``φ(s)/‖φ(s)‖²``, which changes γ(s) = w_γ·φ(s) by exactly that
@@ -162,9 +165,16 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX
     moves = rule != SIGN_AND_MAX or delta > 0.0  # eq. 7's max term: no step at all when δ ≤ 0
     step = actor_step(w, phi, a_rl, a_sup, f, moves, p)
     cv = p.alpha_v * delta  # eqs. 5-6
-    for i in range(phi.shape[0]):
-        w[V, i] += cv * phi[i]
-        w[A, i] += step * phi[i]
+    if trace is not None and p.critic_lambda > 0.0:  # TD(λ): the critic steps along its trace
+        decay = discount * p.critic_lambda
+        for i in range(phi.shape[0]):
+            trace[i] = decay * trace[i] + phi[i]
+            w[V, i] += cv * trace[i]
+            w[A, i] += step * phi[i]
+    else:
+        for i in range(phi.shape[0]):
+            w[V, i] += cv * phi[i]
+            w[A, i] += step * phi[i]
     if var is not None:
         for _ in range(repeats(delta, var, p) - 1):  # CACLA+Var's further actor updates
             step = actor_step(w, phi, a_rl, a_sup, f, moves, p)
@@ -206,9 +216,9 @@ def act_packed(w, phi, sigma, z0, z1, a_sup, hp):
 
 
 @njit(cache=True)
-def update_packed(w, phi, a_rl, a_sup, reward, discount, phi_next, hp, rule, var):
+def update_packed(w, phi, a_rl, a_sup, reward, discount, phi_next, hp, rule, var, trace):
     """:func:`update` with packed parameters: the cheap entry point from Python."""
-    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule, var)
+    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule, var, trace)
 
 
 @njit(cache=True)
@@ -222,11 +232,11 @@ def act_heuristic_packed(w, phi, sigma, z0, z1, x1, y1, hp):
 
 @njit(cache=True)
 def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, normalized, phi_next, hp, rule,
-                       var):  # fmt: skip
+                       var, trace):  # fmt: skip
     """φ(s') into ``phi_next`` and :func:`update`, in one call; ``(δ, False)`` if s' is not finite."""
     if not features_if_finite(next_obs, grid[0], grid[1], grid[2], normalized, phi_next):
         return 0.0, False
-    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule, var), True
+    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule, var, trace), True
 
 
 class Cacla(ActorAgent):
@@ -275,6 +285,8 @@ def cacla_label(p: CaclaParams) -> str:
     name = "supervised CACLA" if p.supervised else "CACLA"
     if p.actor_repeats == REPEAT_VAR:
         name += "+Var"
+    if p.critic_lambda > 0.0:
+        name += f", TD({p.critic_lambda:g})"
     if p.skew > 0.0:
         name += f", skew {p.skew * DEGREES_PER_GAMMA:g}°" + SAMPLE_SUFFIX[p.skew_sample]
     return name
@@ -295,7 +307,13 @@ def params_under(r, skew_deg: float = 0.0, **fields) -> CaclaParams:
 
     ``r`` is a :class:`pipefollow.readings.Readings` (its ``skew_unit``, ``gamma_max``,
     ``skew_sample``, ``skew_step``, ``k_update`` and ``k_step``).
+
+    Raises:
+        ValueError: ``critic_lambda`` outside [0, 1].
     """
+    lam = fields.get("critic_lambda", 0.0)
+    if not 0.0 <= lam <= 1.0:
+        raise ValueError(f"critic_lambda must be in [0, 1], got {lam!r}")
     return CaclaParams(
         skew=skew_in_gamma_units(skew_deg, r.skew_unit),
         gamma_max=r.gamma_max,
@@ -314,11 +332,12 @@ def params_under(r, skew_deg: float = 0.0, **fields) -> CaclaParams:
 
 
 @njit(cache=True)
-def episodes(w, hp, rule, var, tracks, run, grid, rng, env_rng, dz, stats, poses):
+def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats, poses):
     """CACLA's episodes in compiled code: the same numbers as its agent in the environment.
 
     ``rule`` is the actor's step factor (:meth:`Cacla.rule`; the actor-critic's runs here too),
-    ``var`` the running variance of δ of CACLA+Var (a one-entry array, updated in place).
+    ``var`` the running variance of δ of CACLA+Var (a one-entry array, updated in place), ``trace``
+    the critic's eligibility trace of TD(λ) (set to zero at each episode's start).
     ``rng`` draws the exploration, ``env_rng`` the disturbances (:mod:`pipefollow.learners.episodes`).
     """
     p = unpack(hp)
@@ -334,6 +353,7 @@ def episodes(w, hp, rule, var, tracks, run, grid, rng, env_rng, dz, stats, poses
         sigma = run.sigmas[e]
         points, cum, start = ep.pipe_of(tracks, e)
         ep.start_episode(s, points, cum, start, ps, env_rng, dz, book, totals, poses, e)
+        trace[:] = 0.0
         have_phi = False  # phi already holds φ(s) of the current state (computed for the last update)
         a_rl_p = a_sup_p = 0.0
         for t in range(n):
@@ -358,7 +378,8 @@ def episodes(w, hp, rule, var, tracks, run, grid, rng, env_rng, dz, stats, poses
                 a_rl_p, a_sup_p = a_rl, a_sup
             if ep.due(book, s[sim.IN_VIEW] != 0.0, t == n - 1):
                 grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
-                update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p, rule, var)
+                update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p, rule, var,
+                       trace)  # fmt: skip
                 book[ep.PENDING] = 0.0
                 phi, phi_next = phi_next, phi  # φ(s') is the next decision's φ(s)
                 have_phi = True
@@ -379,8 +400,8 @@ def check_compiled(agent: Cacla) -> None:
 
 def run_compiled(agent: Cacla, tracks, run, env_rng, dz, stats, poses) -> None:
     """:func:`episodes` for ``agent`` (a CACLA or an actor-critic agent)."""
-    episodes(agent.weights, pack(agent.params), agent.rule(agent.params), agent.td_var, tracks, run,
-             ep.features_of(agent.grid), agent.rng, env_rng, dz, stats, poses)  # fmt: skip
+    episodes(agent.weights, pack(agent.params), agent.rule(agent.params), agent.td_var, agent.critic_trace,
+             tracks, run, ep.features_of(agent.grid), agent.rng, env_rng, dz, stats, poses)  # fmt: skip
 
 
 def policy_fields(agent: Cacla) -> dict:
@@ -448,7 +469,7 @@ LEARNER = LearnerKind(
     title="CACLA",
     summary="CACLA (eqs. 5-8; skew-normal exploration eqs. 14-15; supervised eqs. 10-13)",
     agent_class=Cacla,
-    options=frozenset({"skew_deg", "supervised", "actor_repeats"}),
+    options=frozenset({"skew_deg", "supervised", "actor_repeats", "critic_lambda"}),
     step_sizes={
         "alpha_v": "alpha_v",
         "alpha_pi": "alpha_pi",
