@@ -86,6 +86,12 @@ VARIANTS: dict[str, tuple[str, Callable[[int, int], tuple[object, int]]]] = {
     "supervised-cacla-mild": ("supervised CACLA, trained under mild", _paper(True, randomization="mild")),
     "cacla-var": ("CACLA+Var", _paper(False, {"actor_repeats": "var"})),
     "supervised-cacla-var": ("supervised CACLA+Var", _paper(True, {"actor_repeats": "var"})),
+    "cacla-td0.5": ("CACLA, critic TD(0.5)", _paper(False, {"critic_lambda": 0.5})),
+    "supervised-cacla-td0.5": ("supervised CACLA, critic TD(0.5)", _paper(True, {"critic_lambda": 0.5})),
+    "cacla-td0.9": ("CACLA, critic TD(0.9)", _paper(False, {"critic_lambda": 0.9})),
+    "supervised-cacla-td0.9": ("supervised CACLA, critic TD(0.9)", _paper(True, {"critic_lambda": 0.9})),
+    "cacla-td1": ("CACLA, critic TD(1)", _paper(False, {"critic_lambda": 1.0})),
+    "supervised-cacla-td1": ("supervised CACLA, critic TD(1)", _paper(True, {"critic_lambda": 1.0})),
     "ppo": ("PPO", _deep("ppo")),
     "sac": ("SAC", _deep("sac")),
 }
