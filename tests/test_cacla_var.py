@@ -97,3 +97,17 @@ def test_compiled_path_equals_the_environment_path_when_updates_repeat():
     np.testing.assert_allclose(stats_fast, stats_env, rtol=0, atol=1e-9)
     np.testing.assert_allclose(b.weights, a.weights, rtol=0, atol=1e-9)
     assert np.abs(once.weights[A] - b.weights[A]).max() > 1e-3  # repeated updates happened
+
+
+def test_policy_files_name_the_options_beyond_the_paper_only_when_set(tmp_path):
+    import json
+
+    for options, stored in (
+        ({}, set()),
+        ({"actor_repeats": "var", "critic_lambda": 0.5}, {"actor_repeats", "critic_lambda"}),
+    ):
+        path = save_policy(make_agent("cacla", **options), tmp_path / "p.npz")
+        with np.load(path, allow_pickle=False) as z:
+            keys = set(json.loads(str(z["params"])))
+        assert keys & {"actor_repeats", "var_rate", "critic_lambda"} == stored
+        assert load_policy(path).params == make_agent("cacla", **options).params

@@ -407,6 +407,9 @@ def run_compiled(agent: Cacla, tracks, run, env_rng, dz, stats, poses) -> None:
 def policy_fields(agent: Cacla) -> dict:
     """The arrays of a policy file: parameters and grid as JSON, the weights (and CACLA+Var's variance)."""
     params = {k: (bool(v) if isinstance(v, bool) else v) for k, v in agent.params._asdict().items()}
+    for k in ("actor_repeats", "var_rate", "critic_lambda"):  # options beyond the paper: only when set,
+        if params[k] == getattr(PAPER_CACLA, k):  # so that files of the paper's learners read as before
+            del params[k]
     fields = {
         "params": np.array(json.dumps(params)),
         "grid": np.array(json.dumps(agent.grid.to_dict())),
