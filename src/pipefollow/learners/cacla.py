@@ -6,10 +6,11 @@ All four heads are linear in the same RBF state features φ(s) (paper §4):
 * skew ``γ(s) = w_γ·φ(s)`` (eqs. 14–15, only with ``skew > 0``),
 * supervisor trust ``k(s) = w_k·φ(s)`` (eq. 13, only when ``supervised``).
 
-The update rules are compiled functions of plain arrays, so that the agent class below and the
-compiled episode loop run the very same code; the general actor-critic (:mod:`.actor_critic`), CACLA
-with another actor step factor, runs them too. Random numbers are drawn by the caller from a
-``numpy.random.Generator`` and passed in as standard normals.
+The update rules (the update itself in :mod:`.cacla_update`) are compiled functions of plain
+arrays, so that the agent class below and the compiled episode loop run the very same code; the
+general actor-critic (:mod:`.actor_critic`), CACLA with another actor step factor, runs them too.
+Random numbers are drawn by the caller from a ``numpy.random.Generator`` and passed in as standard
+normals.
 """
 
 from __future__ import annotations
