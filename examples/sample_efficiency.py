@@ -44,12 +44,17 @@ CONDITIONS = {
 }
 
 
-def _paper(supervised: bool, **options) -> Callable[[int, int], tuple[object, int]]:
-    """A trainer of CACLA (or supervised CACLA) on random pipes: (budget, seed) → (agent, decisions)."""
+def _paper(
+    supervised: bool, agent_options: dict | None = None, **options
+) -> Callable[[int, int], tuple[object, int]]:
+    """A trainer of CACLA (or supervised CACLA) on random pipes: (budget, seed) → (agent, decisions).
+
+    ``agent_options`` go to the agent (e.g. ``actor_repeats``), ``options`` to the training loop.
+    """
 
     def train(budget: int, seed: int):
         rng = np.random.default_rng(seed)
-        agent = make_agent("cacla", supervised=supervised, rng=rng)
+        agent = make_agent("cacla", supervised=supervised, rng=rng, **(agent_options or {}))
         episodes = max(1, budget // int(EPISODE_S))
         pipe_rng = rng.spawn(1)[0]
         extra = dict(options)
@@ -79,6 +84,14 @@ VARIANTS: dict[str, tuple[str, Callable[[int, int], tuple[object, int]]]] = {
     "supervised-cacla-sigma0.3": ("supervised CACLA, σ from 0.3", _paper(True, sigma_start=0.3)),
     "cacla-mild": ("CACLA, trained under mild", _paper(False, randomization="mild")),
     "supervised-cacla-mild": ("supervised CACLA, trained under mild", _paper(True, randomization="mild")),
+    "cacla-var": ("CACLA+Var", _paper(False, {"actor_repeats": "var"})),
+    "supervised-cacla-var": ("supervised CACLA+Var", _paper(True, {"actor_repeats": "var"})),
+    "cacla-td0.5": ("CACLA, critic TD(0.5)", _paper(False, {"critic_lambda": 0.5})),
+    "supervised-cacla-td0.5": ("supervised CACLA, critic TD(0.5)", _paper(True, {"critic_lambda": 0.5})),
+    "cacla-td0.9": ("CACLA, critic TD(0.9)", _paper(False, {"critic_lambda": 0.9})),
+    "supervised-cacla-td0.9": ("supervised CACLA, critic TD(0.9)", _paper(True, {"critic_lambda": 0.9})),
+    "cacla-td1": ("CACLA, critic TD(1)", _paper(False, {"critic_lambda": 1.0})),
+    "supervised-cacla-td1": ("supervised CACLA, critic TD(1)", _paper(True, {"critic_lambda": 1.0})),
     "ppo": ("PPO", _deep("ppo")),
     "sac": ("SAC", _deep("sac")),
 }

@@ -145,6 +145,10 @@ def test_wrong_experiment_value(tmp_path, line, pattern):
             'algorithm = "sarsa"\nskew_deg = 22.5',
             r"skew_deg applies to algorithm cacla only",
         ),
+        ("critic_lambda = 1.5", r"key 'critic_lambda' must be in \[0, 1\], got 1.5"),
+        ('actor_repeats = "twice"', r"'actor_repeats' must be one of once, var"),
+        ('algorithm = "ac"\nactor_repeats = "var"', r"actor_repeats applies to algorithm cacla only"),
+        ('algorithm = "sarsa"\ncritic_lambda = 0.5', r"critic_lambda applies to algorithm cacla and ac only"),
     ],
 )
 def test_wrong_trial_value_names_the_key(tmp_path, line, pattern):
@@ -318,3 +322,12 @@ def test_the_reference_learners_experiment_sets_the_actor_critics_beside_cacla()
         assert (t.alpha_v, t.alpha_pi, t.discount, t.delta_k) == (0.4, 0.2, 0.8, 0.05)
         assert [(p.pipeline, p.episodes) for p in t.phases] == [("paper-left", 500)]
         assert (t.sigma_start, t.sigma_end, t.skew_deg, t.readings) == (1.0, 0.01, 0.0, ())
+
+
+def test_the_sample_efficiency_options_reach_the_trials_agent(tmp_path):
+    from pipefollow.experiments.trial import build_agent
+
+    exp = load_experiment(write_toml(tmp_path, MINIMAL + 'actor_repeats = "var"\ncritic_lambda = 0.9\n'))
+    agent = build_agent(exp.trials[0])
+    assert agent.params.actor_repeats == 1 and agent.params.critic_lambda == 0.9
+    assert agent.name == "CACLA+Var, TD(0.9)"

@@ -29,7 +29,13 @@ from pipefollow.training.compiled import train, train_compiled
 from pipefollow.training.policy_files import load_policy, save_policy
 
 # every learner, and each with every shared option it takes switched on
-ON = {"skew_deg": [22.5], "supervised": [True], "actor_update": ["positive", "sign"]}  # OPTIONS switched on
+ON = {
+    "skew_deg": [22.5],
+    "supervised": [True],
+    "actor_update": ["positive", "sign"],
+    "actor_repeats": ["var"],
+    "critic_lambda": [0.6],
+}  # OPTIONS switched on
 SETUPS = [(name, {}) for name in NAMES] + [
     (name, {option: value})
     for name in NAMES

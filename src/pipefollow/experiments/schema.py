@@ -68,6 +68,15 @@ class TrialConfig:
         "max term alone) or sign (sgn δ: eq. 7's sign term alone)",
         choices=("delta", "positive", "sign"),
     )
+    actor_repeats: str = _f(
+        "once",
+        "CACLA, beyond the paper: one actor update per δ > 0 (once, eq. 7) or ⌈δ/√var⌉ of them, var a "
+        "running variance of δ (var: CACLA+Var, Van Hasselt & Wiering 2007)",
+        choices=("once", "var"),
+    )
+    critic_lambda: float = _f(
+        0.0, "CACLA and actor-critic, beyond the paper: λ of the critic's TD(λ) trace; 0 = TD(0) (eqs. 5-6)"
+    )
     phases: tuple[Phase, ...] = _f((Phase(),), "training phases in order (paper §4.2: left, then right)")
     episode_seconds: float = _f(20.0, "episode length (s); one decision per second (paper §4.1)")
     sigma_start: float = _f(1.0, "exploration σ of the first episode, normalized action units (paper §4)")
@@ -168,7 +177,12 @@ def validate(obj, where: str) -> None:
             raise bad("name", "letters, digits and any of - _ . @ = , +", obj.name)
         try:
             check_options(
-                obj.algorithm, skew_deg=obj.skew_deg, supervised=obj.supervised, actor_update=obj.actor_update
+                obj.algorithm,
+                skew_deg=obj.skew_deg,
+                supervised=obj.supervised,
+                actor_update=obj.actor_update,
+                actor_repeats=obj.actor_repeats,
+                critic_lambda=obj.critic_lambda,
             )
         except ValueError as e:
             raise ConfigError(f"{where}: {e}") from None
@@ -180,6 +194,8 @@ def validate(obj, where: str) -> None:
         for key in ("skew_deg", "delta_k", "forgetting", "sigma_end"):
             if getattr(obj, key) < 0.0:
                 raise bad(key, "≥ 0", getattr(obj, key))
+        if not 0.0 <= obj.critic_lambda <= 1.0:
+            raise bad("critic_lambda", "in [0, 1]", obj.critic_lambda)
         if obj.forgetting >= 1.0:
             raise bad("forgetting", "below 1", obj.forgetting)
         if obj.sigma_start < obj.sigma_end:

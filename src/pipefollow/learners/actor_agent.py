@@ -50,7 +50,8 @@ class ActorAgent(Agent):
     A subclass names its learner (``algorithm``), its label (``name``), its parameter record, the
     actor's step (``rule(params)``, a code of :func:`step_factor`) and its compiled entry points:
     ``pack`` (record → array), ``act_packed`` and ``act_heuristic_packed`` (the policy),
-    ``update_packed`` and ``update_next_packed`` (the update, taking the step's code).
+    ``update_packed`` and ``update_next_packed`` (the update, taking the step's code and the running
+    variance of δ, ``td_var``, that CACLA+Var updates, and the critic's TD(λ) trace ``critic_trace``).
 
     Args:
         params: step sizes and options (a record with ``discount``, ``supervised`` and ``skew``).
@@ -71,6 +72,8 @@ class ActorAgent(Agent):
     ) -> None:
         super().__init__(params, grid, rng, seed)
         self.weights = np.zeros((4, grid.n_features))
+        self.td_var = np.ones(1)  # running variance of δ of CACLA+Var (var_0 = 1), updated in place
+        self.critic_trace = np.zeros(grid.n_features)  # the critic's TD(λ) trace, zero at an episode's start
         self._packed = self.pack(params)
         self._rule = self.rule(params)
         self._draws = 2 if params.skew > 0.0 else 1  # skew-normal samples take two standard normals
@@ -82,6 +85,11 @@ class ActorAgent(Agent):
 
         self.supervisor = supervisor
         self._phi_cache: tuple[bytes, np.ndarray] | None = None  # φ(s') of the last update
+
+    def begin_episode(self, sigma: float) -> None:
+        """Set the exploration σ for the coming episode; forget any pending action and the critic's trace."""
+        super().begin_episode(sigma)
+        self.critic_trace[:] = 0.0
 
     @property
     def supervised(self) -> bool:
@@ -141,14 +149,16 @@ class ActorAgent(Agent):
         cache = self._phi_cache
         w, r, d, hp, rule = self.weights, float(reward), float(discount), self._packed, self._rule
         if cache is not None and cache[0] == next_key:
-            return self.update_packed(w, phi, a_rl, a_sup, r, d, cache[1], hp, rule)
+            return self.update_packed(
+                w, phi, a_rl, a_sup, r, d, cache[1], hp, rule, self.td_var, self.critic_trace
+            )
         if next_obs.shape != (self.grid.ndim,):
             raise ValueError(f"next_obs must have {self.grid.ndim} entries, got shape {next_obs.shape}")
         phi_next = np.empty(self.grid.n_features)
         grid, normalized = self.grid.packed, self.grid.form == "normalized"
-        delta, finite = self.update_next_packed(
-            w, phi, a_rl, a_sup, r, d, next_obs, grid, normalized, phi_next, hp, rule
-        )
+        state = (self.td_var, self.critic_trace)
+        delta, finite = self.update_next_packed(w, phi, a_rl, a_sup, r, d, next_obs, grid, normalized,
+                                                phi_next, hp, rule, *state)  # fmt: skip
         if not finite:
             raise ValueError(f"next_obs must be finite, got {next_obs}")
         self._phi_cache = (next_key, phi_next)

@@ -6,10 +6,11 @@ All four heads are linear in the same RBF state features φ(s) (paper §4):
 * skew ``γ(s) = w_γ·φ(s)`` (eqs. 14–15, only with ``skew > 0``),
 * supervisor trust ``k(s) = w_k·φ(s)`` (eq. 13, only when ``supervised``).
 
-The update rules are compiled functions of plain arrays, so that the agent class below and the
-compiled episode loop run the very same code; the general actor-critic (:mod:`.actor_critic`), CACLA
-with another actor step factor, runs them too. Random numbers are drawn by the caller from a
-``numpy.random.Generator`` and passed in as standard normals.
+The update rules (the update itself in :mod:`.cacla_update`) are compiled functions of plain
+arrays, so that the agent class below and the compiled episode loop run the very same code; the
+general actor-critic (:mod:`.actor_critic`), CACLA with another actor step factor, runs them too.
+Random numbers are drawn by the caller from a ``numpy.random.Generator`` and passed in as standard
+normals.
 """
 
 from __future__ import annotations
@@ -24,7 +25,21 @@ from numba import njit
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from pipefollow.learners import episodes as ep
-from pipefollow.learners.actor_agent import SIGN_AND_MAX, A, ActorAgent, G, K, V, clip1, step_factor
+from pipefollow.learners.actor_agent import SIGN_AND_MAX, A, ActorAgent, G, K, clip1
+from pipefollow.learners.actor_agent import V as V  # the critic's row, beside A, G, K
+from pipefollow.learners.cacla_update import (
+    ACTOR_REPEATS,
+    K_EVERY,
+    K_POSITIVE,
+    REPEAT_ONCE,
+    REPEAT_VAR,
+    SAMPLE_CENTRED,
+    SAMPLE_LOCATION,
+    SAMPLE_MOMENTS,
+    STEP_GAMMA,
+    STEP_WEIGHTS,
+    update,
+)
 from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals, skew_step_to_gamma
 from pipefollow.learners.heuristic import heuristic_action
 from pipefollow.learners.protocol import LearnerKind
@@ -32,11 +47,6 @@ from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite, gri
 from pipefollow.learners.sums import dot
 from pipefollow.sim import decision as sim
 from pipefollow.sim import records
-
-# Readings of open points (docs/design.md, "Readings"); codes as stored in CaclaParams.
-SAMPLE_LOCATION, SAMPLE_CENTRED, SAMPLE_MOMENTS = 0, 1, 2  # skew sample: location/scale, centred, mean/s.d.
-STEP_GAMMA, STEP_WEIGHTS = 0, 1  # eqs. 13, 15: the head's value moves by the step, or its weights by step·φ
-K_EVERY, K_POSITIVE = 0, 1  # eq. 13: k(s) grows at every visit, or only when δ > 0
 
 
 class CaclaParams(NamedTuple):
@@ -55,6 +65,9 @@ class CaclaParams(NamedTuple):
     skew_step: int = STEP_GAMMA  # eq. 15 step: γ(s) moves by Δγ (default) or w_γ by Δγ·φ(s)
     k_update: int = K_EVERY  # eq. 13: k(s) grows at every visit (default) or only when δ > 0
     k_step: int = STEP_WEIGHTS  # eq. 13 step: w_k by Δk·φ(s) (default) or k(s) by Δk (STEP_GAMMA)
+    actor_repeats: int = REPEAT_ONCE  # beyond the paper: REPEAT_VAR makes ⌈δ/√var⌉ actor updates (CACLA+Var)
+    var_rate: float = 0.001  # β of CACLA+Var: var ← (1 − β) var + β δ² (Van Hasselt & Wiering 2007)
+    critic_lambda: float = 0.0  # beyond the paper: λ of the critic's TD(λ) trace; 0 = eqs. 5-6 (TD(0))
 
 
 PAPER_CACLA = CaclaParams()
@@ -108,71 +121,15 @@ def act(w, phi, sigma, z0, z1, a_sup, p):
 
 
 @njit(cache=True)
-def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX):
-    """One CACLA update for the transition from φ(s) with reward and bootstrap ``discount``·V(s').
-
-    ``discount`` is γ_d^n for a transition of n decisions (semi-Markov, docs/design.md). Returns δ.
-    The actor's step ``rule`` (:func:`.actor_agent.step_factor`) is eq. 7's (eq. 12 when supervised)
-    or the actor-critic's: eq. 9 (eq. 11), or one of eq. 7's terms alone.
-
-    Eq. 15 (``skew > 0``) moves γ(s) by ``Δγ·sgn(δ)·sgn(a_rl − A(s))``: with the default step
-    reading the weights move along ``φ(s)/‖φ(s)‖²``, which changes γ(s) = w_γ·φ(s) by exactly that
-    amount; the ``weights`` reading moves them by ``Δγ·…·φ(s)``, which changes γ(s) by ``Δγ‖φ‖²``.
-    """
-    v = dot(w[V], phi)
-    delta = reward + discount * dot(w[V], phi_next) - v  # eq. 4, pre-update critic
-    mu = dot(w[A], phi)
-    f = step_factor(delta, rule)
-    moves = rule != SIGN_AND_MAX or delta > 0.0  # eq. 7's max term: no step at all when δ ≤ 0
-    if p.supervised:
-        k = min(p.k_max, max(0.0, dot(w[K], phi)))
-        rl = k * f * (a_rl - mu) if moves else 0.0
-        step = p.alpha_pi * (rl + (1.0 - k) * (a_sup - mu))  # eq. 12 (eq. 11)
-    else:
-        step = p.alpha_pi * f * (a_rl - mu) if moves else 0.0  # eq. 7 (eq. 9: Gaussian score, 1/σ² in α_π)
-    cv = p.alpha_v * delta  # eqs. 5-6
-    for i in range(phi.shape[0]):
-        w[V, i] += cv * phi[i]
-        w[A, i] += step * phi[i]
-    if p.skew > 0.0:  # eq. 15
-        # the side of the executed sample: compared with the clipped mean, as a_rl is clipped too
-        inc = p.skew * np.sign(delta) * np.sign(a_rl - clip1(mu))
-        g = dot(w[G], phi)
-        if (inc > 0.0 and g < p.gamma_max) or (inc < 0.0 and g > -p.gamma_max):
-            if p.skew_step == STEP_GAMMA:
-                norm2 = dot(phi, phi)
-                inc = inc / norm2 if norm2 > 0.0 else 0.0
-            for i in range(phi.shape[0]):
-                w[G, i] += inc * phi[i]
-    if p.supervised:
-        trust_step(w, phi, delta, p)
-    return delta
-
-
-@njit(cache=True)
-def trust_step(w, phi, delta, p):
-    """Eq. 13: k(s) grows by Δk (capped at k_max), after the optional forgetting of its weights."""
-    if p.forgetting > 0.0:
-        w[K] *= 1.0 - p.forgetting
-    if (p.k_update == K_EVERY or delta > 0.0) and dot(w[K], phi) < p.k_max:
-        inc = p.delta_k
-        if p.k_step == STEP_GAMMA:  # k(s) itself moves by Δk
-            norm2 = dot(phi, phi)
-            inc = inc / norm2 if norm2 > 0.0 else 0.0
-        for i in range(phi.shape[0]):
-            w[K, i] += inc * phi[i]
-
-
-@njit(cache=True)
 def act_packed(w, phi, sigma, z0, z1, a_sup, hp):
     """:func:`act` with packed parameters: the cheap entry point from Python."""
     return act(w, phi, sigma, z0, z1, a_sup, unpack(hp))
 
 
 @njit(cache=True)
-def update_packed(w, phi, a_rl, a_sup, reward, discount, phi_next, hp, rule):
+def update_packed(w, phi, a_rl, a_sup, reward, discount, phi_next, hp, rule, var, trace):
     """:func:`update` with packed parameters: the cheap entry point from Python."""
-    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule)
+    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule, var, trace)
 
 
 @njit(cache=True)
@@ -185,11 +142,12 @@ def act_heuristic_packed(w, phi, sigma, z0, z1, x1, y1, hp):
 
 
 @njit(cache=True)
-def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, normalized, phi_next, hp, rule):
+def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, normalized, phi_next, hp, rule,
+                       var, trace):  # fmt: skip
     """φ(s') into ``phi_next`` and :func:`update`, in one call; ``(δ, False)`` if s' is not finite."""
     if not features_if_finite(next_obs, grid[0], grid[1], grid[2], normalized, phi_next):
         return 0.0, False
-    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule), True
+    return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule, var, trace), True
 
 
 class Cacla(ActorAgent):
@@ -236,6 +194,10 @@ SAMPLE_SUFFIX = {SAMPLE_LOCATION: "", SAMPLE_CENTRED: " centred", SAMPLE_MOMENTS
 def cacla_label(p: CaclaParams) -> str:
     """Label such as ``supervised CACLA, skew 22.5°``."""
     name = "supervised CACLA" if p.supervised else "CACLA"
+    if p.actor_repeats == REPEAT_VAR:
+        name += "+Var"
+    if p.critic_lambda > 0.0:
+        name += f", TD({p.critic_lambda:g})"
     if p.skew > 0.0:
         name += f", skew {p.skew * DEGREES_PER_GAMMA:g}°" + SAMPLE_SUFFIX[p.skew_sample]
     return name
@@ -256,7 +218,13 @@ def params_under(r, skew_deg: float = 0.0, **fields) -> CaclaParams:
 
     ``r`` is a :class:`pipefollow.readings.Readings` (its ``skew_unit``, ``gamma_max``,
     ``skew_sample``, ``skew_step``, ``k_update`` and ``k_step``).
+
+    Raises:
+        ValueError: ``critic_lambda`` outside [0, 1].
     """
+    lam = fields.get("critic_lambda", 0.0)
+    if not 0.0 <= lam <= 1.0:
+        raise ValueError(f"critic_lambda must be in [0, 1], got {lam!r}")
     return CaclaParams(
         skew=skew_in_gamma_units(skew_deg, r.skew_unit),
         gamma_max=r.gamma_max,
@@ -275,10 +243,12 @@ def params_under(r, skew_deg: float = 0.0, **fields) -> CaclaParams:
 
 
 @njit(cache=True)
-def episodes(w, hp, rule, tracks, run, grid, rng, env_rng, dz, stats, poses):
+def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats, poses):
     """CACLA's episodes in compiled code: the same numbers as its agent in the environment.
 
-    ``rule`` is the actor's step factor (:meth:`Cacla.rule`; the actor-critic's runs here too).
+    ``rule`` is the actor's step factor (:meth:`Cacla.rule`; the actor-critic's runs here too),
+    ``var`` the running variance of δ of CACLA+Var (a one-entry array, updated in place), ``trace``
+    the critic's eligibility trace of TD(λ) (set to zero at each episode's start).
     ``rng`` draws the exploration, ``env_rng`` the disturbances (:mod:`pipefollow.learners.episodes`).
     """
     p = unpack(hp)
@@ -294,6 +264,7 @@ def episodes(w, hp, rule, tracks, run, grid, rng, env_rng, dz, stats, poses):
         sigma = run.sigmas[e]
         points, cum, start = ep.pipe_of(tracks, e)
         ep.start_episode(s, points, cum, start, ps, env_rng, dz, book, totals, poses, e)
+        trace[:] = 0.0
         have_phi = False  # phi already holds φ(s) of the current state (computed for the last update)
         a_rl_p = a_sup_p = 0.0
         for t in range(n):
@@ -318,7 +289,8 @@ def episodes(w, hp, rule, tracks, run, grid, rng, env_rng, dz, stats, poses):
                 a_rl_p, a_sup_p = a_rl, a_sup
             if ep.due(book, s[sim.IN_VIEW] != 0.0, t == n - 1):
                 grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
-                update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p, rule)
+                update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p, rule, var,
+                       trace)  # fmt: skip
                 book[ep.PENDING] = 0.0
                 phi, phi_next = phi_next, phi  # φ(s') is the next decision's φ(s)
                 have_phi = True
@@ -339,18 +311,24 @@ def check_compiled(agent: Cacla) -> None:
 
 def run_compiled(agent: Cacla, tracks, run, env_rng, dz, stats, poses) -> None:
     """:func:`episodes` for ``agent`` (a CACLA or an actor-critic agent)."""
-    episodes(agent.weights, pack(agent.params), agent.rule(agent.params), tracks, run,
-             ep.features_of(agent.grid), agent.rng, env_rng, dz, stats, poses)  # fmt: skip
+    episodes(agent.weights, pack(agent.params), agent.rule(agent.params), agent.td_var, agent.critic_trace,
+             tracks, run, ep.features_of(agent.grid), agent.rng, env_rng, dz, stats, poses)  # fmt: skip
 
 
 def policy_fields(agent: Cacla) -> dict:
-    """The arrays of a policy file: parameters and grid as JSON, the weights."""
+    """The arrays of a policy file: parameters and grid as JSON, the weights (and CACLA+Var's variance)."""
     params = {k: (bool(v) if isinstance(v, bool) else v) for k, v in agent.params._asdict().items()}
-    return {
+    for k in ("actor_repeats", "var_rate", "critic_lambda"):  # options beyond the paper: only when set,
+        if params[k] == getattr(PAPER_CACLA, k):  # so that files of the paper's learners read as before
+            del params[k]
+    fields = {
         "params": np.array(json.dumps(params)),
         "grid": np.array(json.dumps(agent.grid.to_dict())),
         "weights": agent.weights,
     }
+    if agent.params.actor_repeats == REPEAT_VAR:
+        fields["td_var"] = agent.td_var
+    return fields
 
 
 def from_policy(
@@ -377,13 +355,24 @@ def from_policy(
             trained = "skew_step=weights" + (",skew_sample=centred" if centred else "")
     agent = (agent_class or Cacla)(params_class(**params), grid=grid, seed=seed)
     agent.readings = trained
+    if "td_var" in data:  # CACLA+Var's running variance of δ, for training on
+        agent.td_var[...] = np.asarray(data["td_var"], dtype=np.float64).reshape(1)
     return agent, weights
 
 
 def make(r, rng: np.random.Generator | None = None, *, skew_deg: float = 0.0, supervised: bool = False,
-         **fields) -> Cacla:  # fmt: skip
-    """A fresh CACLA agent under the readings ``r`` (fields: those of :class:`CaclaParams`)."""
-    params = params_under(r, skew_deg, supervised=supervised, **fields)
+         actor_repeats: str = "once", **fields) -> Cacla:  # fmt: skip
+    """A fresh CACLA agent under the readings ``r`` (fields: those of :class:`CaclaParams`).
+
+    ``actor_repeats``: ``once`` (eq. 7) or ``var`` (CACLA+Var, beyond the paper; :func:`repeats`).
+
+    Raises:
+        ValueError: an unknown ``actor_repeats``.
+    """
+    if actor_repeats not in ACTOR_REPEATS:
+        raise ValueError(f"actor_repeats must be one of {', '.join(ACTOR_REPEATS)}, got {actor_repeats!r}")
+    params = params_under(r, skew_deg, supervised=supervised, actor_repeats=ACTOR_REPEATS[actor_repeats],
+                          **fields)  # fmt: skip
     agent = Cacla(params, grid=state_grid(r.rbf, r.rbf_width), rng=rng)
     agent.readings = r.id
     return agent
@@ -394,7 +383,7 @@ LEARNER = LearnerKind(
     title="CACLA",
     summary="CACLA (eqs. 5-8; skew-normal exploration eqs. 14-15; supervised eqs. 10-13)",
     agent_class=Cacla,
-    options=frozenset({"skew_deg", "supervised"}),
+    options=frozenset({"skew_deg", "supervised", "actor_repeats", "critic_lambda"}),
     step_sizes={
         "alpha_v": "alpha_v",
         "alpha_pi": "alpha_pi",

@@ -22,7 +22,13 @@ import numpy as np
 
 # Options of the command line and experiment files, each with its off value; a learner names the
 # ones it takes in ``LearnerKind.options``, and an option set for another learner is refused.
-OPTIONS = {"skew_deg": 0.0, "supervised": False, "actor_update": "delta"}
+OPTIONS = {
+    "skew_deg": 0.0,
+    "supervised": False,
+    "actor_update": "delta",
+    "actor_repeats": "once",
+    "critic_lambda": 0.0,
+}
 
 
 @dataclass(frozen=True)
