@@ -143,6 +143,7 @@ def random_frames(water: Water, n: int, seed: int, min_visible: float = 1.0):
     return out
 
 
+@pytest.mark.slow  # 300 rendered frames with and without the pipe (≈ 18 s); CI runs it
 def test_clear_water_detection_rate_error_and_false_detections():
     frames = random_frames(WATER_PRESETS["clear"], 300, seed=2026)
     errors, found, false = [], 0, 0

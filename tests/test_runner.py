@@ -212,6 +212,7 @@ def test_a_different_config_in_the_same_folder_is_refused(serial_run):
 
 
 @pytest.mark.ray
+@pytest.mark.slow  # starts a local Ray instance (≈ 16 s)
 def test_ray_backend_gives_identical_results(serial_run, tmp_path):
     pytest.importorskip("ray")
     summary = run_experiment(TINY, tmp_path, backend="ray", workers=2, show_progress=False)
@@ -243,6 +244,7 @@ def reproduce_cmd(out: Path, *extra: str) -> list[str]:
 KILL_RUN = ("--trial", "sarsa", "--trial", "cacla", "--repeats", "2", "--episodes", "1500")
 
 
+@pytest.mark.slow  # a real run of 4 × 1,500 episodes killed midway and resumed (≈ 12 s)
 def test_sigkill_midway_loses_only_unfinished_trials(tmp_path):
     killed = tmp_path / "killed"
     proc = subprocess.Popen(reproduce_cmd(killed, *KILL_RUN), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
