@@ -9,6 +9,7 @@ import contextlib
 import tempfile
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -91,6 +92,7 @@ def invocations(draw):
     return args, files, outputs
 
 
+@pytest.mark.slow  # hypothesis drives the whole CLI (≈ 2 s)
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(invocation=invocations())
 def test_cli_never_gives_a_traceback_or_partial_output(invocation):

@@ -434,6 +434,7 @@ def test_write_outputs_writes_pngs_and_report(run):
     assert not [p for p in run.iterdir() if "tmp" in p.name]
 
 
+@pytest.mark.slow  # a whole report computed twice (≈ 2 s)
 def test_report_numbers_equal_an_independent_computation(run, paper_short):
     report.write_outputs(run)
     text = (run / "REPORT.md").read_text()

@@ -69,6 +69,7 @@ def test_verdict_lines():
     assert s.verdict_line("2b") == "not tested under any reading"
 
 
+@pytest.mark.slow  # a readings run with its report (≈ 1.5 s)
 def test_a_small_readings_run_writes_the_table_and_the_report(tmp_path):
     toml = tmp_path / "small.toml"
     toml.write_text(SMALL)
