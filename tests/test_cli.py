@@ -379,11 +379,13 @@ def test_shell_completion_scripts_come_from_click(runner):
     assert res.stdout.split() == ["plain,pipelines"]
 
 
-def test_the_shared_seconds_option_has_the_experiments_limit():
+def test_the_shared_seconds_and_episodes_options_have_the_experiments_limits():
     from pipefollow.cli.common import MAX_EPISODE_SECONDS
-    from pipefollow.experiments.schema import MAX_SECONDS
+    from pipefollow.cli.common import MAX_EPISODES as CLI_MAX_EPISODES
+    from pipefollow.experiments.schema import MAX_EPISODES, MAX_SECONDS
 
     assert MAX_EPISODE_SECONDS == MAX_SECONDS
+    assert CLI_MAX_EPISODES == MAX_EPISODES
 
 
 @pytest.mark.parametrize("as_json", [True, False])

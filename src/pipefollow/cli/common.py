@@ -94,6 +94,7 @@ def writable_folder(path: str, option: str) -> Path:
 # The longest episode an option takes: experiments.schema.MAX_SECONDS, kept here so that the
 # command line imports no experiment machinery to build its options (a test holds them equal)
 MAX_EPISODE_SECONDS = 86_400.0
+MAX_EPISODES = 10_000_000  # experiments.schema.MAX_EPISODES, likewise
 
 
 SUITE_HELP = (
@@ -143,6 +144,29 @@ def seconds_option(help_text: str = "Episode length in seconds.", default: float
         "--seconds", type=click.FloatRange(min=1.0, max=MAX_EPISODE_SECONDS), callback=finite,
         default=default, show_default=default is not None, help=help_text,
     )  # fmt: skip
+
+
+def episodes_option(default: int, help_text: str):
+    """``--episodes N``: how many episodes, 1 to :data:`MAX_EPISODES`."""
+    return click.option(
+        "--episodes", default=default, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES),
+        help=help_text,
+    )  # fmt: skip
+
+
+def pipeline_option(help_text: str):
+    """``--pipeline NAME|FILE`` (``paper-left`` by default), completed with the pipelines' names."""
+    return click.option(
+        "--pipeline", default="paper-left", show_default=True, shell_complete=complete_pipeline,
+        help=help_text,
+    )  # fmt: skip
+
+
+def offset_option(name: str, help_text: str):
+    """A start offset's bound (``--start-noise``, ``--heading-noise``): finite, ≥ 0, 0 by default."""
+    return click.option(
+        name, default=0.0, show_default=True, type=click.FloatRange(min=0.0), callback=finite, help=help_text
+    )
 
 
 def seed_option(help_text: str):

@@ -12,21 +12,21 @@ from pipefollow.cli.common import (
     apply_readings,
     camera_options,
     check_plot_path,
-    complete_pipeline,
     controller_options,
     disturbance_options,
     disturbance_text,
-    finite,
+    episodes_option,
     guard,
     inert_readings,
     json_option,
     load_controller,
+    offset_option,
+    pipeline_option,
     plot_option,
     reading_option,
     seconds_option,
     seed_option,
 )
-from pipefollow.experiments.config import MAX_EPISODES
 from pipefollow.sim import disturbance as _disturbance
 
 
@@ -56,39 +56,17 @@ def _summary(stats) -> dict:
 
 @click.command()
 @controller_options
-@click.option(
-    "--pipeline",
-    default="paper-left",
-    show_default=True,
-    shell_complete=complete_pipeline,
-    help="Built-in name (paper-left, paper-right, paper-validation), a JSON file, a pipe of a suite "
-    "(e.g. heldout-003, as 'suites export' names it) or random[:FAMILY] for a new pipe every episode.",
+@pipeline_option(
+    "Built-in name (paper-left, paper-right, paper-validation), a JSON file, a pipe of a suite "
+    "(e.g. heldout-003, as 'suites export' names it) or random[:FAMILY] for a new pipe every episode."
 )
-@click.option(
-    "--episodes",
-    default=1,
-    show_default=True,
-    type=click.IntRange(min=1, max=MAX_EPISODES),
-    help="Number of episodes; they differ only with start noise, random disturbances or a random pipeline.",
+@episodes_option(
+    1, "Number of episodes; they differ only with start noise, random disturbances or a random pipeline."
 )
 @seconds_option("Episode length in seconds [default: 60 on paper-validation, else 20].", default=None)
 @seed_option("Seed of the start perturbation.")
-@click.option(
-    "--start-noise",
-    default=0.0,
-    show_default=True,
-    type=click.FloatRange(min=0.0),
-    callback=finite,
-    help="Uniform random lateral start offset up to this many metres.",
-)
-@click.option(
-    "--heading-noise",
-    default=0.0,
-    show_default=True,
-    type=click.FloatRange(min=0.0),
-    callback=finite,
-    help="Uniform random start heading offset up to this many degrees.",
-)
+@offset_option("--start-noise", "Uniform random lateral start offset up to this many metres.")
+@offset_option("--heading-noise", "Uniform random start heading offset up to this many degrees.")
 @plot_option("Save a trajectory plot of the first episode (.png, .svg, .pdf, .jpg, ...).")
 @click.option(
     "--animate",

@@ -11,19 +11,19 @@ import numpy as np
 from pipefollow.cli.common import (
     UserError,
     apply_readings,
-    complete_pipeline,
     disturbance_options,
     echo_result,
+    episodes_option,
     finite,
     guard,
     json_option,
     out_option,
+    pipeline_option,
     reading_option,
     seconds_option,
     seed_option,
     writable_folder,
 )
-from pipefollow.experiments.config import MAX_EPISODES
 from pipefollow.files.progress import progress as progress_report
 from pipefollow.learners.registry import NAMES as LEARNER_NAMES
 from pipefollow.sim import disturbance as _disturbance
@@ -53,21 +53,11 @@ _LEARNING_RATES = ("alpha", "alpha_v", "alpha_pi", "discount", "delta_k", "k_max
     is_flag=True,
     help="The heuristic as supervisor: supervised CACLA (eq. 12) or actor-critic (eq. 11).",
 )
-@click.option(
-    "--pipeline",
-    default="paper-left",
-    show_default=True,
-    shell_complete=complete_pipeline,
-    help="Built-in name or JSON file to train on, or random[:FAMILY] for a new pipe every episode "
-    "(families: see 'pipefollow suites'; random = random:mixed).",
+@pipeline_option(
+    "Built-in name or JSON file to train on, or random[:FAMILY] for a new pipe every episode "
+    "(families: see 'pipefollow suites'; random = random:mixed)."
 )
-@click.option(
-    "--episodes",
-    default=500,
-    show_default=True,
-    type=click.IntRange(min=1, max=MAX_EPISODES),
-    help="Training episodes (σ falls linearly from 1 to 0.01 over them); SARSA and CACLA.",
-)
+@episodes_option(500, "Training episodes (σ falls linearly from 1 to 0.01 over them); SARSA and CACLA.")
 @seconds_option(default=20.0)
 @click.option(
     "--steps",
