@@ -380,8 +380,8 @@ def test_shell_completion_scripts_come_from_click(runner):
 
 
 def test_the_shared_seconds_and_episodes_options_have_the_experiments_limits():
-    from pipefollow.cli.common import MAX_EPISODE_SECONDS
-    from pipefollow.cli.common import MAX_EPISODES as CLI_MAX_EPISODES
+    from pipefollow.cli.options import MAX_EPISODE_SECONDS
+    from pipefollow.cli.options import MAX_EPISODES as CLI_MAX_EPISODES
     from pipefollow.experiments.schema import MAX_EPISODES, MAX_SECONDS
 
     assert MAX_EPISODE_SECONDS == MAX_SECONDS
@@ -390,7 +390,8 @@ def test_the_shared_seconds_and_episodes_options_have_the_experiments_limits():
 
 @pytest.mark.parametrize("as_json", [True, False])
 def test_echo_result_prints_json_or_the_text_and_formats_only_what_it_prints(as_json):
-    from pipefollow.cli.common import echo_result, json_option
+    from pipefollow.cli.common import echo_result
+    from pipefollow.cli.options import json_option
 
     formatted = []
 

@@ -48,7 +48,6 @@ def is_path_error(e: OSError) -> bool:
 
 def guard(fn):
     """Turn the library's input errors into one-line CLI errors (exit 2, no traceback)."""
-    import functools
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
@@ -91,43 +90,11 @@ def writable_folder(path: str, option: str) -> Path:
     return folder
 
 
-# The longest episode an option takes: experiments.schema.MAX_SECONDS, kept here so that the
-# command line imports no experiment machinery to build its options (a test holds them equal)
-MAX_EPISODE_SECONDS = 86_400.0
-MAX_EPISODES = 10_000_000  # experiments.schema.MAX_EPISODES, likewise
-
-
-SUITE_HELP = (
-    "A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
-    "(repeatable) [default: heldout]."
-)
-
-
-def json_option(help_text: str = "Print one JSON object instead of a table."):
-    """``--json`` (``as_json``): print the result as one JSON object (see :func:`echo_result`)."""
-    return click.option("--json", "as_json", is_flag=True, help=help_text)
-
-
 def echo_result(result, as_json: bool, text: Callable[[], str], **dumps) -> None:
     """Print ``result`` as one JSON object under ``--json``, else the lines ``text()`` formats."""
     import json
 
     click.echo(json.dumps(result, **dumps) if as_json else text())
-
-
-def suite_option(help_text: str = SUITE_HELP):
-    """``--suite SUITE|PATH`` (``suite_specs``, repeatable): a suite or pipeline files."""
-    return click.option(
-        "--suite", "suite_specs", multiple=True, metavar="SUITE|PATH", shell_complete=complete_suite,
-        help=help_text,
-    )  # fmt: skip
-
-
-def pipes_option(
-    help_text: str = "Number of pipes [default: all of a held-out suite, 100 of a training family].",
-):
-    """``--pipes N``: how many pipes of a suite (None: its default, see :func:`pipe_count`)."""
-    return click.option("--pipes", type=click.IntRange(min=1, max=100_000), default=None, help=help_text)
 
 
 def pipe_count(suite, pipes: int | None) -> int:
@@ -136,57 +103,6 @@ def pipe_count(suite, pipes: int | None) -> int:
     if suite.count is not None and n > suite.count:
         raise UserError(f"--pipes {n}: suite '{suite.name}' has {suite.count} pipes")
     return n
-
-
-def seconds_option(help_text: str = "Episode length in seconds.", default: float | None = 60.0):
-    """``--seconds S``: the episode length, 1 s to :data:`MAX_EPISODE_SECONDS`, finite."""
-    return click.option(
-        "--seconds", type=click.FloatRange(min=1.0, max=MAX_EPISODE_SECONDS), callback=finite,
-        default=default, show_default=default is not None, help=help_text,
-    )  # fmt: skip
-
-
-def episodes_option(default: int, help_text: str):
-    """``--episodes N``: how many episodes, 1 to :data:`MAX_EPISODES`."""
-    return click.option(
-        "--episodes", default=default, show_default=True, type=click.IntRange(min=1, max=MAX_EPISODES),
-        help=help_text,
-    )  # fmt: skip
-
-
-def pipeline_option(help_text: str):
-    """``--pipeline NAME|FILE`` (``paper-left`` by default), completed with the pipelines' names."""
-    return click.option(
-        "--pipeline", default="paper-left", show_default=True, shell_complete=complete_pipeline,
-        help=help_text,
-    )  # fmt: skip
-
-
-def offset_option(name: str, help_text: str):
-    """A start offset's bound (``--start-noise``, ``--heading-noise``): finite, ≥ 0, 0 by default."""
-    return click.option(
-        name, default=0.0, show_default=True, type=click.FloatRange(min=0.0), callback=finite, help=help_text
-    )
-
-
-def seed_option(help_text: str):
-    """``--seed N``: a non-negative seed, 0 by default."""
-    return click.option("--seed", default=0, show_default=True, type=SEED, help=help_text)
-
-
-def plot_option(help_text: str):
-    """``--plot FILE`` (``plot_path``): a figure file (check it with :func:`check_plot_path`)."""
-    return click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None, help=help_text)
-
-
-def out_option(help_text: str):
-    """``--out FOLDER`` (``out_dir``, required): where a command writes its files."""
-    return click.option("--out", "out_dir", type=click.Path(file_okay=False), required=True, help=help_text)
-
-
-def reading_option(help_text: str):
-    """``--reading ID`` (repeatable): readings of the paper's open points, ``key=value[,key=value]``."""
-    return click.option("--reading", "readings", multiple=True, metavar="ID", help=help_text)
 
 
 def apply_readings(ids, base: str = "default"):
@@ -229,85 +145,6 @@ def load_controller(spec: str, seed: int, lookahead: float | None = None):
         if isinstance(e, user_errors()):
             raise
         raise UserError(str(e)) from None
-
-
-def controller_options(fn):
-    """``--controller heuristic|los|POLICY_FILE`` and ``--lookahead`` (LOS only)."""
-    fn = click.option(
-        "--lookahead",
-        type=click.FloatRange(min=0.0, min_open=True),
-        callback=finite,
-        default=None,
-        help="Lookahead distance Δ (m) of --controller los [default: 1.5].",
-    )(fn)
-    return click.option(
-        "--controller",
-        default="heuristic",
-        show_default=True,
-        shell_complete=complete_controller,
-        help="'heuristic', 'los' (line-of-sight guidance), or a policy file (.npz) from 'pipefollow train' "
-        "or the folder holding it.",
-    )(fn)
-
-
-def disturbance_options(fn):
-    """Decorate a command with ``--current``, ``--camera-noise`` and ``--miss-prob``.
-
-    The command receives one keyword argument ``disturbance`` (a
-    :class:`~pipefollow.sim.disturbance.Disturbance`). Bad values are click usage errors that name the
-    option (exit status 2).
-    """
-    import functools
-
-    def checked(name):
-        def callback(ctx, param, value):
-            if value is None:
-                return None
-            from pipefollow.sim import disturbance
-
-            try:
-                return getattr(disturbance, name)(value)
-            except disturbance.DisturbanceError as e:
-                raise click.BadParameter(str(e), ctx=ctx, param=param) from None
-
-        return callback
-
-    @functools.wraps(fn)
-    def wrapper(*args, current, camera_noise, miss_prob, **kwargs):
-        from pipefollow.sim.disturbance import make_disturbance
-
-        speed, direction = current if current is not None else (0.0, 0.0)
-        d = make_disturbance(speed, direction, camera_noise=camera_noise or 0.0, miss_prob=miss_prob or 0.0)
-        return fn(*args, disturbance=d, **kwargs)
-
-    options = [
-        click.option(
-            "--current",
-            metavar="SPEED,DIR_DEG",
-            default=None,
-            callback=checked("parse_current"),
-            help="Ocean current: SPEED m/s flowing towards DIR_DEG degrees clockwise from north.",
-        ),
-        click.option(
-            "--camera-noise",
-            type=float,
-            default=None,
-            metavar="M",
-            callback=checked("check_camera_noise"),
-            help="Standard deviation (m) of Gaussian noise on the camera's pipe end points. [default: 0]",
-        ),
-        click.option(
-            "--miss-prob",
-            type=float,
-            default=None,
-            metavar="P",
-            callback=checked("check_miss_prob"),
-            help="Probability per decision that the camera misses the pipe. [default: 0]",
-        ),
-    ]
-    for option in reversed(options):
-        wrapper = option(wrapper)
-    return wrapper
 
 
 def check_plot_path(plot_path: str | None) -> None:
@@ -353,96 +190,3 @@ def disturbance_text(d, prefix: str = "; disturbances: ") -> str:
     return prefix + (", ".join(parts) or "varying current")
 
 
-def _complete(names, incomplete: str, files: bool = True):
-    from click.shell_completion import CompletionItem
-
-    items = [CompletionItem(n) for n in names if n.startswith(incomplete)]
-    return items + ([CompletionItem(incomplete, type="file")] if files else [])
-
-
-def complete_pipeline(ctx, param, incomplete: str):
-    """Shell completion of ``--pipeline``: built-ins, ``random:FAMILY``, then files."""
-    from pipefollow.sim.pipe_names import pipeline_names
-
-    return _complete(pipeline_names(), incomplete)
-
-
-def complete_controller(ctx, param, incomplete: str):
-    """Shell completion of ``--controller``: the built-in controllers, then policy files and folders."""
-    from pipefollow.evaluation.benchmark import CONTROLLERS
-
-    return _complete(list(CONTROLLERS), incomplete)
-
-
-def complete_suite(ctx, param, incomplete: str):
-    """Shell completion of ``--suite``: the suites, then folders and files."""
-    from pipefollow.sim.suites import SUITES
-
-    return _complete(list(SUITES), incomplete)
-
-
-def camera_options(fn):
-    """Decorate a command with ``--camera``, ``--water``, ``--turbidity``, ``--burial`` and ``--growth``.
-
-    The command receives one keyword argument ``camera``: ``None`` for the ideal camera, else the
-    environment's camera arguments (``camera``, ``water``). A bad value is a one-line error naming
-    the setting (exit status 2).
-    """
-
-    @functools.wraps(fn)
-    def wrapper(*args, camera, water, turbidity, burial, growth, **kwargs):
-        settings = {
-            k: v
-            for k, v in (("turbidity", turbidity), ("burial", burial), ("growth", growth))
-            if v is not None
-        }
-        if camera == "ideal":
-            if settings or water is not None:
-                raise UserError("--water, --turbidity, --burial and --growth need --camera vision")
-            return fn(*args, camera=None, **kwargs)
-        from pipefollow.perception.camera import camera_settings
-
-        try:
-            chosen = camera_settings("vision", water={"preset": water or "clear", **settings})
-        except (ValueError, ImportError) as e:
-            raise UserError(str(e)) from None
-        return fn(*args, camera={"camera": "vision", "water": chosen.water}, **kwargs)
-
-    number = click.FloatRange(min=0.0)
-    options = [
-        click.option(
-            "--camera",
-            type=click.Choice(["ideal", "vision"]),
-            default="ideal",
-            show_default=True,
-            help="ideal: the exact visible piece (the paper's); vision: a pipe detector on the camera image.",
-        ),
-        click.option(
-            "--water", default=None, metavar="PRESET", help="Water preset: clear, moderate, turbid [clear]."
-        ),
-        click.option(
-            "--turbidity",
-            type=number,
-            callback=finite,
-            default=None,
-            metavar="C",
-            help="Beam attenuation (1/m).",
-        ),
-        click.option(
-            "--burial",
-            type=number,
-            callback=finite,
-            default=None,
-            help="Share of the pipe's width under sand.",
-        ),
-        click.option(
-            "--growth",
-            type=number,
-            callback=finite,
-            default=None,
-            help="Share of the pipe under marine growth.",
-        ),
-    ]
-    for option in reversed(options):
-        wrapper = option(wrapper)
-    return wrapper

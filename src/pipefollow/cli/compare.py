@@ -7,12 +7,14 @@ import click
 from pipefollow.cli.common import (
     UserError,
     check_plot_path,
-    disturbance_options,
     echo_result,
     guard,
-    json_option,
     load_controller,
     pipe_count,
+)
+from pipefollow.cli.options import (
+    disturbance_options,
+    json_option,
     pipes_option,
     plot_option,
     seconds_option,

@@ -10,16 +10,18 @@ import numpy as np
 
 from pipefollow.cli.common import (
     apply_readings,
-    camera_options,
     check_plot_path,
-    controller_options,
-    disturbance_options,
     disturbance_text,
-    episodes_option,
     guard,
     inert_readings,
-    json_option,
     load_controller,
+)
+from pipefollow.cli.options import (
+    camera_options,
+    controller_options,
+    disturbance_options,
+    episodes_option,
+    json_option,
     offset_option,
     pipeline_option,
     plot_option,

@@ -11,6 +11,8 @@ import click
 from pipefollow.cli.common import (
     SEED,
     guard,
+)
+from pipefollow.cli.options import (
     reading_option,
 )
 

@@ -13,9 +13,10 @@ from pipefollow.cli.common import (
     finite,
     guard,
     load_controller,
+    pipe_count,
     writable_folder,
 )
-from pipefollow.cli.suites import _pipe_count, pipes_option
+from pipefollow.cli.options import pipes_option
 from pipefollow.experiments.config import MAX_SECONDS
 
 OUTPUTS = ("curve.csv", "scenarios.csv", "robustness.json", "robustness.png")
@@ -56,7 +57,7 @@ def _controllers(specs, seed: int) -> dict[str, list]:
 @click.option(
     "--suite", "suite_name", default="heldout", show_default=True, help="Suite (see 'pipefollow suites')."
 )
-@pipes_option
+@pipes_option()
 @click.option(
     "--seconds",
     type=click.FloatRange(min=1.0, max=MAX_SECONDS),
@@ -102,7 +103,7 @@ def robustness(controllers, suite_name, pipes, seconds, speeds, sets, seed, out_
     speed_list = _numbers(speeds, "--speeds")
     set_list = [s for s in sets.split(",") if s]
     suite = get_suite(suite_name)
-    n = _pipe_count(suite, pipes)
+    n = pipe_count(suite, pipes)
     for v in speed_list:
         rb.curve_scenarios(v, suite, 1, seconds)  # a bad speed fails before any episode
     for name in set_list:

@@ -8,20 +8,22 @@ import click
 
 from pipefollow.cli.common import (
     UserError,
-    controller_options,
-    disturbance_options,
     echo_result,
     finite,
     guard,
-    json_option,
     load_controller,
-    out_option,
     pipe_count,
+    writable_folder,
+)
+from pipefollow.cli.options import (
+    controller_options,
+    disturbance_options,
+    json_option,
+    out_option,
     pipes_option,
     seconds_option,
     seed_option,
     suite_option,
-    writable_folder,
 )
 
 

@@ -11,18 +11,20 @@ import numpy as np
 from pipefollow.cli.common import (
     UserError,
     apply_readings,
-    disturbance_options,
     echo_result,
-    episodes_option,
     finite,
     guard,
+    writable_folder,
+)
+from pipefollow.cli.options import (
+    disturbance_options,
+    episodes_option,
     json_option,
     out_option,
     pipeline_option,
     reading_option,
     seconds_option,
     seed_option,
-    writable_folder,
 )
 from pipefollow.files.progress import progress as progress_report
 from pipefollow.learners.registry import NAMES as LEARNER_NAMES

@@ -4,33 +4,31 @@ from __future__ import annotations
 
 import click
 
-from pipefollow.cli import common
 from pipefollow.cli.common import (
     apply_readings,
-    camera_options,
     check_plot_path,
-    controller_options,
-    disturbance_options,
     disturbance_text,
     echo_result,
     guard,
     inert_readings,
-    json_option,
     load_controller,
-    out_option,
     pipe_count,
+    writable_folder,
+)
+from pipefollow.cli.options import (
+    camera_options,
+    controller_options,
+    disturbance_options,
+    json_option,
+    out_option,
+    pipes_option,
     plot_option,
     reading_option,
     seconds_option,
     seed_option,
     suite_option,
-    writable_folder,
 )
 from pipefollow.sim import disturbance as _disturbance
-
-# benchmark's and robustness's --pipes and its count (cli/robustness.py takes both from here)
-pipes_option = common.pipes_option()
-_pipe_count = common.pipe_count
 
 
 @click.group(invoke_without_command=True)
@@ -63,7 +61,7 @@ def _suite_table(rows: list[dict]) -> str:
 @suites.command("export")
 @click.argument("name")
 @out_option("Folder for the JSON files.")
-@pipes_option
+@pipes_option()
 @seconds_option("Episode length the pipes must be long enough for.")
 @json_option("Print one JSON object: the files written.")
 @guard
@@ -104,7 +102,7 @@ def pipelines(as_json):
     "(repeatable; what 'suites export' writes) [default: heldout]."
 )
 @seconds_option()
-@pipes_option
+@pipes_option()
 @seed_option("Seed of the bootstrap resampling and of the random disturbances.")
 @plot_option(
     "Save a plot of the per-pipe return differences to the heuristic and a few trajectories "
