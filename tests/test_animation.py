@@ -77,3 +77,25 @@ def test_a_failed_write_leaves_nothing(episode, tmp_path, monkeypatch):
 
 def test_suffixes_known():
     assert animation.ANIMATION_SUFFIXES == ("gif", "mp4")
+
+
+def test_with_the_vision_camera_each_frame_shows_the_camera_panel_beside_the_view(tmp_path):
+    pytest.importorskip("cv2")
+    env = PipelineFollowingEnv("paper-left", episode_seconds=3, camera="vision")
+    recorder = Recorder(env)
+    run_episode(recorder, Heuristic(), seed=0)
+    frames = recorder.frames
+    assert all(f.camera.shape == (animation.PANEL_HEIGHT, 64 * 5, 3) for f in frames)  # 5 px a pixel
+    # the last frame's panel is the camera's image at the end of the episode, scaled 5×
+    grey = np.repeat(np.repeat(env._vision.image, 5, axis=0), 5, axis=1)
+    plain = (frames[-1].camera == grey[..., None]).all(axis=-1)
+    assert plain.mean() > 0.95  # all but the drawn detection and truth lines
+    path = write_animation(env.pipeline, frames, tmp_path / "ep.gif", fps=4, hold_seconds=0.0)
+    with Image.open(path) as im:
+        assert im.size == (500 + 320, 500)  # the 500-px Fig. 2 view, then the panel
+        im.seek(len(frames) - 1)
+        right = np.asarray(im.convert("RGB"), dtype=float)[:480, 500:]
+    # the GIF's palette keeps the panel's picture: close to the image's grey levels on average
+    assert np.abs(right.mean(axis=-1)[plain] - grey[plain]).mean() < 6.0
+    # without the vision camera no panel is kept and the view is alone (the test above: 500 × 500)
+    assert Recorder(PipelineFollowingEnv("paper-left", episode_seconds=3))._panel() is None

@@ -331,3 +331,43 @@ def test_the_sample_efficiency_options_reach_the_trials_agent(tmp_path):
     agent = build_agent(exp.trials[0])
     assert agent.params.actor_repeats == 1 and agent.params.critic_lambda == 0.9
     assert agent.name == "CACLA+Var, TD(0.9)"
+
+
+def test_a_vision_camera_trial_trains_on_the_ideal_camera_and_evaluates_through_the_detector(tmp_path):
+    import dataclasses
+
+    pytest.importorskip("cv2")
+    from pipefollow.experiments.trial import run_trial
+
+    text = MINIMAL + (
+        "phases = [{ pipeline = 'paper-left', episodes = 2 }]\n"
+        "camera = 'vision'\n"
+        "water = { preset = 'clear', turbidity = 0.3 }\n"
+    )
+    t = load_experiment(write_toml(tmp_path, text)).trials[0]
+    assert (t.camera, t.water) == ("vision", {"preset": "clear", "turbidity": 0.3})
+    turbid = run_trial(t, 3)
+    ideal = run_trial(dataclasses.replace(t, camera="ideal", water=None), 3)
+    np.testing.assert_array_equal(turbid.stats, ideal.stats)  # training: the compiled loops, unchanged
+    np.testing.assert_array_equal(turbid.weights, ideal.weights)
+    # the heuristic's evaluation episode: the detector in murky water misses frames the exact camera
+    # sees, and each miss is the lost pipe's −10
+    assert turbid.evaluation["heuristic"][0] < ideal.evaluation["heuristic"][0]
+    assert turbid.evaluation == run_trial(t, 3).evaluation  # seeded
+
+
+@pytest.mark.parametrize(
+    "lines, pattern",
+    [
+        ("water = 'clear'\n", r"key 'water': water settings need camera = 'vision', got camera = 'ideal'"),
+        ("camera = 'laser'\n", r"key 'camera' must be one of ideal, vision, got 'laser'"),
+        ("camera = 'vision'\nwater = 'murky'\n", r"key 'water': water preset 'murky': unknown"),
+        ("camera = 'vision'\nwater = { turbidity = -1 }\n", r"'water': water setting turbidity must be in"),
+        ("camera = 'vision'\nwater = { fog = 1 }\n", r"key 'water': unknown water setting\(s\) \['fog'\]"),
+        ("camera = 'vision'\nwater = 3\n", r"key 'water' must be a preset name or a table, got 3"),
+    ],
+)
+def test_bad_camera_or_water_is_a_one_line_error_naming_the_key(tmp_path, lines, pattern):
+    with pytest.raises(ConfigError, match=pattern) as err:
+        load_experiment(write_toml(tmp_path, MINIMAL + lines))
+    assert "\n" not in str(err.value)

@@ -206,3 +206,24 @@ def test_without_opencv_a_one_line_error_names_the_extra(monkeypatch):
     monkeypatch.setattr(detector, "_CV2", None)
     with pytest.raises(ImportError, match="extra 'vision'"):
         detect_pipe(np.zeros((96, 64), np.uint8))
+
+
+# --- the detector's tracking (a previous detection) --------------------------------------------
+
+
+def test_tracking_orders_the_ends_the_way_of_the_previous_detection():
+    # a pipe across the view: from (−1, 2) to (1, 2.1); the previous frame had it from port to starboard
+    previous = detector.Detection(True, 1.0, 2.0, -1.0, 2.0, 1.0)
+    flipped = detector.Detection(True, -1.0, 2.0, 1.0, 2.1, 0.8)
+    assert detector.same_way(flipped, previous) == detector.Detection(True, 1.0, 2.1, -1.0, 2.0, 0.8)
+    kept = detector.Detection(True, 0.9, 2.2, -1.0, 1.9, 0.8)
+    assert detector.same_way(kept, previous) == kept
+
+
+def test_tracking_adds_no_false_detections_on_frames_without_pipe():
+    frames = random_frames(WATER_PRESETS["clear"], 150, seed=7)
+    false = 0
+    for _, empty, (x1, y1, x2, y_near) in frames:
+        # the previous frame saw the pipe where it was; this one has none
+        false += detect_pipe(empty, previous=detector.Detection(True, x1, y1, x2, y_near, 1.0)).found
+    assert false / len(frames) <= 0.02

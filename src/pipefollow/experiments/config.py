@@ -82,6 +82,9 @@ def _coerce(cls, data: dict, where: str):
             _check_disturbance(value, key)
             kwargs[f.name] = dict(value)
             continue
+        if f.name == "water":
+            kwargs[f.name] = _check_water(value, key, data.get("camera", "ideal"))
+            continue
         if f.name == "randomization":
             kwargs[f.name] = _check_randomization(value, key, data.get("disturbance"))
             continue
@@ -130,6 +133,21 @@ def _check_randomization(value, where: str, disturbance) -> dict:
     except DisturbanceError as e:
         raise ConfigError(str(e)) from None
     return dict(table)
+
+
+def _check_water(value, where: str, camera) -> dict | str:
+    """A water preset name or table, checked (one-line errors); only with the vision camera."""
+    from pipefollow.perception.water import WaterError, water_from
+
+    if camera != "vision":
+        raise ConfigError(f"{where}: water settings need camera = 'vision', got camera = {camera!r}")
+    if not isinstance(value, (str, dict)):
+        raise ConfigError(f"{where} must be a preset name or a table, got {value!r}")
+    try:
+        water_from(value)
+    except WaterError as e:
+        raise ConfigError(f"{where}: {e}") from None
+    return dict(value) if isinstance(value, dict) else value
 
 
 def _check_disturbance(table, where: str) -> None:

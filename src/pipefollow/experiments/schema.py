@@ -101,6 +101,17 @@ class TrialConfig:
         "(mild, moderate, vision, harsh) or a table of pipefollow.sim.randomization.KEYS; not with "
         "disturbance",
     )
+    camera: str = _f(
+        "ideal",
+        "camera of the evaluation episode: ideal (the paper's) or vision (rendered image and pipe detector; "
+        "extra vision); training stays on the ideal camera's compiled loops",
+        choices=("ideal", "vision"),
+    )
+    water: dict | str | None = _f(
+        None,
+        "water and camera settings of the vision camera: a preset name (clear, moderate, turbid) or a "
+        "table of pipefollow.perception.water.Water fields (preset key allowed); clear by default",
+    )
     evaluate_on: str = _f("", "after training, evaluate deterministically on this pipeline ('' = none)")
     evaluate_seconds: float = _f(60.0, "length of the evaluation episode (s) (paper §4.2)")
     figures: tuple[str, ...] = _f(

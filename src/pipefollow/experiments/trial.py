@@ -102,7 +102,9 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
     eval_pipe = resolve_training(eval_name)
     if isinstance(eval_pipe, Suite):  # trained on random pipes only: the family's first pipe
         eval_pipe = eval_pipe.pipe(0, min_length_for(eval_seconds))
-    env = PipelineFollowingEnv(eval_pipe, eval_seconds, params=params)
+    env = PipelineFollowingEnv(
+        eval_pipe, eval_seconds, params=params, camera=config.camera, water=config.water
+    )
     controllers = {"learned": agent, "heuristic": Heuristic()}
     if agent.supervised:
         controllers["actor"] = ActorOnly(agent)

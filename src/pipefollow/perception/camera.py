@@ -95,6 +95,7 @@ class VisionCamera:
         self._textures = make_textures(rng)
         self._last[:] = 0.0
         self._last[6] = 1.0
+        self.detection = NOT_FOUND  # no tracking across episodes
         self._look(state, points, cum, rng)
 
     def step(
@@ -129,7 +130,7 @@ class VisionCamera:
         if self.settings.camera != "vision":
             return
         wt, cam = self.settings.water, self.camera
-        det = detect_pipe(self.image, cam.half_width, cam.depth, wt.pipe_diameter)
+        det = detect_pipe(self.image, cam.half_width, cam.depth, wt.pipe_diameter, previous=self.detection)
         self.detection = det
         last = self._last
         if det.found:

@@ -90,6 +90,7 @@ def detect_pipe(
     depth: float = 3.0,
     pipe_diameter: float = 0.25,
     min_confidence: float = 0.3,
+    previous: Detection | None = None,
 ) -> Detection:
     """Find the pipe in a grey image of the footprint ``x ∈ [−half_width, half_width]``, ``y ∈ [0, depth]``.
 
@@ -100,6 +101,8 @@ def detect_pipe(
         depth: the footprint's forward extent (m).
         pipe_diameter: the pipe's diameter (m); edge pairs from 0.45 to 1.4 of it are accepted.
         min_confidence: detections below this confidence count as not found.
+        previous: the previous frame's detection, when the images come in a sequence: a pipe found
+            in both has its ends ordered the previous one's way (:func:`same_way`).
 
     Returns:
         A :class:`Detection`. A blank, saturated or pure-noise image gives ``found=False``.
@@ -124,7 +127,24 @@ def detect_pipe(
     found, x1, y1, x2, y_near, confidence = centre_line(
         segs, edges, half_width, depth, pipe_diameter, min_confidence
     )
-    return Detection(bool(found), x1, y1, x2, y_near, confidence)
+    det = Detection(bool(found), x1, y1, x2, y_near, confidence)
+    if previous is None or not previous.found or not det.found:
+        return det
+    return same_way(det, previous)
+
+
+def same_way(det: Detection, previous: Detection) -> Detection:
+    """``det`` with its ends swapped if its near-to-far direction opposes ``previous``'s.
+
+    Which end is the near one (the one the pipe comes from) is ambiguous in one image where the
+    pipe crosses the view; between two frames the pipe's direction in view turns little.
+    """
+    dot = (det.x1 - det.x2) * (previous.x1 - previous.x2) + (det.y1 - det.y_near) * (
+        previous.y1 - previous.y_near
+    )
+    if dot >= 0.0:
+        return det
+    return det._replace(x1=det.x2, y1=det.y_near, x2=det.x1, y_near=det.y1)
 
 
 @njit(cache=True)
