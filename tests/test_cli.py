@@ -382,10 +382,17 @@ def test_shell_completion_scripts_come_from_click(runner):
 def test_the_shared_seconds_and_episodes_options_have_the_experiments_limits():
     from pipefollow.cli.options import MAX_EPISODE_SECONDS
     from pipefollow.cli.options import MAX_EPISODES as CLI_MAX_EPISODES
+    from pipefollow.envs import shell
     from pipefollow.experiments.schema import MAX_EPISODES, MAX_SECONDS
 
-    assert MAX_EPISODE_SECONDS == MAX_SECONDS
+    assert MAX_EPISODE_SECONDS == MAX_SECONDS == shell.MAX_EPISODE_SECONDS
     assert CLI_MAX_EPISODES == MAX_EPISODES
+    import gymnasium
+
+    import pipefollow
+
+    # the registered upper bound of gym.make's TimeLimit: one decision per second of the longest episode
+    assert gymnasium.spec(pipefollow.ENV_ID).max_episode_steps == int(MAX_SECONDS)
 
 
 @pytest.mark.parametrize("as_json", [True, False])

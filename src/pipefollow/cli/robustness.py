@@ -16,8 +16,7 @@ from pipefollow.cli.common import (
     pipe_count,
     writable_folder,
 )
-from pipefollow.cli.options import pipes_option
-from pipefollow.experiments.config import MAX_SECONDS
+from pipefollow.cli.options import MAX_EPISODE_SECONDS, pipes_option
 
 OUTPUTS = ("curve.csv", "scenarios.csv", "robustness.json", "robustness.png")
 
@@ -60,7 +59,7 @@ def _controllers(specs, seed: int) -> dict[str, list]:
 @pipes_option()
 @click.option(
     "--seconds",
-    type=click.FloatRange(min=1.0, max=MAX_SECONDS),
+    type=click.FloatRange(min=1.0, max=MAX_EPISODE_SECONDS),
     callback=finite,
     default=60.0,
     show_default=True,

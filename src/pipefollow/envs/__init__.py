@@ -1,9 +1,11 @@
 """The Gymnasium environments and their pictures.
 
-``env`` (``pipefollow/PipelineFollowing-v0``), ``vector_env`` (its batched vector version),
-``render`` (the Fig. 2 view) and ``animation``.
+``shell`` (what both environments share: arguments, spaces, reset options, the start of an
+episode, infos, the episode summary), ``env`` (``pipefollow/PipelineFollowing-v0``), ``vector_env``
+(its batched vector version), ``render`` (the Fig. 2 view) and ``animation``.
 
-They compose the simulator's stages; they know no learner. May import ``files`` and ``sim``.
+They compose the simulator's stages and the camera; they know no learner. May import ``files``,
+``sim`` and ``perception``.
 """
 
 from pipefollow.files.compile_cache import configure_numba_cache

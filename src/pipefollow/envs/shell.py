@@ -60,7 +60,6 @@ INFO_FIELDS = (
     ("camera_missed", sim.MISSED, None, True),
     ("current", sim.CURRENT_SPEED, sim.CURRENT_DIR + 1, False),
 )
-INFO_KEYS = tuple(f[0] for f in INFO_FIELDS)
 # (key, first slot, boolean, index into the last axis): indexing with Ellipsis gives a 0-d array
 _INFO_INDEX = tuple(
     (key, first, boolean, (Ellipsis, first if stop is None else slice(first, stop)))

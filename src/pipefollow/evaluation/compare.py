@@ -31,23 +31,12 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from pipefollow.evaluation.stats import CONFIDENCE, iqm
+
 REPS = 50_000  # rliable's default for interval estimates
 PROFILE_REPS = 2_000  # rliable's default for performance profiles
 POI_REPS = 2_000
-CONFIDENCE = 0.95
 _CHUNK_VALUES = 4_000_000  # floats per block of replicates (bounds the memory to ≈ 32 MB)
-
-
-def iqm(scores: np.ndarray) -> float:
-    """Interquartile mean over all runs × pipes (rliable's ``aggregate_iqm``).
-
-    ``scipy.stats.trim_mean(x, 0.25, axis=None)``: the mean of the sorted values from position
-    ``int(0.25 n)`` to ``n − int(0.25 n)`` (written out here; importing SciPy's statistics takes
-    longer than a whole comparison's bootstrap).
-    """
-    x = np.sort(np.asarray(scores, dtype=np.float64), axis=None)
-    cut = int(0.25 * x.size)
-    return float(np.mean(x[cut : x.size - cut]))
 
 
 def mean(scores: np.ndarray) -> float:

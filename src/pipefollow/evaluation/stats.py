@@ -36,10 +36,14 @@ def bootstrap_ci(values, seed: int = 0, confidence: float = CONFIDENCE) -> tuple
 
 
 def iqm(values) -> float:
-    """Interquartile mean: the mean of the middle 50 % (``scipy.stats.trim_mean(x, 0.25)``)."""
-    from scipy.stats import trim_mean
+    """Interquartile mean over all values (rliable's ``aggregate_iqm``, scipy's ``trim_mean(x, 0.25)``).
 
-    return float(trim_mean(np.asarray(values, dtype=np.float64), 0.25))
+    The mean of the sorted values from position ``int(0.25 n)`` to ``n − int(0.25 n)``, written out
+    here: importing SciPy's statistics takes longer than a whole comparison's bootstrap.
+    """
+    x = np.sort(np.asarray(values, dtype=np.float64), axis=None)
+    cut = int(0.25 * x.size)
+    return float(np.mean(x[cut : x.size - cut]))
 
 
 def paired_difference(a, b, seed: int = 0) -> dict:

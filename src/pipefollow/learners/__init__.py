@@ -5,7 +5,7 @@
 loop), ``protocol`` (what a learner module gives the layers above, the agents' base), ``actor_agent``
 (what the actor-critic learners share: the actor's step factor, the agent class), the learners ``cacla``
 (eqs. 5–8, 10–15), ``sarsa`` (eq. 3) and ``actor_critic`` (eqs. 9, 11), ``registry`` (the learners
-by name), ``mlp`` (an exported network policy). May import ``files`` and ``sim``.
+by name), ``mlp`` (an exported network policy). May import ``files``, ``sim`` and ``perception``.
 """
 
 from pipefollow.files.compile_cache import configure_numba_cache

@@ -46,8 +46,6 @@ class CameraSettings:
         return self.camera == "vision" or self.observation == "image"
 
 
-IDEAL = CameraSettings()
-
 
 def camera_settings(
     camera: str = "ideal",

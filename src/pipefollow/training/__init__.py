@@ -4,7 +4,7 @@ Episodes through an environment, training in a learner's compiled loop (one pipe
 pipe per episode), ``train_phases`` (the one way the command line and experiment trials train),
 policy files, a run's output files, and the deep-RL baselines (``deep``, optional extra).
 
-May import ``files``, ``sim``, ``learners``, ``readings`` and ``envs``.
+May import ``files``, ``sim``, ``perception``, ``learners``, ``readings`` and ``envs``.
 """
 
 from pipefollow.files.compile_cache import configure_numba_cache

@@ -48,6 +48,7 @@ try:
 except ImportError as e:  # pragma: no cover - exercised without the extra
     raise DeepExtraMissing(f"{EXTRA_HINT} ({e})") from e
 
+from pipefollow.envs.shell import SUMMARY_KEYS  # noqa: E402
 from pipefollow.envs.vector_env import PipelineFollowingVectorEnv  # noqa: E402  (after the extra's check)
 
 ALGORITHMS = ("ppo", "sac")
@@ -117,7 +118,7 @@ class SB3VecEnv(VecEnv):
             for k, i in enumerate(idx):
                 infos[i]["terminal_observation"] = obs[i].copy()
                 infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
-                for key in ("episode_pipe_in_view", "episode_progress_m", "episode_rms_e_dist"):
+                for key in SUMMARY_KEYS:
                     if key in info:
                         infos[i][key] = float(info[key][i])
                 obs[i] = first[k]
