@@ -42,24 +42,26 @@ def _datasets_path(folder: Path):
 
 
 def _array_infos(env):
-    """``env`` with infos Minari can store: the keys of every step, each an array.
+    """``env`` with infos Minari can store: the keys every step has (each already an array).
 
-    Minari keeps the infos as arrays with one row per step (the reset's included), so the summary
-    that only the last step has (``episode_*``) is left out, and ``current`` (a pair) is an array.
+    Minari keeps the infos as arrays with one row per step (the reset's included), so the episode
+    summary that only the last step has (:data:`~pipefollow.envs.shell.SUMMARY_KEYS`) is left out.
     """
     import gymnasium as gym
 
-    def arrays(info):
-        return {k: np.asarray(v) for k, v in info.items() if not k.startswith("episode_")}
+    from pipefollow.envs.shell import SUMMARY_KEYS
+
+    def per_step(info):
+        return {k: v for k, v in info.items() if k not in SUMMARY_KEYS}
 
     class ArrayInfos(gym.Wrapper):
         def reset(self, **kwargs):
             obs, info = self.env.reset(**kwargs)
-            return obs, arrays(info)
+            return obs, per_step(info)
 
         def step(self, action):
             obs, reward, terminated, truncated, info = self.env.step(action)
-            return obs, reward, terminated, truncated, arrays(info)
+            return obs, reward, terminated, truncated, per_step(info)
 
     return ArrayInfos(env)
 
