@@ -150,9 +150,6 @@ def benchmark(
         camera=camera,
     )
     run.summary["readings"] = reading.id
-    if camera:  # compared with the heuristic on the ideal camera
-        run.summary["camera"] = "vision"
-        run.summary["water"] = camera["water"]._asdict()
     if disturbance != _disturbance.NO_DISTURBANCE:
         run.summary["disturbance"] = _disturbance.to_dict(disturbance)
     if warnings:

@@ -271,6 +271,12 @@ def benchmark(
     }
     if not is_heuristic:
         summary["vs_heuristic"] = paired_difference(ret, h_res[:, RET], seed)
+    if camera:  # the controller's camera and water; the heuristic beside it ran on the ideal camera
+        from pipefollow.perception.camera import camera_settings
+
+        settings = camera_settings(**camera)
+        summary["camera"] = settings.camera
+        summary["water"] = settings.water._asdict()
     summary["episodes"] = [
         {
             "name": pipe.name,

@@ -203,10 +203,7 @@ def closed_loop(agent, suite: Suite, water: Water, controller: str, n_pipes=None
     """:func:`~pipefollow.evaluation.benchmark.benchmark` of ``agent`` with the vision camera in ``water``."""
     from pipefollow.evaluation.benchmark import benchmark
 
-    run = benchmark(
+    return benchmark(
         agent, suite, controller=controller, seconds=seconds, n_pipes=n_pipes, seed=seed, noise_seed=seed,
         camera={"camera": "vision", "water": water},
     )  # fmt: skip
-    run.summary["camera"] = "vision"
-    run.summary["water"] = water._asdict()
-    return run
