@@ -8,7 +8,8 @@ with the heuristic on the ideal camera on the same pipes (paired differences, bo
 The row "ideal" is each controller on the ideal camera. With ``--policies FOLDER`` it also trains,
 if missing, CACLA and supervised CACLA on random pipes (the README's recipe: 5,000 episodes of 90 s
 on random:mixed) without camera faults, and CACLA under the camera model calibrated for ``--calibrated`` water
-(``docs/vision/calibration.json``), and judges both.
+(``docs/vision/calibration.json``), and PPO (the README's recipe: 100,000 steps on random:mixed,
+the extra ``deep``), and judges them.
 """
 
 from __future__ import annotations
@@ -45,6 +46,18 @@ def train(folder: Path, seed: int, noise: float, miss: float, supervised: bool =
     return str(policy)
 
 
+def train_ppo(folder: Path, seed: int) -> str:
+    """PPO's policy file in ``folder`` (the README's recipe: 100,000 steps on random:mixed), trained if missing."""
+    policy = folder / "policy.npz"
+    if not policy.exists():
+        cmd = [
+            sys.executable, "-m", "pipefollow.cli", "train", "--algorithm", "ppo", "--pipeline", "random:mixed",
+            "--seconds", "90", "--steps", "100000", "--seed", str(seed), "--out", str(folder),
+        ]  # fmt: skip
+        subprocess.run(cmd, check=True)
+    return str(policy)
+
+
 def main() -> None:
     """Print the table's rows and write the CSV."""
     parser = argparse.ArgumentParser()
@@ -53,6 +66,7 @@ def main() -> None:
     parser.add_argument("--policies", default=None, help="Folder of the CACLA policies (trained if missing).")
     parser.add_argument("--calibrated", default="moderate", help="Water of the calibrated camera model.")
     parser.add_argument("--seed", type=int, default=2010)
+    parser.add_argument("--ppo-seed", type=int, default=0, help="Seed of the PPO policy (deep extra).")
     args = parser.parse_args()
     controllers = [("heuristic", "heuristic"), ("LOS (Δ = 1.5 m)", "los")]
     if args.policies:
@@ -65,6 +79,7 @@ def main() -> None:
         controllers.append(("supervised CACLA, random pipes", supervised))
         label = f"CACLA, random pipes, calibrated ({args.calibrated})"
         controllers.append((label, train(base / "calibrated", args.seed, c["camera_noise"], c["miss_prob"])))
+        controllers.append(("PPO, random pipes", train_ppo(base / "ppo", args.ppo_seed)))
     suite = get_suite("heldout")
     rows = []
     for label, spec in controllers:
