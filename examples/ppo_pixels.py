@@ -9,7 +9,9 @@ geometry. It trains on a new random pipe every 90-s episode (``random:mixed``) i
 the project's PPO defaults (``pipefollow.training.deep.DEFAULTS``: 8 environments × 128 steps,
 γ = 0.8, 64 × 64 heads) on a small convolutional features extractor (:func:`small_cnn`), then
 runs one deterministic 60-s episode per held-out pipe in clear, moderate and turbid water
-(``pipefollow.evaluation.vision``), compared with the heuristic on the ideal camera. A saved model (``OUT/model.zip``) is reused.
+(``pipefollow.evaluation.vision``), compared with the heuristic on the ideal camera; the row
+"ideal" is the same policy on the image of clear water with the exact camera's in-view decision.
+A saved model (``OUT/model.zip``) is reused.
 Needs the extras ``deep`` and ``vision``.
 """
 
@@ -81,7 +83,7 @@ def train(out: Path, steps: int, seed: int, water: str):
     torch.set_num_threads(1)
     path = out / "model.zip"
     if path.exists():
-        return PPO.load(path, device="cpu"), None
+        return PPO.load(path, device="cpu"), json.loads((out / "training.json").read_text())["train_seconds"]
     venv = PipelineFollowingVectorEnv(
         num_envs=hyperparameters("ppo")["n_envs"], pipeline="random:mixed", episode_seconds=90.0,
         camera="vision", observation="image", water=water,
@@ -101,10 +103,12 @@ def train(out: Path, steps: int, seed: int, water: str):
         model.learn(chunk, reset_num_timesteps=done == 0)
         done = model.num_timesteps
         rewards = [ep["r"] for ep in model.ep_info_buffer] if model.ep_info_buffer else [float("nan")]
-        print(f"  {done:,} steps, {time.perf_counter() - t0:.0f} s, mean episode return {np.mean(rewards):.1f}")
+        elapsed = time.perf_counter() - t0
+        print(f"  {done:,} steps, {elapsed:.0f} s, mean episode return {np.mean(rewards):.1f}")
     seconds = time.perf_counter() - t0
     out.mkdir(parents=True, exist_ok=True)
     model.save(path)
+    (out / "training.json").write_text(json.dumps({"steps": steps, "seed": seed, "train_seconds": seconds}))
     return model, seconds
 
 
@@ -119,13 +123,15 @@ def main() -> None:
     parser.add_argument("--json", default=None, help="Write the rows here.")
     args = parser.parse_args()
     model, seconds = train(Path(args.out), args.steps, args.seed, args.water)
-    if seconds is not None:
-        print(f"trained {args.steps:,} steps in {seconds:.0f} s")
+    print(f"trained {args.steps:,} steps in {seconds:.0f} s")
     agent = PixelAgent(model)
     suite = get_suite("heldout")
     rows = []
-    for water in ("clear", "moderate", "turbid"):
-        camera = {"camera": "vision", "observation": "image", "water": WATER_PRESETS[water]}
+    for water in ("ideal", "clear", "moderate", "turbid"):
+        if water == "ideal":  # the image of clear water; pipe in view or lost from the exact camera
+            camera = {"camera": "ideal", "observation": "image", "water": WATER_PRESETS["clear"]}
+        else:
+            camera = {"camera": "vision", "observation": "image", "water": WATER_PRESETS[water]}
         s = benchmark(agent, suite, controller="PPO on pixels", n_pipes=args.pipes, camera=camera).summary
         d = s["vs_heuristic"]
         row = {
@@ -139,9 +145,8 @@ def main() -> None:
             f"  success {row['success_rate']:.0%}  vs heuristic (ideal) {row['mean_diff']:+.1f}"
         )
     if args.json:
-        Path(args.json).write_text(
-            json.dumps({"steps": args.steps, "seed": args.seed, "train_seconds": seconds, "rows": rows}, indent=1)
-        )
+        record = {"steps": args.steps, "seed": args.seed, "train_seconds": seconds, "rows": rows}
+        Path(args.json).write_text(json.dumps(record, indent=1) + "\n")
 
 
 if __name__ == "__main__":

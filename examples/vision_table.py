@@ -47,12 +47,13 @@ def train(folder: Path, seed: int, noise: float, miss: float, supervised: bool =
 
 
 def train_ppo(folder: Path, seed: int) -> str:
-    """PPO's policy file in ``folder`` (the README's recipe: 100,000 steps on random:mixed), trained if missing."""
+    """PPO's policy file in ``folder`` (the README's recipe: 100,000 steps), trained if missing."""
     policy = folder / "policy.npz"
     if not policy.exists():
         cmd = [
-            sys.executable, "-m", "pipefollow.cli", "train", "--algorithm", "ppo", "--pipeline", "random:mixed",
-            "--seconds", "90", "--steps", "100000", "--seed", str(seed), "--out", str(folder),
+            sys.executable, "-m", "pipefollow.cli", "train", "--algorithm", "ppo",
+            "--pipeline", "random:mixed", "--seconds", "90", "--steps", "100000", "--seed", str(seed),
+            "--out", str(folder),
         ]  # fmt: skip
         subprocess.run(cmd, check=True)
     return str(policy)
