@@ -15,7 +15,7 @@ def _imports_by_syntax_tree(source: str) -> set[str]:
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Import):
             found.update(a.name for a in node.names if a.name.split(".")[0] == "pipefollow")
-        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module.split(".")[0] == "pipefollow":
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module.startswith("pipefollow"):
             found.add(node.module)
             found.update(f"{node.module}.{a.name}" for a in node.names)
     return found
