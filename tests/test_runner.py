@@ -506,3 +506,26 @@ def test_process_backend_hands_out_the_longest_trials_first():
     assert names[exp.repeats : 2 * exp.repeats] == ["sarsa"] * exp.repeats
     assert names[-exp.repeats :] == ["cacla"] * exp.repeats  # plain CACLA, one phase: the shortest
     assert [s for c, s in ordered if c.name == "cacla"] == list(exp.seeds())  # stable among equals
+
+
+def test_the_side_compilation_runs_only_on_an_empty_compile_cache(tmp_path, monkeypatch):
+    import numba
+
+    from pipefollow.experiments import runner
+
+    started = []
+    monkeypatch.setattr(runner, "run_trial", lambda config, seed: None)
+    monkeypatch.setattr(
+        runner.multiprocessing.context.ForkProcess, "start", lambda self: started.append(self), raising=True
+    )
+    monkeypatch.setattr(runner.multiprocessing.context.ForkProcess, "join", lambda self, timeout=None: None)
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+    configs = [t for t in TINY.trials]  # SARSA and CACLA: two compiled paths
+    assert not runner.compile_cache_filled()
+    runner.warm_up(configs, parallel=True)
+    assert len(started) == 1
+    (tmp_path / "pipefollow" / "sim").mkdir(parents=True)
+    (tmp_path / "pipefollow" / "sim" / "decision.decide-10.py311.nbi").write_bytes(b"")
+    assert runner.compile_cache_filled()
+    runner.warm_up(configs, parallel=True)
+    assert len(started) == 1  # a filled cache: everything loads here, no child
