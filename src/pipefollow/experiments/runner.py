@@ -22,10 +22,10 @@ import signal
 import sys
 import time
 import warnings
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import closing
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import click
@@ -56,6 +56,8 @@ class RunSummary:
         wall_seconds: time this call took.
         tables: the regenerated ``results.csv`` and ``evaluation.csv`` (none if ``read_only``).
         read_only: the run folder was complete and not writable (read-only media): it was only read.
+        results: every stored trial by (trial, seed), as the tables were written from them (none
+            if ``read_only``): the report and summaries need not read the trial files again.
     """
 
     run_dir: Path
@@ -67,6 +69,7 @@ class RunSummary:
     wall_seconds: float
     tables: tuple[Path, ...] = ()
     read_only: bool = False
+    results: Mapping[tuple[str, int], TrialResult] = field(default_factory=dict, repr=False, compare=False)
 
 
 class RunInterrupted(KeyboardInterrupt):
@@ -374,6 +377,7 @@ def run_experiment(
                 n_workers = max(1, min(workers or os.cpu_count() or 1, len(work)))
             ray_info = {"cpus": 0}
             computed = 0
+            saved: dict[tuple[str, int], TrialResult] = {}
             try:
                 if work and (backend != "serial" or trial_fn is run_trial):
                     # Compiling (or loading the compiled code) is a phase of its own: inside the
@@ -390,6 +394,7 @@ def run_experiment(
                     with closing(results):
                         for config, result in results:
                             store.save_trial(run_dir, result, config)
+                            saved[config.name, result.seed] = result
                             computed += 1
                             bar.update(1)
             except KeyboardInterrupt:
@@ -404,7 +409,8 @@ def run_experiment(
             if backend == "ray":
                 n_workers = ray_info["cpus"] or 1
             store.ensure_policies(run_dir, exp)
-            tables = store.write_tables(run_dir, exp)
+            results = store.stored_results(run_dir, exp, saved)
+            tables = store.write_tables(run_dir, exp, results)
     except Exception:
         remove_empty_folders(run_dir, made)  # the lock file is gone now; so go empty folders made here
         raise
@@ -417,4 +423,5 @@ def run_experiment(
         trials_reused=len(done),
         wall_seconds=time.perf_counter() - t0,
         tables=tuple(tables),
+        results=results,
     )
