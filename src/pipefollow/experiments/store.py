@@ -291,6 +291,7 @@ def save_policy_file(run_dir: str | os.PathLike, config: TrialConfig, result: Tr
         seed=result.seed,
         pipeline=pipelines,
         episodes=config.episodes,
+        compress=False,
     )
 
 
