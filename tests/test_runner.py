@@ -529,3 +529,17 @@ def test_the_side_compilation_runs_only_on_an_empty_compile_cache(tmp_path, monk
     assert runner.compile_cache_filled()
     runner.warm_up(configs, parallel=True)
     assert len(started) == 1  # a filled cache: everything loads here, no child
+
+
+def test_while_waiting_runs_once_after_the_pool_has_the_trials_and_not_serially(tmp_path, monkeypatch):
+    events = []
+    real_save = store.save_trial
+    monkeypatch.setattr(store, "save_trial", lambda *a, **k: (events.append("save"), real_save(*a, **k))[1])
+    exp = with_overrides(TINY, trials=["sarsa"])
+    run_experiment(
+        exp, tmp_path / "p", backend="process", workers=2, while_waiting=lambda: events.append("wait")
+    )
+    assert events == ["wait", "save", "save"]  # before the first result is saved, and once
+    events.clear()
+    run_experiment(exp, tmp_path / "s", backend="serial", while_waiting=lambda: events.append("wait"))
+    assert events == ["save", "save"]  # nothing runs beside a serial run

@@ -36,6 +36,15 @@ def _write_figures(run_dir: Path, required: bool, results=None) -> list[Path]:
     return [Path(p) for p in report.write_outputs(run_dir, results)]
 
 
+def _preload_figures() -> None:
+    """While the trials run: import what the figures need (``report.preload``), if that module exists."""
+    try:
+        from pipefollow.experiments import report
+    except ModuleNotFoundError:
+        return
+    report.preload()
+
+
 @click.command()
 @click.option(
     "--out",
@@ -139,7 +148,13 @@ def reproduce(
     out = Path(out_dir)
     try:
         run = run_experiment(
-            exp, out, backend=backend, workers=workers, ray_address=ray_address, show_progress=not as_json
+            exp,
+            out,
+            backend=backend,
+            workers=workers,
+            ray_address=ray_address,
+            show_progress=not as_json,
+            while_waiting=None if no_figures else _preload_figures,
         )
     except RunInterrupted as e:
         click.echo(f"pipefollow: {e.message}", err=True)

@@ -251,7 +251,9 @@ def longest_first(work: Work) -> Work:
     return sorted(work, key=cost, reverse=True)
 
 
-def _process(work: Work, trial_fn: TrialFn, workers: int) -> Iterator[tuple[TrialConfig, TrialResult]]:
+def _process(
+    work: Work, trial_fn: TrialFn, workers: int, while_waiting: Callable[[], object] | None = None
+) -> Iterator[tuple[TrialConfig, TrialResult]]:
     work = longest_first(work)
     ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
     pool = ProcessPoolExecutor(
@@ -262,6 +264,8 @@ def _process(work: Work, trial_fn: TrialFn, workers: int) -> Iterator[tuple[Tria
     try:
         with _forking():  # the pool forks its workers on the first submissions
             futures = {pool.submit(trial_fn, config, seed): (config, seed) for config, seed in work}
+        if while_waiting is not None:
+            while_waiting()
         for fut in as_completed(futures):
             config, seed = futures[fut]
             try:
@@ -279,7 +283,12 @@ def _process(work: Work, trial_fn: TrialFn, workers: int) -> Iterator[tuple[Tria
 
 
 def _ray(
-    work: Work, trial_fn: TrialFn, workers: int | None, address: str | None, info: dict
+    work: Work,
+    trial_fn: TrialFn,
+    workers: int | None,
+    address: str | None,
+    info: dict,
+    while_waiting: Callable[[], object] | None = None,
 ) -> Iterator[tuple[TrialConfig, TrialResult]]:
     ray = import_ray()
     connected_here = not ray.is_initialized()  # else: the caller's Ray session, left as it is
@@ -298,6 +307,8 @@ def _ray(
         info["cpus"] = int(ray.cluster_resources().get("CPU", 0))
         remote = ray.remote(num_cpus=1, max_retries=0)(trial_fn)
         pending = {remote.remote(config, seed): (config, seed) for config, seed in work}
+        if while_waiting is not None:
+            while_waiting()
         while pending:
             ready, _ = ray.wait(list(pending), num_returns=1)
             for ref in ready:
@@ -325,6 +336,7 @@ def run_experiment(
     ray_address: str | None = None,
     show_progress: bool = True,
     trial_fn: TrialFn = run_trial,
+    while_waiting: Callable[[], object] | None = None,
 ) -> RunSummary:
     """Run every (trial, seed) of ``exp`` not yet finished in the run folder ``out_dir``.
 
@@ -337,6 +349,9 @@ def run_experiment(
         show_progress: progress bar on stderr, when it is a terminal.
         trial_fn: the unit of work, ``run_trial`` or a function with its signature (picklable
             for the ``process`` backend on platforms without ``fork``).
+        while_waiting: called once in this process when the trials have been handed to the
+            ``process`` or ``ray`` workers, before their results are awaited: work for what
+            follows the run (the command imports Matplotlib there, instead of after the trials).
 
     Returns:
         A :class:`RunSummary`; the results are in the run folder.
@@ -388,9 +403,9 @@ def run_experiment(
                     if backend == "serial" or not work:
                         results = _serial(work, trial_fn)
                     elif backend == "process":
-                        results = _process(work, trial_fn, n_workers)
+                        results = _process(work, trial_fn, n_workers, while_waiting)
                     else:
-                        results = _ray(work, trial_fn, workers, ray_address, ray_info)
+                        results = _ray(work, trial_fn, workers, ray_address, ray_info, while_waiting)
                     with closing(results):
                         for config, result in results:
                             store.save_trial(run_dir, result, config)
