@@ -447,3 +447,14 @@ def test_the_report_from_memory_equals_the_report_from_the_files(tmp_path):
     (tmp_path / "REPORT.md").unlink()
     report.write_outputs(tmp_path, results)
     assert (tmp_path / "REPORT.md").read_text(encoding="utf-8") == text
+
+
+def test_finished_hands_over_the_results_it_read_and_only_those(tmp_path):
+    results = fill(tmp_path)
+    store.trial_path(tmp_path, "sarsa", 41).write_bytes(b"damaged")  # removed, not handed over
+    loaded = {}
+    done = store.finished(tmp_path, EXP, loaded)
+    assert done == {("sarsa", 40), ("sup-skew", 40), ("sup-skew", 41)}
+    assert set(loaded) == done
+    for key, r in loaded.items():
+        assert_same_result(r, results[key])

@@ -385,14 +385,14 @@ def run_experiment(
                 if created:  # a folder holding another run (or none) is left as it is
                     folder.discard_unfinished(run_dir, exp, created)
                 raise
-            done = store.finished(run_dir, exp)
+            in_hand: dict[tuple[str, int], TrialResult] = {}  # every result read or computed
+            done = store.finished(run_dir, exp, in_hand)
             work = [(t, seed) for t in exp.trials for seed in exp.seeds() if (t.name, seed) not in done]
             n_workers = 1
             if backend == "process":
                 n_workers = max(1, min(workers or os.cpu_count() or 1, len(work)))
             ray_info = {"cpus": 0}
             computed = 0
-            saved: dict[tuple[str, int], TrialResult] = {}
             try:
                 if work and (backend != "serial" or trial_fn is run_trial):
                     # Compiling (or loading the compiled code) is a phase of its own: inside the
@@ -409,7 +409,7 @@ def run_experiment(
                     with closing(results):
                         for config, result in results:
                             store.save_trial(run_dir, result, config)
-                            saved[config.name, result.seed] = result
+                            in_hand[config.name, result.seed] = result
                             computed += 1
                             bar.update(1)
             except KeyboardInterrupt:
@@ -424,7 +424,7 @@ def run_experiment(
             if backend == "ray":
                 n_workers = ray_info["cpus"] or 1
             store.ensure_policies(run_dir, exp)
-            results = store.stored_results(run_dir, exp, saved)
+            results = store.stored_results(run_dir, exp, in_hand)
             tables = store.write_tables(run_dir, exp, results)
     except Exception:
         remove_empty_folders(run_dir, made)  # the lock file is gone now; so go empty folders made here

@@ -249,11 +249,16 @@ def load_trial(run_dir: str | os.PathLike, trial: str, seed: int) -> TrialResult
         raise StoreError(f"{src}: malformed entry ({e})") from None
 
 
-def finished(run_dir: str | os.PathLike, exp: ExperimentConfig) -> set[tuple[str, int]]:
+def finished(
+    run_dir: str | os.PathLike,
+    exp: ExperimentConfig,
+    loaded: dict[tuple[str, int], TrialResult] | None = None,
+) -> set[tuple[str, int]]:
     """The (trial, seed) pairs of ``exp`` with a complete trial file in ``run_dir``.
 
     A trial file that does not load or does not fit its trial's configuration is removed: its
-    trial counts as unfinished and will be computed again.
+    trial counts as unfinished and will be computed again. ``loaded``, if given, receives the
+    results read (for :func:`stored_results`, which then need not read them again).
     """
     done = set()
     shapes: dict[str, tuple[int, ...]] = {}
@@ -273,6 +278,8 @@ def finished(run_dir: str | os.PathLike, exp: ExperimentConfig) -> set[tuple[str
                 path.unlink(missing_ok=True)
                 continue
             done.add((t.name, seed))
+            if loaded is not None:
+                loaded[t.name, seed] = result
     return done
 
 
