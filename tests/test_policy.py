@@ -5,14 +5,20 @@ from pipefollow.training.agents import make_agent
 from pipefollow.training.policy_files import PolicyError, load_policy, save_policy
 
 
+@pytest.mark.parametrize("compress", [True, False])
 @pytest.mark.parametrize(
     "kind", [dict(algorithm="sarsa"), dict(algorithm="cacla", skew_deg=22.5, supervised=True)]
 )
-def test_loaded_policy_acts_exactly_as_saved(tmp_path, kind):
+def test_loaded_policy_acts_exactly_as_saved(tmp_path, kind, compress):
+    import zipfile
+
     rng = np.random.default_rng(0)
     agent = make_agent(rng=rng, **kind)
     agent.weights[:] = rng.normal(size=agent.weights.shape) * 0.3
-    path = save_policy(agent, tmp_path / "p.npz")
+    path = save_policy(agent, tmp_path / "p.npz", compress=compress)
+    with zipfile.ZipFile(path) as z:
+        stored = z.getinfo("weights.npy").compress_type
+    assert stored == (zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED)
     loaded = load_policy(path)
     assert loaded.params == agent.params
     np.testing.assert_array_equal(loaded.weights, agent.weights)

@@ -506,3 +506,40 @@ def test_process_backend_hands_out_the_longest_trials_first():
     assert names[exp.repeats : 2 * exp.repeats] == ["sarsa"] * exp.repeats
     assert names[-exp.repeats :] == ["cacla"] * exp.repeats  # plain CACLA, one phase: the shortest
     assert [s for c, s in ordered if c.name == "cacla"] == list(exp.seeds())  # stable among equals
+
+
+def test_the_side_compilation_runs_only_on_an_empty_compile_cache(tmp_path, monkeypatch):
+    import numba
+
+    from pipefollow.experiments import runner
+
+    started = []
+    monkeypatch.setattr(runner, "run_trial", lambda config, seed: None)
+    monkeypatch.setattr(
+        runner.multiprocessing.context.ForkProcess, "start", lambda self: started.append(self), raising=True
+    )
+    monkeypatch.setattr(runner.multiprocessing.context.ForkProcess, "join", lambda self, timeout=None: None)
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+    configs = [t for t in TINY.trials]  # SARSA and CACLA: two compiled paths
+    assert not runner.compile_cache_filled()
+    runner.warm_up(configs, parallel=True)
+    assert len(started) == 1
+    (tmp_path / "pipefollow" / "sim").mkdir(parents=True)
+    (tmp_path / "pipefollow" / "sim" / "decision.decide-10.py311.nbi").write_bytes(b"")
+    assert runner.compile_cache_filled()
+    runner.warm_up(configs, parallel=True)
+    assert len(started) == 1  # a filled cache: everything loads here, no child
+
+
+def test_while_waiting_runs_once_after_the_pool_has_the_trials_and_not_serially(tmp_path, monkeypatch):
+    events = []
+    real_save = store.save_trial
+    monkeypatch.setattr(store, "save_trial", lambda *a, **k: (events.append("save"), real_save(*a, **k))[1])
+    exp = with_overrides(TINY, trials=["sarsa"])
+    run_experiment(
+        exp, tmp_path / "p", backend="process", workers=2, while_waiting=lambda: events.append("wait")
+    )
+    assert events == ["wait", "save", "save"]  # before the first result is saved, and once
+    events.clear()
+    run_experiment(exp, tmp_path / "s", backend="serial", while_waiting=lambda: events.append("wait"))
+    assert events == ["save", "save"]  # nothing runs beside a serial run

@@ -373,3 +373,88 @@ def test_the_lock_file_goes_when_the_run_ends(tmp_path):
     assert not (run_dir / folder.LOCK_FILE).exists()
     with folder.locked(run_dir):  # and the folder can be locked again
         pass
+
+
+def _csv_rows_of(exp: ExperimentConfig, results) -> str:
+    """results.csv as the csv module writes the rows (the independent answer)."""
+    from pipefollow.training.outputs import csv_text
+
+    rows = []
+    for t in exp.trials:
+        for repeat, seed in enumerate(exp.seeds()):
+            r = results[t.name, seed]
+            for e in range(len(r.stats)):
+                ph = int(r.phase[e])
+                rows.append(
+                    (exp.name, t.name, t.title, t.algorithm, float(t.skew_deg), t.supervised, repeat, seed)
+                    + (ph, t.phases[ph].pipeline, e, float(r.sigma[e]), *(float(v) for v in r.stats[e]))
+                )
+    return csv_text(store.RESULTS_COLUMNS, rows)
+
+
+def test_results_table_equals_the_csv_modules_text_byte_for_byte(tmp_path):
+    # a label and a pipeline name that need quoting, and awkward floats
+    trials = (
+        TrialConfig(
+            name="odd",
+            label='CACLA, "quoted", skew 11.25°',
+            algorithm="cacla",
+            skew_deg=11.25,
+            phases=(Phase("paper-left", 3), Phase("paper-right", 2)),
+        ),
+        TRIALS[0],
+    )
+    exp = ExperimentConfig(name="unit, odd", repeats=2, seed=40, trials=trials)
+    results = fill(tmp_path, exp)
+    results["odd", 40].stats[0, :] = [1e-300, -0.0, 1 / 3, 12345678901234567.0]
+    store.save_trial(tmp_path, results["odd", 40], trials[0])
+    store.write_tables(tmp_path, exp)  # from the trial files
+    assert (tmp_path / "results.csv").read_text(encoding="utf-8") == _csv_rows_of(exp, results)
+    store.write_tables(tmp_path, exp, results)  # from memory
+    assert (tmp_path / "results.csv").read_text(encoding="utf-8") == _csv_rows_of(exp, results)
+
+
+def test_stored_results_take_known_results_and_read_the_others(tmp_path):
+    results = fill(tmp_path)
+    store.trial_path(tmp_path, "sarsa", 41).unlink()
+    known = {("sarsa", 40): results["sarsa", 40]}
+    got = store.stored_results(tmp_path, EXP, known)
+    assert list(got) == [("sarsa", 40), ("sup-skew", 40), ("sup-skew", 41)]
+    assert got["sarsa", 40] is known["sarsa", 40]
+    assert_same_result(got["sup-skew", 41], results["sup-skew", 41])
+    assert store.summary(tmp_path, EXP, last=2) == store.summary(tmp_path, EXP, last=2, results=got)
+
+
+def test_the_report_from_memory_equals_the_report_from_the_files(tmp_path):
+    from pipefollow.experiments import report
+    from pipefollow.experiments.summary import read_training
+
+    results = fill(tmp_path)
+    store.write_tables(tmp_path, EXP)
+    from_files = read_training(tmp_path / "results.csv")
+    from_memory = report.training_of(EXP, results)
+    assert list(from_memory) == list(from_files)
+    for trial, by_seed in from_files.items():
+        assert list(from_memory[trial]) == list(by_seed)
+        for seed, phases in by_seed.items():
+            assert len(from_memory[trial][seed]) == len(phases)
+            for a, b in zip(from_memory[trial][seed], phases, strict=True):
+                assert a.pipeline == b.pipeline
+                for name in ("returns", "in_view", "progress_m"):
+                    np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    report.write_outputs(tmp_path)
+    text = (tmp_path / "REPORT.md").read_text(encoding="utf-8")
+    (tmp_path / "REPORT.md").unlink()
+    report.write_outputs(tmp_path, results)
+    assert (tmp_path / "REPORT.md").read_text(encoding="utf-8") == text
+
+
+def test_finished_hands_over_the_results_it_read_and_only_those(tmp_path):
+    results = fill(tmp_path)
+    store.trial_path(tmp_path, "sarsa", 41).write_bytes(b"damaged")  # removed, not handed over
+    loaded = {}
+    done = store.finished(tmp_path, EXP, loaded)
+    assert done == {("sarsa", 40), ("sup-skew", 40), ("sup-skew", 41)}
+    assert set(loaded) == done
+    for key, r in loaded.items():
+        assert_same_result(r, results[key])

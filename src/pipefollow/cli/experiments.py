@@ -17,8 +17,11 @@ from pipefollow.cli.options import (
 )
 
 
-def _write_figures(run_dir: Path, required: bool) -> list[Path]:
-    """Figures and REPORT.md through ``pipefollow.experiments.report``, if that module exists."""
+def _write_figures(run_dir: Path, required: bool, results=None) -> list[Path]:
+    """Figures and REPORT.md through ``pipefollow.experiments.report``, if that module exists.
+
+    ``results``: the run's trial results in memory (``RunSummary.results``), or None to read them.
+    """
     try:
         from pipefollow.experiments import report
     except ModuleNotFoundError as e:
@@ -30,7 +33,16 @@ def _write_figures(run_dir: Path, required: bool) -> list[Path]:
             ) from None
         click.echo("note: figures skipped (pipefollow.experiments.report is not available)", err=True)
         return []
-    return [Path(p) for p in report.write_outputs(run_dir)]
+    return [Path(p) for p in report.write_outputs(run_dir, results)]
+
+
+def _preload_figures() -> None:
+    """While the trials run: import what the figures need (``report.preload``), if that module exists."""
+    try:
+        from pipefollow.experiments import report
+    except ModuleNotFoundError:
+        return
+    report.preload()
 
 
 @click.command()
@@ -136,7 +148,13 @@ def reproduce(
     out = Path(out_dir)
     try:
         run = run_experiment(
-            exp, out, backend=backend, workers=workers, ray_address=ray_address, show_progress=not as_json
+            exp,
+            out,
+            backend=backend,
+            workers=workers,
+            ray_address=ray_address,
+            show_progress=not as_json,
+            while_waiting=None if no_figures else _preload_figures,
         )
     except RunInterrupted as e:
         click.echo(f"pipefollow: {e.message}", err=True)
@@ -145,7 +163,7 @@ def reproduce(
     if run.read_only:
         click.echo(f"note: '{run.run_dir}' is complete and read-only: summarised, nothing written", err=True)
     elif not no_figures:
-        outputs += _write_figures(run.run_dir, required=False)
+        outputs += _write_figures(run.run_dir, required=False, results=run.results)
     if as_json:
         click.echo(
             json.dumps(
@@ -158,7 +176,7 @@ def reproduce(
                     "trials_reused": run.trials_reused,
                     "wall_seconds": run.wall_seconds,
                     "outputs": [str(p) for p in outputs],
-                    "trials": summary(run.run_dir, exp),
+                    "trials": summary(run.run_dir, exp, results=run.results or None),
                 }
             )
         )
@@ -171,7 +189,7 @@ def reproduce(
     if exp.compare_readings:
         _echo_sensitivity(run.run_dir, outputs)
         return
-    per_trial = summary(run.run_dir, exp)
+    per_trial = summary(run.run_dir, exp, results=run.results or None)
     width = max(len(r["label"]) for r in per_trial.values()) if per_trial else 5
     click.echo(f"{'trial':<{width}}  {'return, last 50 (mean ± sd over seeds)':>38}  {'in view':>7}")
     for row in per_trial.values():

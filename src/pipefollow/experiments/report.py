@@ -31,12 +31,14 @@ from pipefollow.experiments.report_text import (
 )
 from pipefollow.experiments.summary import (
     Evaluation,
+    PhaseSeries,
     Rows,
     Training,
     learning_curves,
     read_rows,
     read_training,
 )
+from pipefollow.learners.episodes import IN_VIEW, PROGRESS, RETURN
 
 # ---------------------------------------------------------------------------------------------
 # The run folder
@@ -108,11 +110,54 @@ def draw_trajectories(run_dir: Path, table: Table1, load: Callable = _load_trial
     return TRAJECTORIES_PNG
 
 
-def write_outputs(run_dir: str | Path) -> list[Path]:
+def preload() -> None:
+    """Import what drawing needs (Matplotlib's figure and Agg canvas, ≈ 0.5 s of CPU) ahead of drawing.
+
+    ``pipefollow reproduce`` calls it while the trials run in worker processes, where the import
+    shares the cores instead of adding to the wall time after the trials. Without Matplotlib it
+    does nothing (drawing then reports the missing package).
+    """
+    try:
+        import matplotlib.backends.backend_agg  # noqa: F401
+        import matplotlib.figure  # noqa: F401
+    except ImportError:
+        pass
+
+
+def training_of(config: ExperimentConfig, results: Mapping[tuple[str, int], object]) -> Training:
+    """The learning curves that ``results.csv`` holds, from the trial results themselves.
+
+    ``results`` maps (trial, seed) to a :class:`~pipefollow.experiments.trial.TrialResult`; the
+    series equal :func:`~pipefollow.experiments.summary.read_training` of the table written from
+    them (floats round-trip through the CSV exactly).
+    """
+    out: dict[str, dict[int, list[PhaseSeries]]] = {}
+    for t in config.trials:
+        for seed in config.seeds():
+            r = results.get((t.name, seed))
+            if r is None:
+                continue
+            phase = np.asarray(r.phase)
+            out.setdefault(t.name, {})[seed] = [
+                PhaseSeries(
+                    t.phases[ph].pipeline,
+                    np.array(r.stats[phase == ph, RETURN], dtype=np.float64),
+                    np.array(r.stats[phase == ph, IN_VIEW], dtype=np.float64),
+                    np.array(r.stats[phase == ph, PROGRESS], dtype=np.float64),
+                )
+                for ph in dict.fromkeys(phase.tolist())
+            ]
+    return out
+
+
+def write_outputs(run_dir: str | Path, results: Mapping[tuple[str, int], object] | None = None) -> list[Path]:
     """Draw the figures and write REPORT.md into a run folder.
 
     Args:
         run_dir: the run folder (``config.json``, ``results.csv``, ``evaluation.csv``, ``trials/``).
+        results: every stored trial by (trial, seed) (:func:`pipefollow.experiments.store.stored_results`,
+            a run's :attr:`~pipefollow.experiments.runner.RunSummary.results`), to save reading
+            ``results.csv`` and the trial files again; None reads them.
 
     Returns:
         Paths written: fig5/6/7.png for the figure groups with results, validation-trajectories.png
@@ -122,18 +167,25 @@ def write_outputs(run_dir: str | Path) -> list[Path]:
 
     run_dir = Path(run_dir)
     config = from_dict(json.loads((run_dir / "config.json").read_text()))
+    load = _load_trial
+    if results is not None:
+        known = results
+
+        def load(run_dir: Path, trial: str, seed: int):
+            return known[trial, seed] if (trial, seed) in known else _load_trial(run_dir, trial, seed)
+
     if config.compare_readings:
         from pipefollow.experiments import sensitivity
 
-        return sensitivity.write_outputs(run_dir, _wall_seconds(run_dir, config, _load_trial))
-    results = read_training(run_dir / "results.csv")
+        return sensitivity.write_outputs(run_dir, _wall_seconds(run_dir, config, load))
+    training = read_training(run_dir / "results.csv") if results is None else training_of(config, results)
     evaluation = read_rows(run_dir / "evaluation.csv")
-    findings = compute_findings(config, results, evaluation, _wall_seconds(run_dir, config, _load_trial))
-    drawn = draw_learning_curves(run_dir, config, results, findings.evaluations)
+    findings = compute_findings(config, training, evaluation, _wall_seconds(run_dir, config, load))
+    drawn = draw_learning_curves(run_dir, config, training, findings.evaluations)
     trajectories = None
     if findings.table1 is not None:
         try:
-            trajectories = draw_trajectories(run_dir, findings.table1, _load_trial)
+            trajectories = draw_trajectories(run_dir, findings.table1, load)
         except _LOAD_ERRORS as e:
             findings = _with_note(findings, f"The validation trajectories were not drawn: {e}.")
     written = [run_dir / name for name in drawn.values()]

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -248,11 +249,16 @@ def load_trial(run_dir: str | os.PathLike, trial: str, seed: int) -> TrialResult
         raise StoreError(f"{src}: malformed entry ({e})") from None
 
 
-def finished(run_dir: str | os.PathLike, exp: ExperimentConfig) -> set[tuple[str, int]]:
+def finished(
+    run_dir: str | os.PathLike,
+    exp: ExperimentConfig,
+    loaded: dict[tuple[str, int], TrialResult] | None = None,
+) -> set[tuple[str, int]]:
     """The (trial, seed) pairs of ``exp`` with a complete trial file in ``run_dir``.
 
     A trial file that does not load or does not fit its trial's configuration is removed: its
-    trial counts as unfinished and will be computed again.
+    trial counts as unfinished and will be computed again. ``loaded``, if given, receives the
+    results read (for :func:`stored_results`, which then need not read them again).
     """
     done = set()
     shapes: dict[str, tuple[int, ...]] = {}
@@ -272,6 +278,8 @@ def finished(run_dir: str | os.PathLike, exp: ExperimentConfig) -> set[tuple[str
                 path.unlink(missing_ok=True)
                 continue
             done.add((t.name, seed))
+            if loaded is not None:
+                loaded[t.name, seed] = result
     return done
 
 
@@ -290,6 +298,7 @@ def save_policy_file(run_dir: str | os.PathLike, config: TrialConfig, result: Tr
         seed=result.seed,
         pipeline=pipelines,
         episodes=config.episodes,
+        compress=False,
     )
 
 
@@ -308,40 +317,66 @@ def ensure_policies(run_dir: str | os.PathLike, exp: ExperimentConfig) -> int:
 # Tables
 
 
-def _results_rows(exp: ExperimentConfig, t: TrialConfig, repeat: int, r: TrialResult):
-    for e in range(len(r.stats)):
-        ph = int(r.phase[e])
-        yield (
-            exp.name,
-            t.name,
-            t.title,
-            t.algorithm,
-            float(t.skew_deg),
-            t.supervised,
-            repeat,
-            r.seed,
-            ph,
-            t.phases[ph].pipeline,
-            e,
-            float(r.sigma[e]),
-            *(float(v) for v in r.stats[e]),
-        )
+def _results_lines(exp: ExperimentConfig, t: TrialConfig, repeat: int, r: TrialResult) -> Iterator[str]:
+    """One trial's rows of ``results.csv``, as :func:`csv_text` would write them, ~5x faster.
+
+    The text columns (quoted where the CSV dialect needs it) are formatted once per trial and
+    phase, the numbers of each row by ``repr`` of Python floats, as :func:`csv_text` does; a test
+    holds the two equal byte for byte.
+    """
+    head = csv_text(
+        (), [(exp.name, t.name, t.title, t.algorithm, float(t.skew_deg), t.supervised, repeat, r.seed)]
+    )
+    head = head[1:-1]  # csv_text's empty header line and the row's line end
+    phases = {ph: csv_text((), [(ph, p.pipeline)])[1:-1] for ph, p in enumerate(t.phases)}
+    sigma, stats = r.sigma.tolist(), r.stats.tolist()
+    for e, ph in enumerate(r.phase.tolist()):
+        numbers = ",".join(map(repr, (sigma[e], *stats[e])))
+        yield f"{head},{phases[ph]},{e},{numbers}\n"
 
 
-def write_tables(run_dir: str | os.PathLike, exp: ExperimentConfig) -> list[Path]:
+def stored_results(
+    run_dir: str | os.PathLike,
+    exp: ExperimentConfig,
+    known: Mapping[tuple[str, int], TrialResult] | None = None,
+) -> dict[tuple[str, int], TrialResult]:
+    """Every stored trial of ``exp`` by (trial, seed), in the experiment's order.
+
+    ``known`` holds results already in memory (those a run just saved); the others are read from
+    their trial files. Trials without a trial file are left out.
+    """
+    known = known or {}
+    out = {}
+    for t in exp.trials:
+        for seed in exp.seeds():
+            if (t.name, seed) in known:
+                out[t.name, seed] = known[t.name, seed]
+            elif trial_path(run_dir, t.name, seed).exists():
+                out[t.name, seed] = load_trial(run_dir, t.name, seed)
+    return out
+
+
+def write_tables(
+    run_dir: str | os.PathLike,
+    exp: ExperimentConfig,
+    results: Mapping[tuple[str, int], TrialResult] | None = None,
+) -> list[Path]:
     """Regenerate ``results.csv`` and ``evaluation.csv`` from the stored trials of ``exp``.
 
     Rows follow the order of the trials in ``exp``, then the seeds; trials not (yet) stored are
-    left out. Returns the two paths.
+    left out. ``results`` (:func:`stored_results`) saves reading the trial files again. Returns
+    the two paths.
     """
     run_dir = Path(run_dir)
-    results, evaluation = [], []
+    if results is None:
+        results = stored_results(run_dir, exp)
+    lines, evaluation = [csv_text(RESULTS_COLUMNS, ())], []
     for t in exp.trials:
         for repeat, seed in enumerate(exp.seeds()):
-            if not trial_path(run_dir, t.name, seed).exists():
+            r = results.get((t.name, seed))
+            if r is None:
                 continue
-            r = load_trial(run_dir, t.name, seed)
-            results.extend(_results_rows(exp, t, repeat, r))
+            lines.extend(_results_lines(exp, t, repeat, r))
             for controller, values in r.evaluation.items():
                 evaluation.append(
                     (
@@ -355,34 +390,40 @@ def write_tables(run_dir: str | os.PathLike, exp: ExperimentConfig) -> list[Path
                     )
                 )
     paths = [run_dir / RESULTS_FILE, run_dir / EVALUATION_FILE]
-    write_text_atomic(paths[0], csv_text(RESULTS_COLUMNS, results))
+    write_text_atomic(paths[0], "".join(lines))
     write_text_atomic(paths[1], csv_text(EVALUATION_COLUMNS, evaluation))
     return paths
 
 
-def summary(run_dir: str | os.PathLike, exp: ExperimentConfig, last: int = 50) -> dict[str, dict]:
+def summary(
+    run_dir: str | os.PathLike,
+    exp: ExperimentConfig,
+    last: int = 50,
+    results: Mapping[tuple[str, int], TrialResult] | None = None,
+) -> dict[str, dict]:
     """Per trial of ``exp``, means over its stored seeds.
 
     Of the last ``last`` training episodes: return and pipe in view; of the evaluation episodes:
-    each controller's return.
+    each controller's return. ``results`` (:func:`stored_results`) saves reading the trial files.
     """
+    if results is None:
+        results = stored_results(run_dir, exp)
     out = {}
     for t in exp.trials:
-        seeds = [s for s in exp.seeds() if trial_path(run_dir, t.name, s).exists()]
-        results = [load_trial(run_dir, t.name, s) for s in seeds]
-        if not results:
+        results_of = [results[t.name, s] for s in exp.seeds() if (t.name, s) in results]
+        if not results_of:
             continue
-        final = [r.stats[-last:].mean(axis=0) for r in results]
+        final = [r.stats[-last:].mean(axis=0) for r in results_of]
         row = {
             "label": t.title,
-            "seeds": [r.seed for r in results],
+            "seeds": [r.seed for r in results_of],
             f"mean_return_last{last}": float(np.mean([f[0] for f in final])),
             # sample standard deviation, as in the report
             f"std_return_last{last}": float(np.std([f[0] for f in final], ddof=1)) if len(final) > 1 else 0.0,
             f"mean_pipe_in_view_last{last}": float(np.mean([f[1] for f in final])),
-            "evaluation_pipeline": results[0].evaluation_pipeline,
+            "evaluation_pipeline": results_of[0].evaluation_pipeline,
             "evaluation_mean_return": {
-                c: float(np.mean([r.evaluation[c][0] for r in results])) for c in results[0].evaluation
+                c: float(np.mean([r.evaluation[c][0] for r in results_of])) for c in results_of[0].evaluation
             },
         }
         out[t.name] = row

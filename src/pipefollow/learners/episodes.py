@@ -80,6 +80,10 @@ def tracks_of(pipes) -> Tracks:
     points = np.ascontiguousarray(np.concatenate([p.points for p in pipes]))
     cum = np.ascontiguousarray(np.concatenate([p.cumulative for p in pipes]))
     starts = np.array([[p.points[0, 0], p.points[0, 1], p.start_heading] for p in pipes])
+    # Read-only like a Pipeline's own arrays, which the environment hands to the simulator: numba
+    # types the two alike, so the simulator's functions are compiled once, not once for each.
+    points.setflags(write=False)
+    cum.setflags(write=False)
     return Tracks(points, cum, offsets, starts)
 
 

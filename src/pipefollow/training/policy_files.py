@@ -38,10 +38,12 @@ class PolicyError(ValueError):
     """A policy file that cannot be used; the message names the file and the problem."""
 
 
-def save_policy(agent, path: str | os.PathLike, **metadata) -> Path:
+def save_policy(agent, path: str | os.PathLike, *, compress: bool = True, **metadata) -> Path:
     """Write ``agent`` (a learner of the registry, or an MLP) to ``path`` (``.npz``) atomically.
 
     The file holds the agent's readings' id (``agent.readings``); extra string ``metadata`` is stored too.
+    ``compress=False`` stores the arrays uncompressed (a run folder's many policies: zlib cost more
+    time than the files' size is worth); either kind loads the same way.
     """
     path = Path(path)
     if isinstance(agent, MLPPolicy):
@@ -55,7 +57,7 @@ def save_policy(agent, path: str | os.PathLike, **metadata) -> Path:
         "readings": np.array(getattr(agent, "readings", "default")),
     }
     with atomic_file(path) as f:
-        np.savez_compressed(f, **arrays)
+        (np.savez_compressed if compress else np.savez)(f, **arrays)
     return path
 
 
