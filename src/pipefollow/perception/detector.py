@@ -21,7 +21,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from pipefollow.perception.follow import dilate, extend_ends
+from pipefollow.perception.follow import extend_ends
 from pipefollow.sim.camera import clip_segment
 
 MIN_SIDE = 16  # smallest image side (pixels) the detector accepts
@@ -126,7 +126,7 @@ def detect_pipe(
         return NOT_FOUND
     segs = np.asarray(segs, dtype=np.float64).reshape(-1, 4)  # (N, 1, 4) in OpenCV 4, (N, 4) in 5
     found, x1, y1, x2, y_near, confidence = centre_line(
-        segs, edges, dilate(edges, cv2), half_width, depth, pipe_diameter, min_confidence
+        segs, edges, half_width, depth, pipe_diameter, min_confidence
     )
     det = Detection(bool(found), x1, y1, x2, y_near, confidence)
     if previous is None or not previous.found or not det.found:
@@ -148,7 +148,7 @@ def same_way(det: Detection, previous: Detection) -> Detection:
     return det._replace(x1=det.x2, y1=det.y_near, x2=det.x1, y_near=det.y1)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=True)
 def gradient_level(img):
     """Mean gradient magnitude of a grey image (central differences, grey levels per pixel)."""
     h, w = img.shape
@@ -162,20 +162,20 @@ def gradient_level(img):
 
 
 @njit(cache=True)
-def centre_line(segs, edges, grown, half_width, depth, diameter, min_confidence):
+def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     """From Hough segments (pixels ``x0, y0, x1, y1``) and the edge image to the pipe's centre line.
 
     Returns ``(found, x1, y1, x2, y_near, confidence)`` in camera metres (see :func:`detect_pipe`).
     The strongest straight leg is found first (:func:`leg`); a pipe that bends or curves in view
-    goes on beyond it, so both ends are then followed along the pipe's two edges in ``grown`` (the
-    dilated edge image) to the ends of the visible piece (:func:`~pipefollow.perception.follow.extend_ends`),
-    as the exact camera's observation spans the visible piece from its near to its far end.
+    goes on beyond it, so both ends are then followed along the pipe's two edges to the ends of the
+    visible piece (:func:`~pipefollow.perception.follow.extend_ends`), as the exact camera's
+    observation spans the visible piece from its near to its far end.
     """
     active = np.ones(segs.shape[0], dtype=np.bool_)
     found, ends, confidence, _, _, sep = leg(segs, active, edges, half_width, depth, diameter, min_confidence)
     if not found:
         return False, 0.0, 0.0, 0.0, 0.0, confidence
-    extend_ends(ends, grown, 0.5 * sep, half_width, depth)
+    extend_ends(ends, edges, 0.5 * sep, half_width, depth)
     xa, ya, xb, yb = ends[0, 0], ends[0, 1], ends[1, 0], ends[1, 1]
     # the near end is the one nearer the AUV (the footprint's origin): the pipe comes from behind
     # it, also when it runs across the view after a turn

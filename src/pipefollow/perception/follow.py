@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
 STEP_PX = 4.0  # step length in pixels
@@ -26,13 +25,20 @@ MIN_HITS = 0.75  # share of the step's edge points that must lie on edge pixels
 
 @njit(cache=True)
 def on_edge(edges, x, y, half_width, depth, sx, sy):
-    """1 if the point (camera metres) lies on a set pixel of ``edges``, 0 if not, −1 outside the image."""
+    """1 if the point (camera metres) lies within a pixel of a set pixel of ``edges``, 0 if not, −1 outside.
+
+    The pixel of tolerance lets an edge line a pixel off (a staircase edge, a step's rounding) hit.
+    """
     h, w = edges.shape
     c = int(math.floor((x + half_width) / sx))
     r = int(math.floor((depth - y) / sy))
     if c < 0 or c >= w or r < 0 or r >= h:
         return -1
-    return 1 if edges[r, c] != 0 else 0
+    for rr in range(max(r - 1, 0), min(r + 2, h)):
+        for cc in range(max(c - 1, 0), min(c + 2, w)):
+            if edges[rr, cc] != 0:
+                return 1
+    return 0
 
 
 @njit(cache=True)
@@ -40,7 +46,7 @@ def follow_pipe(edges, x, y, ux, uy, half_sep, half_width, depth, max_steps):
     """Walk along the pipe from the centre-line point ``(x, y)`` in direction ``(ux, uy)`` (unit).
 
     Args:
-        edges: the (dilated) edge image, row 0 the far edge y = ``depth``.
+        edges: the edge image, row 0 the far edge y = ``depth``.
         x: the start's lateral position, on the centre line (camera metres).
         y: the start's forward position.
         ux: the walk's direction, a unit vector: lateral component ...
@@ -85,6 +91,10 @@ def follow_pipe(edges, x, y, ux, uy, half_sep, half_width, depth, max_steps):
                         best = score
                         bx, by = x + shift * mx + step * vx, y + shift * my + step * vy
                         bux, buy = vx, vy
+                if best == 1.0:  # nothing beats it, and ties keep the first
+                    break
+            if best == 1.0:
+                break
         if best < MIN_HITS:
             break
         n += 1
@@ -125,8 +135,3 @@ def extend_ends(ends, edges, half_sep, half_width, depth):
         ends[e, 0], ends[e, 1] = x, y
         total += n
     return total
-
-
-def dilate(edges: np.ndarray, cv2) -> np.ndarray:
-    """The edge image grown by a pixel each way, so that an edge line a pixel off still hits it."""
-    return cv2.dilate(edges, np.ones((3, 3), np.uint8))
