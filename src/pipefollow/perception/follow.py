@@ -224,8 +224,13 @@ def extend_ends(ends, edges, half_sep, half_width, depth):
         back = min(RETRACT, 0.4 * norm)
         x, y, n, tx, ty, exited = follow_pipe(edges, leg[e, 0] - back * ux, leg[e, 1] - back * uy, ux, uy,
                                               half_sep, half_width, depth, max_steps)  # fmt: skip
-        if n == 0:  # not a step from inside the leg: its fitted end stays
-            continue
+        if n * STEP_PX * max(2.0 * half_width / w, depth / h) < back:
+            # it did not get back to the leg's end (patchy edges, or a start off a curved pipe):
+            # from the leg's end itself, and where no step is taken there the fitted end stays
+            x, y, n, tx, ty, exited = follow_pipe(edges, leg[e, 0], leg[e, 1], ux, uy, half_sep, half_width,
+                                                  depth, max_steps)  # fmt: skip
+            if n == 0:
+                continue
         ends[e, 0], ends[e, 1] = refine_end(edges, tx, ty, x, y, half_sep, half_width, depth, exited)
         total += n
     return total
