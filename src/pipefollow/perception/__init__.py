@@ -2,7 +2,8 @@
 
 ``water`` holds the one parameter record of water and camera settings, ``image`` renders the
 footprint as the camera sees it, ``detector`` finds the pipe in a grey image (OpenCV, the optional
-extra ``vision``) and ``camera`` joins the two to the simulation's observation slots.
+extra ``vision``), ``follow`` walks along the pipe's edges to the ends of the visible piece, and
+``camera`` joins them to the simulation's observation slots.
 """
 
 from pipefollow.files.compile_cache import configure_numba_cache

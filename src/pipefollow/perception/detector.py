@@ -3,7 +3,8 @@
 The steps of the underwater pipeline-tracking literature: Canny edges, the probabilistic Hough
 transform, the dominant direction of the line segments (a length-weighted angle histogram), the
 pipe's two edges paired into a centre line (two parallel groups of segments about a pipe diameter
-apart), each edge refined by a least-squares fit to its edge pixels. The result is the paper's
+apart), each edge refined by a least-squares fit to its edge pixels, then both ends followed
+along the two edges beyond the straight leg, through bends and curves. The result is the paper's
 observation ``(x1, y1, x2)`` in camera metres by the pixel conventions of
 :mod:`pipefollow.perception.image` (also ``y_near``), plus a confidence.
 
@@ -20,6 +21,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from pipefollow.perception.follow import extend_ends
 from pipefollow.sim.camera import clip_segment
 
 MIN_SIDE = 16  # smallest image side (pixels) the detector accepts
@@ -28,7 +30,6 @@ MIN_EDGE = 24.0  # ... and at least this (Canny's 3×3 Sobel units)
 MIN_EDGE_SHARE = 0.1  # the weaker edge's segment length, at least this share of the stronger's
 MIN_SUPPORT = 0.25  # the two edges' segment length, at least this share of the footprint's longer side
 EXTEND = 0.4  # m: how far edge pixels on the fitted edges may lengthen the Hough segments' extent
-JOIN = 0.5  # m: two legs whose nearest ends are closer than this are one bent pipe
 SOBEL_GAIN = 8.0  # a 3×3 Sobel gives 8× the central-difference gradient
 _CV2 = None
 
@@ -147,7 +148,7 @@ def same_way(det: Detection, previous: Detection) -> Detection:
     return det._replace(x1=det.x2, y1=det.y_near, x2=det.x1, y_near=det.y1)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=True)
 def gradient_level(img):
     """Mean gradient magnitude of a grey image (central differences, grey levels per pixel)."""
     h, w = img.shape
@@ -165,31 +166,16 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     """From Hough segments (pixels ``x0, y0, x1, y1``) and the edge image to the pipe's centre line.
 
     Returns ``(found, x1, y1, x2, y_near, confidence)`` in camera metres (see :func:`detect_pipe`).
-    A pipe that bends in view shows two straight legs: the strongest leg is found first, then the
-    strongest leg of another direction among the remaining segments; if one of its ends lies
-    within :data:`JOIN` of one of the first leg's, the observation spans the chain's outer ends,
-    as the exact camera's spans the visible piece from its near to its far end.
+    The strongest straight leg is found first (:func:`leg`); a pipe that bends or curves in view
+    goes on beyond it, so both ends are then followed along the pipe's two edges to the ends of the
+    visible piece (:func:`~pipefollow.perception.follow.extend_ends`), as the exact camera's
+    observation spans the visible piece from its near to its far end.
     """
-    m = segs.shape[0]
-    active = np.ones(m, dtype=np.bool_)
-    args = (edges, half_width, depth, diameter, min_confidence)
-    found, ends, confidence, used, dirn = leg(segs, active, *args)
+    active = np.ones(segs.shape[0], dtype=np.bool_)
+    found, ends, confidence, _, _, sep = leg(segs, active, edges, half_width, depth, diameter, min_confidence)
     if not found:
         return False, 0.0, 0.0, 0.0, 0.0, confidence
-    for i in range(m):
-        if used[i]:
-            active[i] = False
-    found2, ends2, _, _, dirn2 = leg(segs, active, *args)
-    bend = abs((dirn2 - dirn + 0.5 * math.pi) % math.pi - 0.5 * math.pi)
-    if found2 and bend > math.radians(15.0):
-        best, bi, bj = math.inf, 0, 0
-        for i in range(2):
-            for j in range(2):
-                d = math.hypot(ends[i, 0] - ends2[j, 0], ends[i, 1] - ends2[j, 1])
-                if d < best:
-                    best, bi, bj = d, i, j
-        if best < JOIN:
-            ends[bi, 0], ends[bi, 1] = ends2[1 - bj, 0], ends2[1 - bj, 1]
+    extend_ends(ends, edges, 0.5 * sep, half_width, depth)
     xa, ya, xb, yb = ends[0, 0], ends[0, 1], ends[1, 0], ends[1, 1]
     # the near end is the one nearer the AUV (the footprint's origin): the pipe comes from behind
     # it, also when it runs across the view after a turn
@@ -206,8 +192,9 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
 def leg(segs, active, edges, half_width, depth, diameter, min_confidence):
     """The strongest straight piece of pipe among the ``active`` segments.
 
-    Returns ``(found, ends, confidence, used, direction)``: the centre line's two ends inside the
-    footprint (a 2 × 2 array, unordered), the segments of its two edges, and its direction (rad).
+    Returns ``(found, ends, confidence, used, direction, separation)``: the centre line's two ends
+    inside the footprint (a 2 × 2 array, unordered), the segments of its two edges, its direction
+    (rad) and the distance between the two fitted edges (m).
     """
     nothing = np.zeros((2, 2))
     h, w = edges.shape
@@ -245,7 +232,7 @@ def leg(segs, active, edges, half_width, depth, diameter, min_confidence):
     k = idx.size
     used = np.zeros(m, dtype=np.bool_)
     if k < 2:
-        return False, nothing, 0.0, used, 0.0
+        return False, nothing, 0.0, used, 0.0, 0.0
     dirn = 0.5 * math.atan2(s2, c2)
     dx, dy = math.cos(dirn), math.sin(dirn)
     nx, ny = -dy, dx
@@ -286,7 +273,7 @@ def leg(segs, active, edges, half_width, depth, diameter, min_confidence):
             ):
                 pa, pb, score = i, j, total
     if pa < 0:
-        return False, nothing, 0.0, used, dirn
+        return False, nothing, 0.0, used, dirn, 0.0
     t_lo, t_hi = math.inf, -math.inf
     for j in range(k):
         if group[j] == pa or group[j] == pb:
@@ -298,7 +285,7 @@ def leg(segs, active, edges, half_width, depth, diameter, min_confidence):
     sep = g_rho[pb] - g_rho[pa]
     confidence = min(1.0, 0.5 * score / extent) * math.exp(-(((sep - diameter) / diameter) ** 2))
     if confidence < min_confidence or score < MIN_SUPPORT * max(depth, 2.0 * half_width):
-        return False, nothing, confidence, used, dirn
+        return False, nothing, confidence, used, dirn, 0.0
     for j in range(k):
         used[idx[j]] = group[j] == pa or group[j] == pb
     # refine each edge: least squares of the offset across against the position along, on its
@@ -348,11 +335,12 @@ def leg(segs, active, edges, half_width, depth, diameter, min_confidence):
     ax0, ay0, bx0, by0 = ends[0, 0], ends[0, 1], ends[1, 0], ends[1, 1]
     t0, t1 = clip_segment(ax0, ay0, bx0, by0, -half_width, half_width, 0.0, depth)
     if t0 > t1:
-        return False, nothing, confidence, used, dirn
+        return False, nothing, confidence, used, dirn, 0.0
     out = np.empty((2, 2))
     out[0, 0], out[0, 1] = ax0 + t0 * (bx0 - ax0), ay0 + t0 * (by0 - ay0)
     out[1, 0], out[1, 1] = ax0 + t1 * (bx0 - ax0), ay0 + t1 * (by0 - ay0)
-    return True, out, confidence, used, dirn
+    sep = abs(fit[1, 0] - fit[0, 0] + (fit[1, 1] - fit[0, 1]) * 0.5 * extent)
+    return True, out, confidence, used, dirn, sep
 
 
 @njit(cache=True)
