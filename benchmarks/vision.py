@@ -83,9 +83,17 @@ def main() -> None:
         rows.append((name, statistics.median(blocks(fn, args.repeats, 200)), target))
 
     def stepper(camera):
-        e = gym.make("pipefollow/PipelineFollowing-v0", pipeline=pipe, episode_seconds=86_400, camera=camera)
-        e.reset(seed=0)
-        return lambda: e.step([0.0])
+        """One decision of the heuristic following the pipe (the pipe in view, as in a real run)."""
+        e = gym.make("pipefollow/PipelineFollowing-v0", pipeline=pipe, episode_seconds=600.0, camera=camera)
+        last = list(e.reset(seed=0))
+
+        def step():
+            obs, info = last[0], last[-1]
+            a = math.atan2(obs[0], obs[1]) / (0.5 * math.pi) if info["pipe_in_view"] else 0.0
+            obs, _, terminated, truncated, info = e.step([a])
+            last[:] = e.reset() if terminated or truncated else (obs, info)
+
+        return step
 
     ideal, vision = stepper("ideal"), stepper("vision")
     ideal(), vision()
