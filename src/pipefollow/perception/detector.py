@@ -29,7 +29,7 @@ EDGE_FACTOR = 3.2  # Canny's high threshold in mean gradients of the image ...
 MIN_EDGE = 24.0  # ... and at least this (Canny's 3×3 Sobel units)
 MIN_EDGE_SHARE = 0.1  # the weaker edge's segment length, at least this share of the stronger's
 MIN_SUPPORT = 0.25  # the two edges' segment length, at least this share of the footprint's longer side
-EXTEND = 0.4  # m: how far edge pixels on the fitted edges may lengthen the Hough segments' extent
+EXTEND = 0.4  # m: how far edge pixels may lengthen the Hough segments' extent (and the walk starts back)
 SOBEL_GAIN = 8.0  # a 3×3 Sobel gives 8× the central-difference gradient
 _CV2 = None
 
@@ -171,11 +171,10 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     visible piece (:func:`~pipefollow.perception.follow.extend_ends`), as the exact camera's
     observation spans the visible piece from its near to its far end.
     """
-    active = np.ones(segs.shape[0], dtype=np.bool_)
-    found, ends, confidence, _, _, sep = leg(segs, active, edges, half_width, depth, diameter, min_confidence)
+    found, ends, confidence, sep = leg(segs, edges, half_width, depth, diameter, min_confidence)
     if not found:
         return False, 0.0, 0.0, 0.0, 0.0, confidence
-    extend_ends(ends, edges, 0.5 * sep, half_width, depth)
+    extend_ends(ends, edges, 0.5 * sep, half_width, depth, EXTEND)
     xa, ya, xb, yb = ends[0, 0], ends[0, 1], ends[1, 0], ends[1, 1]
     # the near end is the one nearer the AUV (the footprint's origin): the pipe comes from behind
     # it, also when it runs across the view after a turn
@@ -189,12 +188,11 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
 
 
 @njit(cache=True)
-def leg(segs, active, edges, half_width, depth, diameter, min_confidence):
-    """The strongest straight piece of pipe among the ``active`` segments.
+def leg(segs, edges, half_width, depth, diameter, min_confidence):
+    """The strongest straight piece of pipe among the Hough segments.
 
-    Returns ``(found, ends, confidence, used, direction, separation)``: the centre line's two ends
-    inside the footprint (a 2 × 2 array, unordered), the segments of its two edges, its direction
-    (rad) and the distance between the two fitted edges (m).
+    Returns ``(found, ends, confidence, separation)``: the centre line's two ends inside the
+    footprint (a 2 × 2 array, unordered) and the distance between the two fitted edges (m).
     """
     nothing = np.zeros((2, 2))
     h, w = edges.shape
@@ -212,8 +210,7 @@ def leg(segs, active, edges, half_width, depth, diameter, min_confidence):
     bins = 36
     hist = np.zeros(bins)
     for i in range(m):
-        if active[i]:
-            hist[int(theta[i] / math.pi * bins) % bins] += length[i]
+        hist[int(theta[i] / math.pi * bins) % bins] += length[i]
     best_bin, best_val = 0, -1.0
     for b in range(bins):
         v = hist[b] + 0.5 * (hist[(b - 1) % bins] + hist[(b + 1) % bins])
@@ -224,15 +221,14 @@ def leg(segs, active, edges, half_width, depth, diameter, min_confidence):
     s2, c2 = 0.0, 0.0  # doubled angles average a direction modulo π
     for i in range(m):
         diff = abs((theta[i] - peak + 0.5 * math.pi) % math.pi - 0.5 * math.pi)
-        if diff < math.radians(12.0) and active[i]:
+        if diff < math.radians(12.0):
             keep[i] = True
             s2 += length[i] * math.sin(2.0 * theta[i])
             c2 += length[i] * math.cos(2.0 * theta[i])
     idx = np.nonzero(keep)[0]
     k = idx.size
-    used = np.zeros(m, dtype=np.bool_)
     if k < 2:
-        return False, nothing, 0.0, used, 0.0, 0.0
+        return False, nothing, 0.0, 0.0
     dirn = 0.5 * math.atan2(s2, c2)
     dx, dy = math.cos(dirn), math.sin(dirn)
     nx, ny = -dy, dx
@@ -273,7 +269,7 @@ def leg(segs, active, edges, half_width, depth, diameter, min_confidence):
             ):
                 pa, pb, score = i, j, total
     if pa < 0:
-        return False, nothing, 0.0, used, dirn, 0.0
+        return False, nothing, 0.0, 0.0
     t_lo, t_hi = math.inf, -math.inf
     for j in range(k):
         if group[j] == pa or group[j] == pb:
@@ -285,9 +281,7 @@ def leg(segs, active, edges, half_width, depth, diameter, min_confidence):
     sep = g_rho[pb] - g_rho[pa]
     confidence = min(1.0, 0.5 * score / extent) * math.exp(-(((sep - diameter) / diameter) ** 2))
     if confidence < min_confidence or score < MIN_SUPPORT * max(depth, 2.0 * half_width):
-        return False, nothing, confidence, used, dirn, 0.0
-    for j in range(k):
-        used[idx[j]] = group[j] == pa or group[j] == pb
+        return False, nothing, confidence, 0.0
     # refine each edge: least squares of the offset across against the position along, on its
     # edge pixels near it; twice, the second time in a narrower band around the first fit (the
     # Hough direction is only good to a degree or two)
@@ -335,12 +329,12 @@ def leg(segs, active, edges, half_width, depth, diameter, min_confidence):
     ax0, ay0, bx0, by0 = ends[0, 0], ends[0, 1], ends[1, 0], ends[1, 1]
     t0, t1 = clip_segment(ax0, ay0, bx0, by0, -half_width, half_width, 0.0, depth)
     if t0 > t1:
-        return False, nothing, confidence, used, dirn, 0.0
+        return False, nothing, confidence, 0.0
     out = np.empty((2, 2))
     out[0, 0], out[0, 1] = ax0 + t0 * (bx0 - ax0), ay0 + t0 * (by0 - ay0)
     out[1, 0], out[1, 1] = ax0 + t1 * (bx0 - ax0), ay0 + t1 * (by0 - ay0)
     sep = abs(fit[1, 0] - fit[0, 0] + (fit[1, 1] - fit[0, 1]) * 0.5 * extent)
-    return True, out, confidence, used, dirn, sep
+    return True, out, confidence, sep
 
 
 @njit(cache=True)

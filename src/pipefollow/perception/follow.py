@@ -22,7 +22,6 @@ LOOK_AHEAD = 2.0  # steps: a step is scored on the edges this far ahead (a corne
 MAX_TURN = math.radians(60.0)  # largest turn per step (a bend of 90° takes two steps)
 TURNS = 17  # turns tried per step, evenly from −MAX_TURN to MAX_TURN (7.5° apart)
 MIN_HEADING = math.cos(math.radians(120.0))  # the walk turns at most 120° from its start's direction
-RETRACT = 0.4  # m: the walk starts this far back inside the leg (the refinement's EXTEND)
 MIN_HITS = 0.75  # share of the step's edge points that must lie on edge pixels
 SHIFTS = 3  # sideways shifts tried per turn: 0, ±1 pixel
 TAIL = 3  # steps: the end's line is refitted to the edge pixels of the walk's last TAIL steps
@@ -205,8 +204,11 @@ def refine_end(edges, tail_x, tail_y, x, y, half_sep, half_width, depth, exited)
 
 
 @njit(cache=True)
-def extend_ends(ends, edges, half_sep, half_width, depth):
+def extend_ends(ends, edges, half_sep, half_width, depth, retract):
     """Follow the pipe beyond both ends of a straight leg (rows of ``ends``, in place).
+
+    Each walk starts ``retract`` (m) back inside the leg, at most 0.4 of its length: the leg's
+    fitted line may have been lengthened that far (the detector's ``EXTEND``) past a bend.
 
     Returns the number of steps taken beyond the leg's ends.
     """
@@ -221,7 +223,7 @@ def extend_ends(ends, edges, half_sep, half_width, depth):
             continue
         ux, uy = dx / norm, dy / norm
         # start back inside the leg: its fitted line may overshoot a bend along the other leg's edge
-        back = min(RETRACT, 0.4 * norm)
+        back = min(retract, 0.4 * norm)
         x, y, n, tx, ty, exited = follow_pipe(edges, leg[e, 0] - back * ux, leg[e, 1] - back * uy, ux, uy,
                                               half_sep, half_width, depth, max_steps)  # fmt: skip
         if n * STEP_PX * max(2.0 * half_width / w, depth / h) < back:
