@@ -32,31 +32,28 @@ COLUMNS = (
 )  # fmt: skip
 
 
-def train(folder: Path, seed: int, noise: float, miss: float, supervised: bool = False) -> str:
-    """The policy file in ``folder``, trained first if missing."""
+def trained(folder: Path, seed: int, *options: str) -> str:
+    """The policy file in ``folder``, trained if missing (``pipefollow train``, 90 s on random:mixed)."""
     policy = folder / "policy.npz"
     if not policy.exists():
         cmd = [
-            sys.executable, "-m", "pipefollow.cli", "train", "--algorithm", "cacla",
-            "--pipeline", "random:mixed",
-            "--seconds", "90", "--episodes", "5000", "--seed", str(seed), "--out", str(folder),
-            "--camera-noise", str(noise), "--miss-prob", str(miss), *(["--supervised"] if supervised else []),
+            sys.executable, "-m", "pipefollow.cli", "train", "--pipeline", "random:mixed", "--seconds", "90",
+            "--seed", str(seed), "--out", str(folder), *options,
         ]  # fmt: skip
         subprocess.run(cmd, check=True)
     return str(policy)
+
+
+def train(folder: Path, seed: int, noise: float, miss: float, supervised: bool = False) -> str:
+    """CACLA's policy file in ``folder`` (the README's recipe: 5,000 episodes), trained if missing."""
+    faults = ["--camera-noise", str(noise), "--miss-prob", str(miss)]
+    options = [*faults, "--supervised"] if supervised else faults
+    return trained(folder, seed, "--algorithm", "cacla", "--episodes", "5000", *options)
 
 
 def train_ppo(folder: Path, seed: int) -> str:
     """PPO's policy file in ``folder`` (the README's recipe: 100,000 steps), trained if missing."""
-    policy = folder / "policy.npz"
-    if not policy.exists():
-        cmd = [
-            sys.executable, "-m", "pipefollow.cli", "train", "--algorithm", "ppo",
-            "--pipeline", "random:mixed", "--seconds", "90", "--steps", "100000", "--seed", str(seed),
-            "--out", str(folder),
-        ]  # fmt: skip
-        subprocess.run(cmd, check=True)
-    return str(policy)
+    return trained(folder, seed, "--algorithm", "ppo", "--steps", "100000")
 
 
 def main() -> None:
