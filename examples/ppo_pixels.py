@@ -28,7 +28,7 @@ from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
 from pipefollow.evaluation.benchmark import benchmark
 from pipefollow.perception.water import WATER_PRESETS
 from pipefollow.sim.suites import get_suite
-from pipefollow.training.deep import SB3VecEnv, hyperparameters
+from pipefollow.training.deep import SB3VecEnv, hyperparameters, make_model
 
 
 def small_cnn():
@@ -93,9 +93,7 @@ def train(out: Path, steps: int, seed: int, water: str):
     env = VecMonitor(SB3VecEnv(venv))  # episode returns for the progress lines
     env.seed(seed)
     hp = hyperparameters("ppo")
-    kwargs = {k: v for k, v in hp.items() if k not in ("n_envs", "net_arch", "activation")}
-    policy_kwargs = {"features_extractor_class": small_cnn(), "net_arch": list(hp["net_arch"])}
-    model = PPO("CnnPolicy", env, seed=seed, device="cpu", verbose=0, policy_kwargs=policy_kwargs, **kwargs)
+    model = make_model("ppo", env, hp, seed, policy="CnnPolicy", features_extractor_class=small_cnn())
     t0 = time.perf_counter()
     done = 0
     while done < steps:  # progress every rollout chunk, as `pipefollow train` prints it

@@ -152,12 +152,22 @@ def hyperparameters(algorithm: str, **overrides) -> dict[str, Any]:
     return hp
 
 
-def make_model(algorithm: str, env, hp: dict[str, Any], seed: int):
-    """A Stable-Baselines3 model of ``algorithm`` on ``env`` (an SB3 VecEnv) with hyper-parameters ``hp``."""
+def make_model(
+    algorithm: str, env, hp: dict[str, Any], seed: int, policy: str = "MlpPolicy", **policy_kwargs
+):
+    """A Stable-Baselines3 model of ``algorithm`` on ``env`` (an SB3 VecEnv) with hyper-parameters ``hp``.
+
+    ``policy`` is SB3's policy name (``"CnnPolicy"`` for image observations); ``policy_kwargs``
+    are added to the network the hyper-parameters give (e.g. a ``features_extractor_class``).
+    """
     kwargs = {k: v for k, v in hp.items() if k not in ("n_envs", "net_arch", "activation")}
-    policy_kwargs = {"net_arch": list(hp["net_arch"]), "activation_fn": _ACTIVATIONS[hp["activation"]]}
+    policy_kwargs = {
+        "net_arch": list(hp["net_arch"]),
+        "activation_fn": _ACTIVATIONS[hp["activation"]],
+        **policy_kwargs,
+    }
     cls = PPO if algorithm == "ppo" else SAC
-    return cls("MlpPolicy", env, seed=seed, policy_kwargs=policy_kwargs, device="cpu", verbose=0, **kwargs)
+    return cls(policy, env, seed=seed, policy_kwargs=policy_kwargs, device="cpu", verbose=0, **kwargs)
 
 
 def _dense_layers(modules) -> tuple[list[np.ndarray], list[np.ndarray], list[str]]:
