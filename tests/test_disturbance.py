@@ -1,6 +1,5 @@
 """Disturbances and faults: ocean current, camera noise, missed detections, buried stretches."""
 
-import hashlib
 import json
 import math
 
@@ -10,7 +9,6 @@ from numpy.testing import assert_allclose
 from scipy import stats
 from scipy.integrate import solve_ivp
 
-from pipefollow import readings
 from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim import decision as sim
@@ -36,12 +34,11 @@ from pipefollow.training.compiled import run_episode, train_compiled
 # ---------------------------------------------------------------------------------------------
 # Off by default: the numbers of the code before disturbances existed, bit for bit
 
-# computed with the code before this module existed (heuristic, 60 s, seed 0; compiled
-# supervised CACLA with skew 22.5°, rng seed 5, 30 episodes on paper-left, chunk 10)
+# computed with the code before this module existed (heuristic, 60 s, seed 0); the simulator's
+# arithmetic has a fixed order (no fastmath, no BLAS), so these bits hold on every CPU target
 BEFORE = {
     "paper-left": "-0x1.01120bd512efcp+6",
     "paper-validation": "-0x1.16440a7152f05p+6",
-    "cacla_weights_sha256": "c63e6dff9f3fd4bae31c0b00d4270e26b142cf460ecebc82d66b0f957d6563d6",
 }
 ZERO = Disturbance(current_speed=0.0, current_direction=1.3)  # a direction, but no speed
 
@@ -54,15 +51,22 @@ def test_no_disturbance_reproduces_the_earlier_numbers(pipeline, disturbance):
     assert ep.ret == float.fromhex(BEFORE[pipeline])
 
 
-def test_no_disturbance_reproduces_compiled_training():
-    # the hash is of the code before disturbances and readings, whose eq. 15 was skew_step=weights
-    weights_step = readings.parse("skew_step=weights")
-    agent = make_agent(
-        "cacla", supervised=True, skew_deg=22.5, rng=np.random.default_rng(5), readings=weights_step
-    )
-    params = sim.PAPER_SIM._replace(disturbance=ZERO)
+def _trained_weights(params):
+    agent = make_agent("cacla", supervised=True, skew_deg=22.5, rng=np.random.default_rng(5))
     train_compiled(agent, builtin("paper-left"), 30, chunk=10, params=params)
-    assert hashlib.sha256(agent.weights.tobytes()).hexdigest() == BEFORE["cacla_weights_sha256"]
+    return agent.weights
+
+
+def test_a_current_of_zero_speed_trains_as_no_disturbance():
+    # a direction with no speed must leave every number of a learning run as it is
+    plain = _trained_weights(sim.PAPER_SIM)
+    zero = _trained_weights(sim.PAPER_SIM._replace(disturbance=ZERO))
+    assert np.array_equal(plain, zero)
+    # and the run is not trivially equal: a current that flows changes it
+    flowing = _trained_weights(
+        sim.PAPER_SIM._replace(disturbance=Disturbance(current_speed=0.1, current_direction=1.3))
+    )
+    assert not np.array_equal(plain, flowing)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 import pandas as pd
 import pytest
+from llvmlite import binding as llvm
 
 import pipefollow
 from pipefollow.experiments import folder, store
@@ -231,12 +233,26 @@ def test_prepare_writes_the_resolved_config_and_accepts_the_same_again(tmp_path)
     store.prepare(run, EXP)
     stored = json.loads((run / "config.json").read_text())
     code = stored.pop("code")
+    machine = stored.pop("machine")
     assert stored == json.loads(json.dumps(to_dict(EXP)))
     assert code["version"] == pipefollow.__version__
     assert code["sources"] == source_hash(store.result_modules())
     assert code["numpy"] == np.__version__
+    assert machine["packages"]["numpy"] == np.__version__
+    assert machine["numba_cpu_target"] == (os.environ.get("NUMBA_CPU_NAME") or llvm.get_host_cpu_name())
     assert store.read_config(run) == EXP
     store.prepare(run, EXP)  # same configuration: resume
+
+
+def test_a_run_started_on_one_cpu_target_resumes_on_another(tmp_path):
+    # results do not depend on the CPU, so the machine record does not guard resumption
+    run = tmp_path / "run"
+    store.prepare(run, EXP)
+    data = json.loads((run / "config.json").read_text())
+    data["machine"]["numba_cpu_target"] = "some-other-cpu"
+    (run / "config.json").write_text(json.dumps(data))
+    store.prepare(run, EXP)
+    assert json.loads((run / "config.json").read_text())["machine"]["numba_cpu_target"] == "some-other-cpu"
 
 
 def test_prepare_accepts_a_folder_written_before_a_config_field_existed(tmp_path):

@@ -2,7 +2,8 @@
 
 Layout of a run folder ``RUN``::
 
-    RUN/config.json                      the resolved ExperimentConfig (written first)
+    RUN/config.json                      the resolved ExperimentConfig (written first), the code stamp
+                                         and the machine it was started on (numba's CPU target, versions)
     RUN/trials/<trial>/seed-<seed>.npz   one finished trial (TrialResult), the unit of resumption
     RUN/policies/<trial>-seed<seed>.npz  its learned policy, a policy file for ``pipefollow evaluate``
     RUN/results.csv                      tidy learning curves: trial × seed × training episode
@@ -26,6 +27,7 @@ import numpy as np
 from pipefollow.experiments.schema import ConfigError, ExperimentConfig, TrialConfig, from_dict, to_dict
 from pipefollow.experiments.trial import TrialResult, build_agent
 from pipefollow.files.atomic import TMP_SUFFIX, atomic_file, read_npz_file, write_text_atomic
+from pipefollow.files.machine import machine_stamp
 from pipefollow.files.sources import imported_modules, source_hash
 from pipefollow.training.compiled import STAT_NAMES
 from pipefollow.training.outputs import csv_text
@@ -168,7 +170,10 @@ def prepare(run_dir: str | os.PathLike, exp: ExperimentConfig) -> Path:
                 "its results would mix with this version's; use another --out"
             )
     else:
-        write_text_atomic(path, json.dumps(wanted, indent=2, ensure_ascii=False) + "\n")
+        # the machine is a record, not part of what must match on resumption: results do not
+        # depend on the CPU (learners.sums), so a run may be resumed on another machine
+        record = {**wanted, "machine": machine_stamp()}
+        write_text_atomic(path, json.dumps(record, indent=2, ensure_ascii=False) + "\n")
     for tmp in run_dir.rglob(f".*{TMP_SUFFIX}"):
         tmp.unlink(missing_ok=True)
     return run_dir

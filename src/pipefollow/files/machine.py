@@ -1,0 +1,66 @@
+"""Where a result was computed: the machine, numba's CPU target and the package versions.
+
+Results do not depend on the CPU (``learners.sums`` fixes every sum's order), so this record does
+not decide whether a run folder may be resumed (the code stamp of ``experiments.store`` does); it
+is written beside the results so that a reader can see where they came from, and so that a claim
+of portability can be checked.
+"""
+
+from __future__ import annotations
+
+import platform
+from importlib import metadata
+
+PACKAGES = ("pipefollow", "numpy", "numba", "llvmlite", "scipy", "gymnasium")
+
+
+def numba_target() -> str:
+    """The CPU target numba compiles for: ``NUMBA_CPU_NAME`` if set, otherwise the host's own."""
+    from numba import config
+    from llvmlite import binding
+
+    return config.CPU_NAME or binding.get_host_cpu_name()
+
+
+def package_versions() -> dict[str, str]:
+    """Installed versions of the packages that compute results (``"-"`` for one not installed)."""
+    out = {}
+    for name in PACKAGES:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "-"
+    return out
+
+
+def machine_stamp() -> dict:
+    """The machine and software a result was computed with, as JSON-ready values."""
+    return {
+        "numba_cpu_target": numba_target(),
+        "host_cpu": _host_cpu(),
+        "platform": platform.platform(),
+        "machine": platform.machine(),
+        "python": platform.python_version(),
+        "packages": package_versions(),
+    }
+
+
+def describe(stamp: dict) -> str:
+    """One line for a report: ``numba target znver5 on AMD EPYC (x86_64, Linux-…), Python 3.11.7, numpy …``."""
+    versions = ", ".join(f"{k} {v}" for k, v in stamp.get("packages", {}).items())
+    return (
+        f"numba's CPU target {stamp.get('numba_cpu_target', '?')} on {stamp.get('host_cpu', '?')} "
+        f"({stamp.get('platform', '?')}), Python {stamp.get('python', '?')}; {versions}"
+    )
+
+
+def _host_cpu() -> str:
+    """The processor's model name (Linux: /proc/cpuinfo), else what ``platform`` says."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
