@@ -528,3 +528,41 @@ def test_findings_are_frozen(run):
     f = _findings(run)
     with pytest.raises(dataclasses.FrozenInstanceError):
         f.table1 = None
+
+
+# ---------------------------------------------------------------------------------------------
+# margins, and a run of more repeats judged on the paper's five as well
+
+
+def _sixth_repeat_fails(repeat, episodes):
+    view = 0.99 if repeat < 5 else 0.5  # repeats 0-4 keep the pipe in view, repeat 5 does not
+    return np.full(episodes, -5.0), np.full(episodes, view), np.full(episodes, 4.5 + 0.1 * repeat)
+
+
+def test_margin_names_the_repeat_nearest_the_rule(tmp_path, paper_short):
+    exp = dataclasses.replace(with_overrides(paper_short, trials=["cacla"]), repeats=5)
+    run, _ = make_run(tmp_path, exp, spec_override={"cacla": _sixth_repeat_fails})
+    (part,) = _parts(_findings(run), 1)
+    # every repeat in view at 99 %; the least progress is repeat 0's 4.5 m (seed 2010): 12.5 % past 4 m,
+    # while 99 % is 4.2 % past 95 %, so each repeat's margin is its in-view one and all tie: the first wins
+    assert part.verdict == claims.CONFIRMED
+    assert part.margin.startswith("closest to failing: CACLA seed 2010, in view 99.0 %")
+    assert "progress 4.50 m (rule ≥ 4 m)" in part.margin
+
+
+def test_a_run_of_more_repeats_is_judged_on_the_first_five_too(tmp_path, paper_short):
+    exp = dataclasses.replace(with_overrides(paper_short, trials=["cacla"]), repeats=6)
+    run, _ = make_run(tmp_path, exp, spec_override={"cacla": _sixth_repeat_fails})
+    f = _findings(run)
+    (few,) = next(c for c in f.first_repeats if c.number == 1).parts
+    (full,) = _parts(f, 1)
+    assert few.verdict == claims.CONFIRMED and (few.passed, few.total) == (5, 5)
+    assert full.verdict == claims.NOT_CONFIRMED and (full.passed, full.total) == (5, 6)
+    assert "seed 2015, in view 50.0 %" in full.margin
+    text = report.render_markdown(f)
+    row = next(line for line in text.splitlines() if line.startswith("| 1a"))
+    assert "| confirmed (5/5)" in row and "| not confirmed (5/6)" in row and row.endswith("| **no** |")
+
+
+def test_a_run_of_five_repeats_has_no_second_judgement(run):
+    assert _findings(run).first_repeats is None

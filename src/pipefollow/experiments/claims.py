@@ -7,6 +7,7 @@ The only numbers written here are the paper's own (for comparison) and the rules
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -55,6 +56,8 @@ class Part:
         passed: cases in which the statement held: repeats (summed over set-ups) for convergence
             and Table 1, (variant, repeat) pairs of the same seed for a skew comparison.
         total: cases counted.
+        margin: how far the deciding number lies from the rule's threshold, with its unit
+            (positive on the side of the verdict given, negative where the rule failed).
     """
 
     statement: str
@@ -62,6 +65,7 @@ class Part:
     verdict: str
     passed: int = 0
     total: int = 0
+    margin: str = ""
 
 
 @dataclass(frozen=True)
@@ -110,6 +114,35 @@ def _verdict(ok: bool) -> str:
     return CONFIRMED if ok else NOT_CONFIRMED
 
 
+def _slack(r) -> float:
+    """How far a repeat is past the convergence rule, as the smaller of its two relative margins.
+
+    Positive when it converged, negative when it did not: ``min(in view / threshold,
+    progress / threshold) − 1`` (a threshold of 0 counts as met by any value).
+    """
+    pairs = ((r.last_in_view, r.min_in_view), (r.last_progress_m, r.min_progress_m))
+    ratios = [v / t for v, t in pairs if t > 0]
+    return min(ratios, default=math.inf) - 1.0
+
+
+def convergence_margin(summaries: Sequence[PhaseSummary], expect_all: bool = True) -> str:
+    """The repeat nearest the rule's other side: the worst for "every repeat", the best for "none".
+
+    Its pipe-in-view and progress against their thresholds, e.g. ``CACLA seed 2013: in view
+    100.0 % (rule ≥ 95 %), progress 3.96 m (rule ≥ 4 m)``.
+    """
+    repeats = [(s, r) for s in summaries for r in s.repeats]
+    if not repeats:
+        return ""
+    pick = min if expect_all else max
+    s, r = pick(repeats, key=lambda sr: _slack(sr[1]))
+    return (
+        f"{'closest to failing' if expect_all else 'closest to converging'}: {s.label} seed {r.seed}, "
+        f"in view {r.last_in_view * 100:.1f} % (rule ≥ {r.min_in_view * 100:g} %), "
+        f"progress {r.last_progress_m:.2f} m (rule ≥ {r.min_progress_m:g} m)"
+    )
+
+
 def _convergence_part(summaries: Sequence[PhaseSummary], statement: str, expect_all: bool = True) -> Part:
     """All listed set-ups converge in every repeat (``expect_all``) or in none."""
     if not summaries:
@@ -118,7 +151,17 @@ def _convergence_part(summaries: Sequence[PhaseSummary], statement: str, expect_
     ok = all((s.n_converged == s.n if expect_all else s.n_converged == 0) and s.n > 0 for s in summaries)
     total = sum(s.n for s in summaries)
     converged = sum(s.n_converged for s in summaries)
-    return Part(statement, ours, _verdict(ok), converged if expect_all else total - converged, total)
+    passed = converged if expect_all else total - converged
+    return Part(statement, ours, _verdict(ok), passed, total, convergence_margin(summaries, expect_all))
+
+
+def _se_margin(comps, rule) -> str:
+    """The comparison nearest the other side of a standard-error rule, in standard errors."""
+    defined = [(v, d / se) for v, d, se in comps if not math.isnan(se) and se > 0]
+    if not defined:
+        return ""
+    v, z, m = min(((v, z, rule(z)) for v, z in defined), key=lambda x: x[2])
+    return f"nearest the rule: {v.title}, {z:+.1f} SE ({m:+.1f} SE from the {SE_FACTOR:g}-SE threshold)"
 
 
 def _paired(base: PhaseSummary, variant: PhaseSummary, stat: str, variant_better: bool) -> tuple[int, int]:
@@ -203,7 +246,8 @@ def claim_fig6(trials: Sequence[TrialConfig], summaries: Mapping[str, list[Phase
             tally = f"none of the {len(comps)} variants better by more than {SE_FACTOR:g} SE"
         head = f"first {EARLY_EPISODES} episodes, mean return over repeats: "
         ours = head + "; ".join(lines) + f" — {tally}"
-        helps = Part(statement, ours, _verdict(all(better)), *counts)
+        margin = _se_margin(comps, lambda z: z - SE_FACTOR)
+        helps = Part(statement, ours, _verdict(all(better)), *counts, margin)
     paper = (
         '"All cases converged to a successful policy in all instances." (§5.1) "Adding skew '
         "exploration also seems to have a positive effect on early stages of the tabula rasa CACLA "
@@ -227,7 +271,8 @@ def claim_fig7(trials: Sequence[TrialConfig], summaries: Mapping[str, list[Phase
         comps, lines, counts = _against_baseline(base, variants, summaries, "last_return", False)
         alike = [not math.isnan(se) and abs(d) < SE_FACTOR * se for _, d, se in comps]
         ours = f"last {CONVERGE_EPISODES} episodes, mean return over repeats: " + "; ".join(lines)
-        same = Part(statement, ours, _verdict(all(alike)), *counts)
+        margin = _se_margin(comps, lambda z: SE_FACTOR - abs(z))
+        same = Part(statement, ours, _verdict(all(alike)), *counts, margin)
     paper = (
         '"Both cases converged to a successful policy in all instances." (§5.1) "Comparing the '
         "supervised CACLA algorithm with and without skew, we see no advantage of using the skew "
@@ -317,7 +362,8 @@ def claim_table1(table: Table1 | None, later_phases: Sequence[PhaseSummary]) -> 
             f"{paper_improvement_pct():+.1f} %); the learned policy beats the heuristic in "
             f"{table.n_beat}/{len(table.seeds)} repeats"
         )
-        beats = Part(statement, ours, _verdict(lm > hm), table.n_beat, len(table.seeds))
+        margin = f"learned − heuristic = {lm - hm:+.2f} (mean over repeats)"
+        beats = Part(statement, ours, _verdict(lm > hm), table.n_beat, len(table.seeds), margin)
     parts = [beats]
     for s in later_phases:
         part = f"training on `{s.pipeline}` (phase {s.phase + 1}) also converges in every repeat"
@@ -346,6 +392,9 @@ class Findings:
         table1: the validation trial's evaluation, if any.
         wall_seconds: summed wall time of the trials (s), if known.
         notes: extra lines for the end of the report (what could not be drawn, and why).
+        machine: where the run was started (``config.json``'s ``machine``), if recorded.
+        first_repeats: the claims judged on the paper's count of repeats only (the run's first
+            :data:`PAPER_REPEATS` seeds), for a run with more repeats; None otherwise.
     """
 
     config: ExperimentConfig
@@ -355,13 +404,31 @@ class Findings:
     table1: Table1 | None = None
     wall_seconds: float | None = None
     notes: tuple[str, ...] = field(default=())
+    machine: Mapping | None = None
+    first_repeats: tuple[Claim, ...] | None = None
 
 
 def compute_findings(
     config: ExperimentConfig, results: Rows | Training, evaluation: Rows, wall_seconds: float | None = None
 ) -> Findings:
-    """The findings of a run from its configuration, ``results.csv`` (rows or series), ``evaluation.csv``."""
+    """The findings of a run from its configuration, ``results.csv`` (rows or series), ``evaluation.csv``.
+
+    A run of more than the paper's :data:`PAPER_REPEATS` repeats is judged twice: on all its
+    repeats and on its first :data:`PAPER_REPEATS` seeds (``first_repeats``), so that the report
+    shows which verdicts of a 5-repeat run hold over more repeats.
+    """
     training = as_training(results)
+    found = _judge(config, training, evaluation, wall_seconds)
+    if config.repeats <= PAPER_REPEATS:
+        return found
+    seeds = set(config.seeds()[:PAPER_REPEATS])
+    first_training = {t: {s: v for s, v in by_seed.items() if s in seeds} for t, by_seed in training.items()}
+    first_evaluation = [r for r in evaluation if int(r["seed"]) in seeds]
+    first = _judge(config, first_training, first_evaluation, None)
+    return dataclasses.replace(found, first_repeats=first.claims)
+
+
+def _judge(config: ExperimentConfig, training: Training, evaluation: Rows, wall_seconds: float | None):
     summaries = {t.name: s for t in config.trials if (s := summarize_trial(training, t))}
     evaluations = read_evaluations(evaluation)
     table_trial = next((t for t in config.trials if any("table1" in f for f in t.figures)), None)

@@ -10,6 +10,7 @@ experiment that compares readings (``compare_readings``) gets the sensitivity re
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -166,7 +167,8 @@ def write_outputs(run_dir: str | Path, results: Mapping[tuple[str, int], object]
     from pipefollow.files.atomic import write_text_atomic
 
     run_dir = Path(run_dir)
-    config = from_dict(json.loads((run_dir / "config.json").read_text()))
+    stored = json.loads((run_dir / "config.json").read_text())
+    config = from_dict(stored)
     load = _load_trial
     if results is not None:
         known = results
@@ -181,6 +183,7 @@ def write_outputs(run_dir: str | Path, results: Mapping[tuple[str, int], object]
     training = read_training(run_dir / "results.csv") if results is None else training_of(config, results)
     evaluation = read_rows(run_dir / "evaluation.csv")
     findings = compute_findings(config, training, evaluation, _wall_seconds(run_dir, config, load))
+    findings = dataclasses.replace(findings, machine=stored.get("machine"))
     drawn = draw_learning_curves(run_dir, config, training, findings.evaluations)
     trajectories = None
     if findings.table1 is not None:
@@ -198,6 +201,4 @@ def write_outputs(run_dir: str | Path, results: Mapping[tuple[str, int], object]
 
 
 def _with_note(findings: Findings, note: str) -> Findings:
-    import dataclasses
-
     return dataclasses.replace(findings, notes=(*findings.notes, note))

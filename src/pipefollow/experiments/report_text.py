@@ -16,6 +16,7 @@ from pipefollow.experiments.claims import (
     PAPER_REPEATS,
     PAPER_TABLE1,
     Findings,
+    Part,
     paper_improvement_pct,
     pm,
 )
@@ -24,6 +25,7 @@ from pipefollow.experiments.summary import (
     CONVERGE_PIPELINE,
     EARLY_EPISODES,
 )
+from pipefollow.files.machine import describe as describe_machine
 from pipefollow.learners.registry import learner as learner_of_name
 
 FIGURES = {
@@ -79,6 +81,8 @@ def _setup_lines(f: Findings) -> list[str]:
         lines.append(
             f"The trials took {took} of compute in total (summed over trials that may have run in parallel)."
         )
+    if f.machine:
+        lines.append(f"Computed with {describe_machine(f.machine)}.")
     missing = [t.name for t in cfg.trials if t.name not in f.summaries]
     if missing:
         lines.append("No training results for: " + ", ".join(f"`{m}`" for m in missing) + ".")
@@ -178,8 +182,52 @@ def _claim_lines(f: Findings) -> list[str]:
         lines += [f"### Claim {c.number} ({c.source}): {c.verdict}", "", f"Paper: {c.paper}", ""]
         for i, p in enumerate(c.parts):
             tag = f"({chr(ord('a') + i)}) " if len(c.parts) > 1 else ""
-            lines += [f"- {tag}*{p.statement}.* Ours: {p.ours}. **Verdict: {p.verdict}.**"]
+            margin = f" Margin: {p.margin}." if p.margin else ""
+            lines += [f"- {tag}*{p.statement}.* Ours: {p.ours}.{margin} **Verdict: {p.verdict}.**"]
         lines.append("")
+    return lines
+
+
+def _part_cell(p: Part) -> str:
+    count = f" ({p.passed}/{p.total})" if p.total else ""
+    return f"{p.verdict}{count}" + (f"; {p.margin}" if p.margin else "")
+
+
+def _firmness_lines(f: Findings) -> list[str]:
+    """Each part's verdict over the paper's 5 repeats beside its verdict over all of this run's."""
+    if f.first_repeats is None:
+        return [
+            "## How firm the verdicts are",
+            "",
+            f"Each verdict above rests on this run's {f.config.repeats} repeats, and its margin says how "
+            "near the rule's threshold it lies. `pipefollow reproduce --experiment repeats` judges the same "
+            "claims over 30 repeats, with these repeats' verdicts beside them.",
+            "",
+        ]
+    seeds = f.config.seeds()
+    lines = [
+        "## How firm the verdicts are",
+        "",
+        f"Each part judged on the paper's {PAPER_REPEATS} repeats (this run's first seeds, "
+        f"{seeds[0]}–{seeds[PAPER_REPEATS - 1]}, which `pipefollow reproduce` runs) and on all "
+        f"{len(seeds)} repeats (seeds {seeds[0]}–{seeds[-1]}). In brackets, the cases in which the "
+        "statement held (repeats, or paired repeats for a skew comparison); then the margin of the "
+        "deciding number from the rule's threshold.",
+        "",
+        f"| claim | part | {PAPER_REPEATS} repeats: verdict; margin | {len(seeds)} repeats: verdict; margin "
+        "| firm |",
+        "|---|---|---|---|---|",
+    ]
+    for c_few, c_all in zip(f.first_repeats, f.claims, strict=True):
+        for i, (few, full) in enumerate(zip(c_few.parts, c_all.parts, strict=True)):
+            firm = "yes" if few.verdict == full.verdict else "**no**"
+            if full.verdict == NOT_TESTED:
+                firm = "—"
+            lines.append(
+                f"| {c_all.number}{chr(ord('a') + i)} ({c_all.source}) | {full.statement} "
+                f"| {_part_cell(few)} | {_part_cell(full)} | {firm} |"
+            )
+    lines.append("")
     return lines
 
 
@@ -297,6 +345,7 @@ def render_markdown(
     lines += _trial_table_lines(findings)
     if claims:
         lines += _claim_lines(findings)
+        lines += _firmness_lines(findings)
     lines += _table1_lines(findings, trajectories)
     lines += _figure_lines(figures_drawn or {})
     lines += _differences_lines(findings)

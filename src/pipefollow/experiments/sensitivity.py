@@ -21,6 +21,7 @@ from pipefollow import readings as rd
 from pipefollow.experiments.claims import CONFIRMED, NOT_CONFIRMED, NOT_TESTED, Findings, compute_findings
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig, from_dict
 from pipefollow.experiments.summary import as_training, read_rows, read_training
+from pipefollow.files.machine import describe as describe_machine
 
 SEP = "@"  # joins a trial's name and the reading id it was trained under
 READINGS_CSV = "readings.csv"
@@ -148,8 +149,8 @@ def compute(config: ExperimentConfig, results, evaluation) -> Sensitivity:
     return Sensitivity(config, ids, findings, tuple(rows))
 
 
-def render_markdown(s: Sensitivity, wall_seconds: float | None = None) -> str:
-    """The sensitivity report (REPORT.md of a ``compare_readings`` experiment)."""
+def render_markdown(s: Sensitivity, wall_seconds: float | None = None, machine: dict | None = None) -> str:
+    """The sensitivity report (REPORT.md of a ``compare_readings`` experiment), ``machine`` where it ran."""
     cfg = s.config
     base = [t for t in cfg.trials if t.name.endswith(f"{SEP}{training_id(s.readings[0])}")]
     seeds = cfg.seeds()
@@ -175,6 +176,8 @@ def render_markdown(s: Sensitivity, wall_seconds: float | None = None) -> str:
     ]
     if wall_seconds is not None:
         lines += [f"The trials took {wall_seconds:.1f} s of compute in total.", ""]
+    if machine:
+        lines += [f"Computed with {describe_machine(machine)}.", ""]
     lines += ["## Per claim", ""]
     statements = {r.claim: r.statement for r in s.rows if r.reading == s.readings[0]}
     for claim in s.claim_ids():
@@ -261,5 +264,6 @@ def write_outputs(run_dir: str | Path, wall_seconds: float | None = None) -> lis
     table = run_dir / READINGS_CSV
     write_text_atomic(table, csv_text(s))
     report = run_dir / "REPORT.md"
-    write_text_atomic(report, render_markdown(s, wall_seconds))
+    machine = json.loads((run_dir / "config.json").read_text()).get("machine")
+    write_text_atomic(report, render_markdown(s, wall_seconds, machine))
     return [table, report]

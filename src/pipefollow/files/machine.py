@@ -16,8 +16,8 @@ PACKAGES = ("pipefollow", "numpy", "numba", "llvmlite", "scipy", "gymnasium")
 
 def numba_target() -> str:
     """The CPU target numba compiles for: ``NUMBA_CPU_NAME`` if set, otherwise the host's own."""
-    from numba import config
     from llvmlite import binding
+    from numba import config
 
     return config.CPU_NAME or binding.get_host_cpu_name()
 
@@ -46,7 +46,7 @@ def machine_stamp() -> dict:
 
 
 def describe(stamp: dict) -> str:
-    """One line for a report: ``numba target znver5 on AMD EPYC (x86_64, Linux-…), Python 3.11.7, numpy …``."""
+    """One line for a report: numba's CPU target, the host, the platform, Python and the package versions."""
     versions = ", ".join(f"{k} {v}" for k, v in stamp.get("packages", {}).items())
     return (
         f"numba's CPU target {stamp.get('numba_cpu_target', '?')} on {stamp.get('host_cpu', '?')} "
