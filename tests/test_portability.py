@@ -32,3 +32,50 @@ def test_reproduction_on_the_host_target_equals_the_committed_evaluation(tmp_pat
 def test_reproduction_under_the_generic_cpu_target_equals_the_committed_evaluation(tmp_path):
     env = dict(os.environ, NUMBA_CPU_NAME="generic", NUMBA_CACHE_DIR=str(tmp_path / "cache"))
     assert _reproduce(tmp_path / "run", env) == COMMITTED.read_bytes()
+
+
+def test_no_compiled_function_lets_the_compiler_reorder_or_fuse_arithmetic():
+    # fastmath's reassoc splits sums by the target's SIMD width and its contract fuses multiply-add
+    # where the target has FMA: either makes the numbers depend on the CPU
+    import ast
+
+    src = Path(__file__).resolve().parents[1] / "src" / "pipefollow"
+    licensed = []
+    for path in sorted(src.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call) and any(k.arg == "fastmath" for k in node.keywords):
+                licensed.append(f"{path.relative_to(src)}:{node.lineno}")
+    assert licensed == []
+
+
+FRAMES = """
+import hashlib, sys
+import numpy as np
+from pipefollow.perception.detector import detect_pipe
+from pipefollow.perception.image import Renderer, make_textures
+from pipefollow.perception.water import WATER_PRESETS
+from pipefollow.sim.suites import get_suite, min_length_for
+
+pipe = get_suite("heldout").pipes(1, min_length_for(200.0))[0]
+rng = np.random.default_rng(0)
+textures, renderer = make_textures(rng), Renderer(WATER_PRESETS['moderate'])
+images, detections = hashlib.sha256(), hashlib.sha256()
+x0, y0 = pipe.points[0]
+for k in range(40):
+    pose = (x0 + 0.05 * k, y0 + 0.01 * k, 0.02 * k)
+    image = renderer.render(pipe.points, pipe.cumulative, pose, textures, rng)
+    images.update(image.tobytes())
+    detections.update(repr(detect_pipe(image)).encode())
+print(images.hexdigest(), detections.hexdigest())
+"""
+
+
+@pytest.mark.slow  # compiles the renderer for another target
+def test_camera_images_and_detections_are_the_same_under_the_generic_cpu_target(tmp_path):
+    pytest.importorskip("cv2")
+    host = {k: v for k, v in os.environ.items() if k != "NUMBA_CPU_NAME"}
+    generic = dict(os.environ, NUMBA_CPU_NAME="generic", NUMBA_CACHE_DIR=str(tmp_path))
+    run = [sys.executable, "-c", FRAMES]
+    a = subprocess.run(run, env=host, check=True, capture_output=True, text=True).stdout
+    b = subprocess.run(run, env=generic, check=True, capture_output=True, text=True).stdout
+    assert a == b and len(a.split()) == 2

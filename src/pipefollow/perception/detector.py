@@ -148,7 +148,7 @@ def same_way(det: Detection, previous: Detection) -> Detection:
     return det._replace(x1=det.x2, y1=det.y_near, x2=det.x1, y_near=det.y1)
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True)
 def gradient_level(img):
     """Mean gradient magnitude of a grey image (central differences, grey levels per pixel)."""
     h, w = img.shape

@@ -161,7 +161,7 @@ def light_and_water(water: Water, camera: CameraParams) -> tuple[np.ndarray, np.
     return (gain * light * t).astype(np.float32), (gain * light * VEIL * (1.0 - t)).astype(np.float32)
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True)
 def _compose(
     img, x, y, psi, hw, depth, radius, burial, growth_share, seabed, growth, dist, across, along, a, b
 ):
@@ -207,7 +207,7 @@ def _compose(
             img[r, c] = a[r, c] * albedo + b[r, c]
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True)
 def _blur(img, tmp, sigma):
     """Separable Gaussian blur of ``img`` in place (edges replicated), ``tmp`` a same-size buffer."""
     if sigma < 0.05:
