@@ -30,11 +30,13 @@ MAX_REPEATS = 100
 
 
 @njit(cache=True)
-def actor_step(w, phi, a_rl, a_sup, f, moves, p):
-    """The actor's step of eq. 7 (eq. 12 when supervised) with factor ``f``, as a multiple of φ(s)."""
-    mu = dot(w[A], phi)
+def actor_step(mu, k_raw, a_rl, a_sup, f, moves, p):
+    """The actor's step of eq. 7 (eq. 12 when supervised) with factor ``f``, as a multiple of φ(s).
+
+    ``mu`` is A(s) = w_A·φ(s) and ``k_raw`` w_K·φ(s) (before k(s)'s clipping; unused unsupervised).
+    """
     if p.supervised:
-        k = min(p.k_max, max(0.0, dot(w[K], phi)))
+        k = min(p.k_max, max(0.0, k_raw))
         rl = k * f * (a_rl - mu) if moves else 0.0
         return p.alpha_pi * (rl + (1.0 - k) * (a_sup - mu))  # eq. 12 (eq. 11)
     return p.alpha_pi * f * (a_rl - mu) if moves else 0.0  # eq. 7 (eq. 9: Gaussian score, 1/σ² in α_π)
@@ -72,12 +74,15 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX
     reading the weights move along ``φ(s)/‖φ(s)‖²``, which changes γ(s) = w_γ·φ(s) by exactly that
     amount; the ``weights`` reading moves them by ``Δγ·…·φ(s)``, which changes γ(s) by ``Δγ‖φ‖²``.
     """
+    # each head's value on φ(s) is computed once and reused while its weights are unchanged
     v = dot(w[V], phi)
     delta = reward + discount * dot(w[V], phi_next) - v  # eq. 4, pre-update critic
     mu = dot(w[A], phi)
+    k_raw = dot(w[K], phi) if p.supervised else 0.0  # w_K moves only in trust_step, at the end
+    norm2 = -1.0  # ‖φ(s)‖², computed when first needed
     f = step_factor(delta, rule)
     moves = rule != SIGN_AND_MAX or delta > 0.0  # eq. 7's max term: no step at all when δ ≤ 0
-    step = actor_step(w, phi, a_rl, a_sup, f, moves, p)
+    step = actor_step(mu, k_raw, a_rl, a_sup, f, moves, p)
     cv = p.alpha_v * delta  # eqs. 5-6
     if trace is not None and p.critic_lambda > 0.0:  # TD(λ): the critic steps along its trace
         decay = discount * p.critic_lambda
@@ -91,7 +96,7 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX
             w[A, i] += step * phi[i]
     if var is not None:
         for _ in range(repeats(delta, var, p) - 1):  # CACLA+Var's further actor updates
-            step = actor_step(w, phi, a_rl, a_sup, f, moves, p)
+            step = actor_step(dot(w[A], phi), k_raw, a_rl, a_sup, f, moves, p)  # A(s) has moved
             for i in range(phi.shape[0]):
                 w[A, i] += step * phi[i]
     if p.skew > 0.0:  # eq. 15
@@ -105,19 +110,23 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX
             for i in range(phi.shape[0]):
                 w[G, i] += inc * phi[i]
     if p.supervised:
-        trust_step(w, phi, delta, p)
+        trust_step(w, phi, delta, k_raw, norm2, p)
     return delta
 
 
 @njit(cache=True)
-def trust_step(w, phi, delta, p):
-    """Eq. 13: k(s) grows by Δk (capped at k_max), after the optional forgetting of its weights."""
+def trust_step(w, phi, delta, k_raw, norm2, p):
+    """Eq. 13: k(s) grows by Δk (capped at k_max), after the optional forgetting of its weights.
+
+    ``k_raw`` is w_K·φ(s) before this step and ``norm2`` ‖φ(s)‖² (negative: not yet computed).
+    """
     if p.forgetting > 0.0:
         w[K] *= 1.0 - p.forgetting
-    if (p.k_update == K_EVERY or delta > 0.0) and dot(w[K], phi) < p.k_max:
+        k_raw = dot(w[K], phi)
+    if (p.k_update == K_EVERY or delta > 0.0) and k_raw < p.k_max:
         inc = p.delta_k
         if p.k_step == STEP_GAMMA:  # k(s) itself moves by Δk
-            norm2 = dot(phi, phi)
+            norm2 = norm2 if norm2 >= 0.0 else dot(phi, phi)
             inc = inc / norm2 if norm2 > 0.0 else 0.0
         for i in range(phi.shape[0]):
             w[K, i] += inc * phi[i]
