@@ -95,9 +95,9 @@ class ActorCritic(Cacla):
         return name + factor
 
 
-def from_policy(data: dict, version: int, seed: int | None = None):
+def from_policy(data: dict, seed: int | None = None):
     """An agent and its weights from a policy file's arrays (CACLA's fields)."""
-    return cacla.from_policy(data, version, seed, agent_class=ActorCritic, params_class=ActorCriticParams)
+    return cacla.from_policy(data, seed, agent_class=ActorCritic, params_class=ActorCriticParams)
 
 
 def make(

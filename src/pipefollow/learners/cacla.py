@@ -333,28 +333,16 @@ def policy_fields(agent: Cacla) -> dict:
 
 def from_policy(
     data: dict,
-    version: int,
     seed: int | None = None,
     agent_class: type | None = None,
     params_class: type = CaclaParams,
 ):
-    """An agent and its weights from a policy file's arrays (see :func:`policy_fields`).
-
-    Files before format 3 had a boolean ``skew_centred`` and were trained with eq. 15 moving the
-    weights by Δγ·φ(s): they load with ``skew_step=weights``.
-    """
+    """An agent and its weights from a policy file's arrays (see :func:`policy_fields`)."""
     params = json.loads(str(data["params"]))
     grid = RBFGrid.from_dict(json.loads(str(data["grid"])))
     weights = np.asarray(data["weights"], dtype=np.float64)
-    trained = str(data.get("readings", "default"))
-    if version < 3 and isinstance(params, dict):
-        centred = params.pop("skew_centred", False)
-        params["skew_sample"] = SAMPLE_CENTRED if centred else SAMPLE_LOCATION
-        params["skew_step"] = STEP_WEIGHTS
-        if params.get("skew", 0.0) > 0.0:
-            trained = "skew_step=weights" + (",skew_sample=centred" if centred else "")
     agent = (agent_class or Cacla)(params_class(**params), grid=grid, seed=seed)
-    agent.readings = trained
+    agent.readings = str(data.get("readings", "default"))
     if "td_var" in data:  # CACLA+Var's running variance of δ, for training on
         agent.td_var[...] = np.asarray(data["td_var"], dtype=np.float64).reshape(1)
     return agent, weights
