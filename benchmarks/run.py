@@ -54,7 +54,7 @@ def bench_substep(repeats):
 def bench_env_step(repeats):
     import gymnasium as gym
 
-    import pipefollow  # noqa: F401  (registers the environment)
+    import pipefollow.envs  # noqa: F401  (registers the environment)
 
     env = gym.make("pipefollow/PipelineFollowing-v0", episode_seconds=86_400)
     env.reset(seed=0)
@@ -74,7 +74,7 @@ def bench_env_step_disturbed(repeats):
     """
     import gymnasium as gym
 
-    import pipefollow  # noqa: F401  (registers the environment)
+    import pipefollow.envs  # noqa: F401  (registers the environment)
     from pipefollow.sim.disturbance import make_disturbance
 
     dist = make_disturbance(0.1, 45.0, camera_noise=0.05)
@@ -214,7 +214,7 @@ def bench_vector_env(repeats):
     """One step of the batched vector env with 64 AUVs, timed in turns with 64 single ``env.step`` calls."""
     import gymnasium as gym
 
-    import pipefollow  # noqa: F401  (registers the environment)
+    import pipefollow.envs  # noqa: F401  (registers the environment)
 
     n = 64
     mode = "vector_entry_point"

@@ -42,7 +42,7 @@ def main() -> None:
     import cv2
     import gymnasium as gym
 
-    import pipefollow  # noqa: F401 (registers the environment)
+    import pipefollow.envs  # noqa: F401 (registers the environment)
     from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
     from pipefollow.perception.detector import detect_pipe
     from pipefollow.perception.image import Renderer, make_textures

@@ -101,6 +101,11 @@ def run_all(out: Path, learners, budgets, seeds) -> None:
                 )
 
 
+def ci95_mean(summary: dict) -> list[float]:
+    """The interval of the mean return; the runs stored in docs/deep-vs-paper name it ``ci95_return``."""
+    return summary["ci95_mean"] if "ci95_mean" in summary else summary["ci95_return"]
+
+
 def table(out: Path) -> str:
     """The Markdown table of all finished runs: per cell the mean over seeds and the seeds' range."""
     runs = [json.loads(p.read_text()) for p in sorted((out / "runs").glob("*.json"))]
@@ -114,14 +119,14 @@ def table(out: Path) -> str:
 
     def cell(rs, cond):
         m = [r[cond]["mean_return"] for r in rs]
-        worst = min(rs, key=lambda r: r[cond]["ci95_return"][0])[cond]["ci95_return"]
+        worst = min((ci95_mean(r[cond]) for r in rs), key=lambda ci: ci[0])
         lo, hi = min(r[cond]["success_rate"] for r in rs), max(r[cond]["success_rate"] for r in rs)
         succ = f"{lo:.0%}" if lo == hi else f"{lo:.0%}–{hi:.0%}"
         return f"{np.mean(m):.1f} [{worst[0]:.1f}, {worst[1]:.1f}]", succ
 
     hc, hd = h["calm"], h["disturbed"]
-    c_lo, c_hi = hc["ci95_return"]
-    d_lo, d_hi = hd["ci95_return"]
+    c_lo, c_hi = ci95_mean(hc)
+    d_lo, d_hi = ci95_mean(hd)
     lines.append(
         f"| heuristic | — | — | {hc['mean_return']:.1f} [{c_lo:.1f}, {c_hi:.1f}] | {hc['success_rate']:.0%} "
         f"| {hd['mean_return']:.1f} [{d_lo:.1f}, {d_hi:.1f}] | {hd['success_rate']:.0%} | — | — |"

@@ -90,7 +90,7 @@ def main() -> None:
             d = s.get("vs_heuristic") or {"mean_diff": 0.0, "ci95_diff": [0.0, 0.0]}
             row = {
                 "water": water, "controller": label, "mean_return": s["mean_return"],
-                "ci95_low": s["ci95_return"][0], "ci95_high": s["ci95_return"][1],
+                "ci95_low": s["ci95_mean"][0], "ci95_high": s["ci95_mean"][1],
                 "success_rate": s["success_rate"], "pipe_in_view": s["mean_pipe_in_view"],
                 "mean_diff": d["mean_diff"],
                 "ci95_diff_low": d["ci95_diff"][0], "ci95_diff_high": d["ci95_diff"][1],

@@ -6,17 +6,19 @@ import pytest
 from pipefollow import readings as rd
 from pipefollow.learners import actor_critic as ac
 from pipefollow.learners import cacla
-from pipefollow.learners.actor_agent import A, K, V
+from pipefollow.learners.cacla_update import A, K, V
 from pipefollow.training.agents import make_agent
 
 PHI = np.array([1.0, 0.0, 0.0])  # one feature: each head's value is its first weight
 ALPHA_V, ALPHA_PI = 0.4, 0.2
 
 
-def one_update(rule, p, reward, a_rl, a_sup=0.0, k=0.0):
+def one_update(agent_class, p, reward, a_rl, a_sup=0.0, k=0.0):
+    """One update as ``agent_class``'s agents make it: CACLA's entry point with the class's step factor."""
     w = np.zeros((4, 3))
     w[K, 0] = k
-    delta = rule(w, PHI, a_rl, a_sup, reward, 0.0, np.zeros(3), p)
+    hp, rule, var, trace = cacla.pack(p), agent_class.rule(p), np.ones(1), np.zeros(3)
+    delta = cacla.update_packed(w, PHI, a_rl, a_sup, reward, 0.0, np.zeros(3), hp, rule, var, trace)
     return delta, w
 
 
@@ -34,25 +36,25 @@ def one_update(rule, p, reward, a_rl, a_sup=0.0, k=0.0):
 )
 def test_actor_critic_steps_by_hand(update, reward, actor):
     p = ac.PAPER_AC._replace(actor_update=ac.ACTOR_UPDATES[update])
-    delta, w = one_update(ac.update, p, reward, 0.5)
+    delta, w = one_update(ac.ActorCritic, p, reward, 0.5)
     assert delta == reward
     assert w[V, 0] == pytest.approx(ALPHA_V * reward) and w[A, 0] == pytest.approx(actor)
 
 
 @pytest.mark.parametrize("reward", [-2.0, 3.0])
 def test_cacla_is_the_actor_critic_with_both_terms(reward):
-    _, w_cacla = one_update(cacla.update, cacla.PAPER_CACLA, reward, 0.5)
+    _, w_cacla = one_update(cacla.Cacla, cacla.PAPER_CACLA, reward, 0.5)
     assert w_cacla[A, 0] == pytest.approx(ALPHA_PI * 0.5 if reward > 0 else 0.0)  # max(sgn δ, 0)
 
 
 def test_supervised_actor_critic_is_eq_11_by_hand():
     p = ac.PAPER_AC._replace(supervised=True)
-    delta, w = one_update(ac.update, p, -2.0, 0.5, a_sup=-0.4, k=0.5)
+    delta, w = one_update(ac.ActorCritic, p, -2.0, 0.5, a_sup=-0.4, k=0.5)
     # α_π [k δ (a_RL − A) + (1 − k)(a_SUP − A)] with k = 0.5, δ = −2, A = 0
     assert w[A, 0] == pytest.approx(ALPHA_PI * (0.5 * -2.0 * 0.5 + 0.5 * -0.4))
     assert w[K, 0] == pytest.approx(0.5 + 0.05)  # eq. 13: k(s) grows by Δk·φ at every visit
     _, w12 = one_update(
-        cacla.update, cacla.PAPER_CACLA._replace(supervised=True), -2.0, 0.5, a_sup=-0.4, k=0.5
+        cacla.Cacla, cacla.PAPER_CACLA._replace(supervised=True), -2.0, 0.5, a_sup=-0.4, k=0.5
     )
     assert w12[A, 0] == pytest.approx(ALPHA_PI * 0.5 * -0.4)  # eq. 12: the RL part drops out for δ < 0
 
@@ -72,6 +74,8 @@ def test_cacla_code_reads_the_actor_critic_record():
     # CACLA's compiled code reads the first fields of the packed record; the step factor goes beside it
     from pipefollow.sim import records
 
+    assert ac.ActorCriticParams._fields == (*cacla.CaclaParams._fields, "actor_update")
+    assert ac.PAPER_AC == (*cacla.PAPER_CACLA, ac.DELTA)  # CACLA's defaults, then eq. 9's δ
     p = ac.PAPER_AC._replace(supervised=True, alpha_pi=0.3, delta_k=0.07, actor_update=ac.SIGN)
     assert cacla.unpack(records.pack(p)) == cacla.CaclaParams(supervised=True, alpha_pi=0.3, delta_k=0.07)
     assert ac.ActorCritic(p).rule(p) == ac.SIGN

@@ -89,11 +89,29 @@ def test_an_unknown_command_is_a_one_line_error():
     assert "No such command 'evalute'" in result.output
 
 
-@pytest.mark.parametrize("first", ["pipefollow", "gymnasium"])
-def test_the_environment_is_registered_whichever_is_imported_first(first):
-    second = "gymnasium" if first == "pipefollow" else "pipefollow"
-    code = f"import {first}\nimport {second}\nassert pipefollow.ENV_ID in gymnasium.registry"
+@pytest.mark.parametrize(
+    "imports",
+    [
+        "import gymnasium\nimport pipefollow",  # Gymnasium loaded: the package registers at import
+        "import pipefollow.envs\nimport gymnasium",  # the environments register when imported
+        "import pipefollow.envs.env\nimport gymnasium",
+    ],
+)
+def test_the_environment_is_registered_by_the_package_after_gymnasium_or_by_its_envs(imports):
+    loaded_after(f"{imports}\nassert pipefollow.ENV_ID in gymnasium.registry")
+
+
+def test_gymnasiums_module_form_of_the_id_registers_the_environment_whatever_came_first():
+    # the package imported before Gymnasium registers nothing; the module form imports pipefollow.envs
+    code = (
+        "import pipefollow, gymnasium\n"
+        "assert pipefollow.ENV_ID not in gymnasium.registry\n"
+        "env = gymnasium.make('pipefollow.envs:' + pipefollow.ENV_ID, episode_seconds=2)\n"
+        "assert env.spec.id == pipefollow.ENV_ID\n"
+        "env = gymnasium.make(pipefollow.ENV_ID)"
+    )
     loaded_after(code)
+    loaded_after("import gymnasium\ngymnasium.make('pipefollow:pipefollow/PipelineFollowing-v0')")
 
 
 def test_importing_a_compiled_module_points_numba_at_the_source_hashed_cache(tmp_path):

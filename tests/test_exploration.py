@@ -1,4 +1,9 @@
-"""Exploration noise (eqs. 8, 14) against scipy and the skew-normal's known moments."""
+"""Exploration noise (eqs. 8, 14) against scipy and the skew-normal's known moments.
+
+The samples are the learners' own: a CACLA agent's exploring actions, its generator drawing the
+standard normals as the compiled training loop does (tests/test_learner_contract.py checks that
+the two paths give the same numbers).
+"""
 
 from __future__ import annotations
 
@@ -6,37 +11,47 @@ import math
 
 import numpy as np
 import pytest
-from numba import njit
 from numpy.testing import assert_allclose
 from scipy import integrate, stats
 
+from pipefollow.learners.cacla import A, Cacla, CaclaParams, G
 from pipefollow.learners.exploration import (
-    gaussian_action,
     linear_sigma,
-    skew_normal_action,
     skew_normal_from_normals,
     skew_normal_pdf,
-    skew_normal_z,
     skew_step_to_gamma,
 )
+from pipefollow.learners.sums import dot
 
-N_SAMPLES = 200_000
-
-
-@njit
-def draw_z(rng, gamma, n):
-    out = np.empty(n)
-    for i in range(n):
-        out[i] = skew_normal_z(rng, gamma)
-    return out
+N_SAMPLES = 100_000
+OBS = np.array([0.3, 1.2, 0.1, -0.2])  # any state: A(s) and γ(s) are set through the weights
 
 
-@njit
-def draw_actions(rng, mu, sigma, gamma, n, skewed):
-    out = np.empty(n)
-    for i in range(n):
-        out[i] = skew_normal_action(rng, mu, sigma, gamma) if skewed else gaussian_action(rng, mu, sigma)
-    return out
+def exploring_cacla(mu: float, gamma: float | None, sigma: float, seed: int) -> tuple[Cacla, float, float]:
+    """A CACLA agent whose actor gives ``mu`` and skew head ``gamma`` (None: Gaussian) at :data:`OBS`.
+
+    Returns the agent (exploring with ``sigma``) and A(s), γ(s) as the agent computes them.
+    """
+    skewed = gamma is not None
+    params = CaclaParams(skew=0.5 if skewed else 0.0, gamma_max=max(1.0, abs(gamma or 0.0)))
+    agent = Cacla(params, rng=np.random.default_rng(seed))
+    phi = agent.features(OBS)
+    agent.weights[A] = mu / phi.sum()
+    agent.weights[G] = (gamma or 0.0) / phi.sum()
+    agent.begin_episode(sigma)
+    return agent, dot(agent.weights[A], phi), dot(agent.weights[G], phi)
+
+
+def draw_actions(agent: Cacla, n: int) -> np.ndarray:
+    """``n`` exploring actions of ``agent`` at :data:`OBS`."""
+    return np.array([agent.act(OBS) for _ in range(n)])
+
+
+def draw_z(gamma: float | None, n: int = N_SAMPLES, seed: int = 12345) -> np.ndarray:
+    """The exploration's standard sample ``z = (a − A(s))/σ`` of ``n`` unclipped actions."""
+    sigma = 0.1  # |a| ≤ 1 unless z beyond ±9: no action is clipped
+    agent, mu, _ = exploring_cacla(0.0, gamma, sigma, seed)
+    return (draw_actions(agent, n) - mu) / sigma
 
 
 def numpy_skew_normal_z(rng: np.random.Generator, gamma: float, n: int) -> np.ndarray:
@@ -122,12 +137,12 @@ def test_pdf_rejects_bad_sigma(sigma):
         skew_normal_pdf(0.0, 0.0, sigma, 1.0)
 
 
-# --- sampler ----------------------------------------------------------------------------------
+# --- the learners' samples (eqs. 8, 14) ---------------------------------------------------------
 
 
 @pytest.mark.parametrize("gamma", [-1.0, 0.25, 0.5, 1.0, 3.0])
 def test_skew_normal_moments(gamma):
-    z = draw_z(np.random.default_rng(12345), gamma, N_SAMPLES)
+    z = draw_z(gamma)
     n = z.size
     delta = gamma / math.sqrt(1 + gamma**2)
     mean, var = delta * math.sqrt(2 / math.pi), 1 - 2 * delta**2 / math.pi
@@ -138,8 +153,9 @@ def test_skew_normal_moments(gamma):
     assert abs(np.mean(z > 0) - p_pos) < 4.5 * math.sqrt(p_pos * (1 - p_pos) / n)
 
 
-def test_zero_skew_is_standard_normal():
-    z = draw_z(np.random.default_rng(7), 0.0, N_SAMPLES)
+@pytest.mark.parametrize("gamma", [None, 0.0])
+def test_gaussian_and_zero_skew_exploration_is_standard_normal(gamma):
+    z = draw_z(gamma, seed=7)
     assert stats.kstest(z, stats.norm.cdf).pvalue > 1e-3
     assert abs(z.mean()) < 4.5 / math.sqrt(N_SAMPLES)
     assert abs(z.var() - 1.0) < 4.5 * math.sqrt(2.0 / N_SAMPLES)
@@ -147,26 +163,60 @@ def test_zero_skew_is_standard_normal():
 
 @pytest.mark.parametrize("gamma", [0.5, -0.5])
 def test_skew_normal_distribution_matches_scipy(gamma):
-    z = draw_z(np.random.default_rng(99), gamma, N_SAMPLES)
+    z = draw_z(gamma, seed=99)
     assert stats.kstest(z, stats.skewnorm(a=gamma).cdf).pvalue > 1e-3
     # and the test has power: the sample is clearly not N(0, 1)
     assert stats.kstest(z, stats.norm.cdf).pvalue < 1e-6
 
 
+@pytest.mark.parametrize("gamma", [1.0, -1.0])
+def test_skew_shifts_the_mean_action_by_sigma_delta_root_two_over_pi(gamma):
+    # the paper's location/scale form: A(s) is the location, the mean lies σ δ √(2/π) beside it
+    sigma = 0.15
+    agent, mu, g = exploring_cacla(0.05, gamma, sigma, 31)
+    a = draw_actions(agent, N_SAMPLES)
+    assert np.all(np.abs(a) < 1.0)  # none clipped
+    shift = sigma * stats.skewnorm(a=g).mean()
+    assert shift == pytest.approx(sigma * g / math.sqrt(1 + g * g) * math.sqrt(2 / math.pi), rel=1e-12)
+    assert abs(a.mean() - mu - shift) < 4.5 * sigma * stats.skewnorm(a=g).std() / math.sqrt(a.size)
+    assert stats.kstest(a, stats.skewnorm(a=g, loc=mu, scale=sigma).cdf).pvalue > 1e-3
+
+
 @pytest.mark.parametrize("gamma", [0.0, 0.5, -1.0])
-def test_compiled_sampler_equals_numpy_reimplementation_bit_for_bit(gamma):
-    rng_numba, rng_numpy = np.random.default_rng(2024), np.random.default_rng(2024)
-    z = draw_z(rng_numba, gamma, 10_000)
-    assert np.array_equal(z, numpy_skew_normal_z(rng_numpy, gamma, 10_000))
-    # both consumed exactly two normals per sample: the streams stay in step
-    assert rng_numba.standard_normal() == rng_numpy.standard_normal()
+def test_skew_action_is_the_numpy_skew_normal_bit_for_bit(gamma):
+    # two standard normals per action, u0 then v, clip(A(s) + σ z) (eq. 14)
+    agent, mu, g = exploring_cacla(-0.6, gamma, 0.8, 2024)
+    rng_numpy = np.random.default_rng(2024)
+    a = draw_actions(agent, 5_000)
+    assert np.array_equal(a, np.clip(mu + 0.8 * numpy_skew_normal_z(rng_numpy, g, 5_000), -1.0, 1.0))
+    assert a.min() == -1.0 and a.max() == 1.0
+    assert agent.rng.bit_generator.state == rng_numpy.bit_generator.state  # the streams stay in step
 
 
-def test_sampler_called_from_python_shares_the_generator_state():
-    rng_a, rng_b = np.random.default_rng(5), np.random.default_rng(5)
-    z = [skew_normal_z(rng_a, 0.5) for _ in range(3)]
-    assert z == numpy_skew_normal_z(rng_b, 0.5, 3).tolist()
-    assert rng_a.bit_generator.state == rng_b.bit_generator.state
+def test_gaussian_action_is_the_clipped_eq8_sample_with_one_normal_each():
+    agent, mu, _ = exploring_cacla(0.7, None, 1.0, 11)
+    rng_numpy = np.random.default_rng(11)
+    a = draw_actions(agent, 5_000)
+    assert np.array_equal(a, np.clip(mu + 1.0 * rng_numpy.standard_normal(5_000), -1.0, 1.0))
+    assert a.min() == -1.0 and a.max() == 1.0
+    assert agent.rng.bit_generator.state == rng_numpy.bit_generator.state
+
+
+@pytest.mark.parametrize("gamma", [None, 0.5])
+def test_no_exploration_draws_nothing(gamma):
+    agent, _, _ = exploring_cacla(1.5, gamma, 0.0, 17)
+    state = agent.rng.bit_generator.state
+    assert agent.act(OBS) == 1.0  # clip(A(s)), σ = 0
+    agent.begin_episode(0.5)
+    assert agent.act(OBS, explore=False) == 1.0
+    assert agent.rng.bit_generator.state == state
+
+
+def test_small_sigma_stays_near_the_mean():
+    agent, mu, _ = exploring_cacla(0.3, 1.0, 0.01, 19)
+    a = draw_actions(agent, 1_000)
+    assert np.all(np.abs(a - mu) < 0.06)
+    assert np.mean(a > mu) > 0.6  # skewed to the right for γ = 1 (P = 3/4)
 
 
 def test_skew_normal_from_normals():
@@ -175,40 +225,6 @@ def test_skew_normal_from_normals():
     assert skew_normal_from_normals(g, 0.5, -0.2) == pytest.approx(d * 0.5 + d * -0.2, abs=1e-15)
     assert skew_normal_from_normals(g, -0.5, -0.2) == pytest.approx(-(d * -0.5 + d * -0.2), abs=1e-15)
     assert skew_normal_from_normals(0.0, -0.5, 0.3) == -0.3
-
-
-# --- actions ----------------------------------------------------------------------------------
-
-
-def test_gaussian_action_is_clipped_eq8_sample():
-    rng_a, rng_b = np.random.default_rng(11), np.random.default_rng(11)
-    a = draw_actions(rng_a, 0.7, 1.0, 0.0, 5_000, False)
-    expected = np.clip(0.7 + 1.0 * rng_b.standard_normal(5_000), -1.0, 1.0)
-    assert np.array_equal(a, expected)
-    assert a.min() == -1.0 and a.max() == 1.0
-    assert rng_a.standard_normal() == rng_b.standard_normal()
-
-
-def test_skew_normal_action_is_clipped_eq14_sample():
-    rng_a, rng_b = np.random.default_rng(13), np.random.default_rng(13)
-    a = draw_actions(rng_a, -0.6, 0.8, 1.0, 5_000, True)
-    expected = np.clip(-0.6 + 0.8 * numpy_skew_normal_z(rng_b, 1.0, 5_000), -1.0, 1.0)
-    assert np.array_equal(a, expected)
-    assert a.min() == -1.0 and a.max() == 1.0
-
-
-def test_actions_with_zero_sigma_still_draw():
-    rng_a, rng_b = np.random.default_rng(17), np.random.default_rng(17)
-    assert gaussian_action(rng_a, 0.25, 0.0) == 0.25
-    assert skew_normal_action(rng_a, 1.5, 0.0, 0.5) == 1.0
-    rng_b.standard_normal(3)
-    assert rng_a.bit_generator.state == rng_b.bit_generator.state
-
-
-def test_small_sigma_stays_near_the_mean():
-    a = draw_actions(np.random.default_rng(19), 0.3, 0.01, 1.0, 1_000, True)
-    assert np.all(np.abs(a - 0.3) < 0.06)
-    assert np.mean(a > 0.3) > 0.6  # skewed to the right for γ = 1 (P = 3/4)
 
 
 # --- Δγ in degrees ----------------------------------------------------------------------------

@@ -57,16 +57,16 @@ def test_save_is_atomic_and_leaves_no_temporary_files(tmp_path):
     assert [p.name for p in (tmp_path / "a").iterdir()] == ["p.npz"]
 
 
-def test_version_1_sarsa_policy_files_still_load(tmp_path):
-    agent = make_agent("sarsa", rng=np.random.default_rng(1))
-    agent.weights[:] = np.random.default_rng(2).normal(size=agent.weights.shape)
-    path = save_policy(agent, tmp_path / "v2.npz")
+@pytest.mark.parametrize("version", [1, 2])
+def test_policy_files_before_format_3_are_refused_in_one_line(tmp_path, version):
+    path = save_policy(make_agent("sarsa"), tmp_path / "p.npz")
     with np.load(path) as z:
         data = dict(z)
-    data["format_version"] = np.array(1)
-    data["weights"] = agent.weights.T.copy()  # version 1: (state features × action features)
-    np.savez(tmp_path / "v1.npz", **data)
-    np.testing.assert_array_equal(load_policy(tmp_path / "v1.npz").weights, agent.weights)
+    data["format_version"] = np.array(version)
+    np.savez(tmp_path / "old.npz", **data)
+    message = f"old.npz': format version {version} is older than this pipefollow reads$"
+    with pytest.raises(PolicyError, match=message):
+        load_policy(tmp_path / "old.npz")
 
 
 def test_written_files_get_the_usual_permissions(tmp_path):

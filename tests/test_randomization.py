@@ -12,6 +12,12 @@ from scipy import stats
 from pipefollow.sim import randomization as rz
 from pipefollow.sim.disturbance import MAX_BURIED, NO_DISTURBANCE, DisturbanceError, check
 
+
+def draws(r: rz.Randomization, rng: np.random.Generator, n: int) -> list:
+    """``n`` episodes' disturbances, drawn one after the other from ``rng`` as training draws them."""
+    return [rz.draw(r, rng) for _ in range(n)]
+
+
 # ---------------------------------------------------------------------------------------------
 # The map from uniforms to a record, by hand
 
@@ -57,10 +63,10 @@ def test_off_draws_no_disturbance_and_consumes_the_same_numbers():
 
 def test_same_seed_same_draws_and_kinds_do_not_shift_each_other():
     r = rz.PRESETS["moderate"]
-    a = rz.draw_many(r, np.random.default_rng(11), 50)
-    b = rz.draw_many(r, np.random.default_rng(11), 50)
+    a = draws(r, np.random.default_rng(11), 50)
+    b = draws(r, np.random.default_rng(11), 50)
     assert a == b
-    quiet = rz.draw_many(replace(r, camera_noise=(0.0, 0.0), buried_prob=0.0), np.random.default_rng(11), 50)
+    quiet = draws(replace(r, camera_noise=(0.0, 0.0), buried_prob=0.0), np.random.default_rng(11), 50)
     assert [d.current_speed for d in quiet] == [d.current_speed for d in a]
     assert [d.miss_prob for d in quiet] == [d.miss_prob for d in a]
     assert all(d.camera_noise == 0.0 and math.isinf(d.buried_from[0]) for d in quiet)
@@ -79,7 +85,7 @@ def test_speed_direction_and_noise_are_uniform_on_their_ranges():
     r = rz.Randomization(
         current_speed=(0.05, 0.25), current_direction_deg=(-90.0, 90.0), camera_noise=(0.0, 0.1)
     )
-    ds = rz.draw_many(r, np.random.default_rng(2026), 4000)
+    ds = draws(r, np.random.default_rng(2026), 4000)
     speed = np.array([d.current_speed for d in ds])
     direction = np.degrees([d.current_direction for d in ds])
     noise = np.array([d.camera_noise for d in ds])
@@ -94,7 +100,7 @@ def test_buried_cells_hold_a_stretch_with_their_probability():
     r = rz.Randomization(
         buried_prob=0.3, buried_count=3, buried_length_m=(0.5, 2.0), buried_region_m=(6.0, 36.0)
     )
-    ds = rz.draw_many(r, np.random.default_rng(5), 3000)
+    ds = draws(r, np.random.default_rng(5), 3000)
     counts = np.array([sum(math.isfinite(a) for a in d.buried_from) for d in ds])
     # three independent cells: the count is binomial(3, 0.3)
     observed = np.bincount(counts, minlength=4)
@@ -132,7 +138,7 @@ def test_every_draw_is_a_valid_disturbance_inside_its_ranges(u, count, prob):
 def test_presets_are_valid_and_round_trip(name):
     r = rz.resolve(name)
     assert rz.from_dict(rz.to_dict(r)) == r
-    for d in rz.draw_many(r, np.random.default_rng(0), 200):
+    for d in draws(r, np.random.default_rng(0), 200):
         check(d)
 
 

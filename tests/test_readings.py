@@ -111,25 +111,6 @@ def test_policy_files_keep_their_readings(tmp_path):
     np.testing.assert_array_equal(back.weights, agent.weights)
 
 
-def test_a_policy_file_from_before_readings_loads_with_the_weights_step(tmp_path):
-    import json
-
-    agent = make_agent("cacla", skew_deg=22.5, rng=np.random.default_rng(0))
-    path = save_policy(agent, tmp_path / "p.npz")
-    with np.load(path) as z:
-        data = dict(z)
-    params = json.loads(str(data["params"]))
-    for key in ("skew_sample", "skew_step", "k_update", "k_step"):
-        del params[key]
-    params["skew_centred"] = True
-    data.update(params=np.array(json.dumps(params)), format_version=np.array(2))
-    del data["readings"]
-    np.savez(tmp_path / "old.npz", **data)
-    old = load_policy(tmp_path / "old.npz")
-    assert old.params.skew_step == cacla.STEP_WEIGHTS and old.params.skew_sample == cacla.SAMPLE_CENTRED
-    assert old.readings == "skew_step=weights,skew_sample=centred"
-
-
 def test_a_trial_applies_its_readings_to_sigma_start_and_features():
     from pipefollow.experiments.schema import Phase, TrialConfig
     from pipefollow.experiments.trial import build_agent, run_trial

@@ -7,7 +7,7 @@ from matplotlib.colors import to_rgb
 
 import pipefollow
 from pipefollow.envs.env import PipelineFollowingEnv
-from pipefollow.envs.render import AUV_COLOR, CAMERA_COLOR, Scene, draw_scene
+from pipefollow.envs.render import AUV_COLOR, CAMERA_COLOR, Scene
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim import decision as sim
 
@@ -78,12 +78,6 @@ def test_a_new_pipeline_gets_a_new_figure():
     env.reset(options={"pipeline": "paper-right"})
     env.render()
     assert env._scene is not first and env._scene.pipeline.name == "paper-right"
-
-
-def test_draw_scene_still_draws_one_frame():
-    env = _run(PipelineFollowingEnv("paper-left"), 4)
-    img = draw_scene(env.pipeline, env.state, np.array(env.trail))
-    assert img.shape == (500, 500, 3) and img.std() > 0
 
 
 def test_human_mode_renders_through_pyplot_without_crashing():

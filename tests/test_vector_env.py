@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from gymnasium.vector import AutoresetMode, VectorEnv
 
-import pipefollow  # noqa: F401  (registers the environment)
+import pipefollow.envs  # noqa: F401  (registers the environment)
 from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
 from pipefollow.sim.disturbance import make_disturbance

@@ -6,8 +6,13 @@ episode, infos, the episode summary), ``env`` (``pipefollow/PipelineFollowing-v0
 
 They compose the simulator's stages and the camera; they know no learner. May import ``files``,
 ``sim`` and ``perception``.
+
+Importing this package registers the environment with Gymnasium (:func:`pipefollow.register_envs`),
+so that ``gymnasium.make("pipefollow.envs:pipefollow/PipelineFollowing-v0")`` finds it in any process.
 """
 
+from pipefollow import register_envs
 from pipefollow.files.compile_cache import configure_numba_cache
 
 configure_numba_cache()  # before any compiled module of this package is decorated
+register_envs()

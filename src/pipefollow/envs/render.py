@@ -297,15 +297,6 @@ def _interactive_backend() -> bool:
     return backend in {b.lower() for b in interactive}
 
 
-def draw_scene(pipeline: Pipeline, state: np.ndarray, trail: np.ndarray, params=sim.PAPER_SIM) -> np.ndarray:
-    """Fig. 2 view of one moment as an RGB array: pipe, AUV, camera footprint, waypoint and trail.
-
-    Draws a new figure; to draw many frames, make one :class:`Scene` and update it.
-    """
-    trail = np.asarray(trail)
-    return Scene(pipeline, params, extent_points=trail if len(trail) else None).update(state, trail).rgb()
-
-
 def _frame(ax, pipeline: Pipeline, trails, margin=1.5) -> None:
     pts = [pipeline.points] + [np.asarray(t)[:, :2] for t in trails if len(t)]
     allp = np.vstack(pts)

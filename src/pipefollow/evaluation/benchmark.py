@@ -15,9 +15,9 @@ Definitions:
 * ``rms_e_dist``: root mean square of ``e_dist`` over the decisions that end with the pipe in
   view (per episode; pooled over all episodes for the summary); ``None`` without such decisions.
 * ``progress_m``: arc length reached along the pipe.
-* ``ci95_mean``: BCa bootstrap interval of the mean return over pipes (``ci95_return`` is its
-  former name); ``ci95_iqm``: the percentile interval of the IQM, the pipes resampled as rliable
-  resamples runs (:mod:`pipefollow.evaluation.compare`).
+* ``ci95_mean``: BCa bootstrap interval of the mean return over pipes; ``ci95_iqm``: the
+  percentile interval of the IQM, the pipes resampled as rliable resamples runs
+  (:mod:`pipefollow.evaluation.compare`).
 * ``vs_heuristic``: *paired* per pipe: ``mean_diff`` and its interval are those of the per-pipe
   differences (controller − heuristic on the same pipe and noise); ``win_rate`` is the share of
   pipes where the controller's return is higher than the heuristic's on that pipe.
@@ -117,12 +117,6 @@ def _controller_episodes(kind, tracks, run, net, lookahead, z_all, out, poses):
 # Fixed controllers with a compiled kind; learners run their own loop (pipefollow.learners.registry).
 _FIXED_KINDS = {Heuristic: HEURISTIC, mlp_mod.MLPPolicy: MLP, LOS: LOS_KIND}
 _NO_NET = (np.zeros(1), np.ones((1, 4), dtype=np.int64))  # theta, layout of "no network"
-
-
-def concatenate(pipes: Sequence[Pipeline]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Points and arc lengths of all pipes in two arrays, pipe ``i`` at ``offsets[i]:offsets[i + 1]``."""
-    tracks = tracks_of(pipes)
-    return tracks.points, tracks.cum, tracks.offsets
 
 
 def _noise_rng(noise_seed: int, k: int) -> np.random.Generator:
@@ -261,7 +255,6 @@ def benchmark(
         "n_episodes": len(pipes),
         "mean_return": float(ret.mean()),
         "ci95_mean": [lo, hi],
-        "ci95_return": [lo, hi],  # the former name of ci95_mean, kept for scripts that read it
         "iqm_return": iqm(ret),
         "ci95_iqm": iqm_ci,
         "success_rate": float(np.mean(res[:, IN_VIEW] >= SUCCESS_IN_VIEW)),

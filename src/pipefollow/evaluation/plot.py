@@ -24,7 +24,7 @@ def plot_benchmark(run: BenchmarkRun, path: str | os.PathLike) -> None:
     grid = fig.add_gridspec(1, 4, width_ratios=[1.6, 1, 1, 1])
     ax = fig.add_subplot(grid[0, 0])
     if is_heuristic:
-        values, mean, (lo, hi) = run.returns, s["mean_return"], s["ci95_return"]
+        values, mean, (lo, hi) = run.returns, s["mean_return"], s["ci95_mean"]
         ylabel = "return per pipe"
     else:
         v = s["vs_heuristic"]

@@ -17,7 +17,7 @@ that does not scale with δ (the sign term). To tell the two apart, ``actor_upda
 ``max(δ, 0)`` (the max term alone, ``positive``) or ``sgn δ`` (the sign term alone, ``sign``).
 The critic (eqs. 5–6), the Gaussian exploration (eq. 8), the features and the semi-Markov updates
 while the pipe is lost are CACLA's: this learner runs CACLA's update with its own step factor
-(:func:`~pipefollow.learners.actor_agent.step_factor`), CACLA's compiled loop and CACLA's agent class.
+(:func:`~pipefollow.learners.cacla_update.step_factor`), CACLA's compiled loop and CACLA's agent class.
 """
 
 from __future__ import annotations
@@ -26,35 +26,54 @@ from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from pipefollow.learners import cacla
-from pipefollow.learners.actor_agent import DELTA, POSITIVE, SIGN
-from pipefollow.learners.cacla import Cacla, CaclaParams
+from pipefollow.learners.cacla import Cacla
+from pipefollow.learners.cacla_update import (
+    DELTA,
+    K_EVERY,
+    POSITIVE,
+    REPEAT_ONCE,
+    SAMPLE_LOCATION,
+    SIGN,
+    STEP_GAMMA,
+    STEP_WEIGHTS,
+)
 from pipefollow.learners.protocol import LearnerKind
 from pipefollow.learners.rbf import STATE_GRID, RBFGrid, state_grid
 
-# The actor's step factor on (a − A(s)) (actor_agent.step_factor): eq. 9's δ, or one of eq. 7's terms.
+# The actor's step factor on (a − A(s)) (cacla_update.step_factor): eq. 9's δ, or one of eq. 7's terms.
 ACTOR_UPDATES = {"delta": DELTA, "positive": POSITIVE, "sign": SIGN}
 
-# CACLA's record with the step factor after CACLA's fields: CACLA's compiled code reads its packed
-# form (``cacla.unpack`` reads the fields it starts with) and the record itself by the same names.
-ActorCriticParams = NamedTuple(
-    "ActorCriticParams", [*CaclaParams.__annotations__.items(), ("actor_update", int)]
-)
-ActorCriticParams.__new__.__defaults__ = (*CaclaParams(), DELTA)
-ActorCriticParams.__doc__ = "The actor-critic's step sizes and options: CACLA's, and the actor's step factor."
-PAPER_AC = ActorCriticParams()  # the paper's α_V = 0.4, α_π = 0.2, γ_d = 0.8, Δk = 0.05; eq. 9's δ
 
+class ActorCriticParams(NamedTuple):
+    """The actor-critic's step sizes and options: CACLA's, and the actor's step factor.
 
-@njit(cache=True)
-def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p):
-    """One actor-critic update (eq. 9, or eq. 11 when supervised) from φ(s); returns δ.
-
-    CACLA's update (critic, k(s)) with the record's step factor; ``discount`` is γ_d^n for a
-    transition of n decisions (semi-Markov, docs/design.md).
+    The fields up to ``critic_lambda`` are :class:`~pipefollow.learners.cacla.CaclaParams`'s, in
+    its order and with its defaults, so that CACLA's compiled code reads the packed record
+    (``cacla.unpack`` reads the fields it starts with) and the record itself by the same names.
     """
-    return cacla.update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, p.actor_update)
+
+    alpha_v: float = 0.4  # critic step size α_V (paper §4)
+    alpha_pi: float = 0.2  # actor step size α_π (paper §4)
+    discount: float = 0.8  # discount factor γ_d (paper §4)
+    skew: float = 0.0  # always 0: this learner explores with eq. 8 only
+    gamma_max: float = 1.0  # cap |γ(s)| ≤ γ_max, unused without skew
+    supervised: bool = False  # supervised actor-critic (eqs. 10, 11, 13)
+    delta_k: float = 0.05  # Δk per visit (paper §4.1)
+    k_max: float = 1.0  # cap on k(s) (eq. 13)
+    forgetting: float = 0.0  # per-update decay of w_k (Rosenstein & Barto); the paper uses none
+    skew_sample: int = SAMPLE_LOCATION  # unused without skew
+    skew_step: int = STEP_GAMMA  # unused without skew
+    k_update: int = K_EVERY  # eq. 13: k(s) grows at every visit (default) or only when δ > 0
+    k_step: int = STEP_WEIGHTS  # eq. 13 step: w_k by Δk·φ(s) (default) or k(s) by Δk (STEP_GAMMA)
+    actor_repeats: int = REPEAT_ONCE  # CACLA+Var's repeats, not an option of this learner
+    var_rate: float = 0.001  # β of CACLA+Var, unused without it
+    critic_lambda: float = 0.0  # beyond the paper: λ of the critic's TD(λ) trace; 0 = eqs. 5-6 (TD(0))
+    actor_update: int = DELTA  # the actor's step factor: eq. 9's δ (default), max(δ, 0) or sgn(δ)
+
+
+PAPER_AC = ActorCriticParams()  # the paper's α_V = 0.4, α_π = 0.2, γ_d = 0.8, Δk = 0.05; eq. 9's δ
 
 
 class ActorCritic(Cacla):
@@ -95,9 +114,9 @@ class ActorCritic(Cacla):
         return name + factor
 
 
-def from_policy(data: dict, version: int, seed: int | None = None):
+def from_policy(data: dict, seed: int | None = None):
     """An agent and its weights from a policy file's arrays (CACLA's fields)."""
-    return cacla.from_policy(data, version, seed, agent_class=ActorCritic, params_class=ActorCriticParams)
+    return cacla.from_policy(data, seed, agent_class=ActorCritic, params_class=ActorCriticParams)
 
 
 def make(
@@ -110,7 +129,7 @@ def make(
 ) -> ActorCritic:
     """A fresh actor-critic under the readings ``r`` (fields: those of ``CaclaParams`` but the skew's).
 
-    ``actor_update``: ``delta`` (eq. 9), ``positive`` or ``sign`` (:func:`.actor_agent.step_factor`).
+    ``actor_update``: ``delta`` (eq. 9), ``positive`` or ``sign`` (:func:`.cacla_update.step_factor`).
 
     Raises:
         ValueError: an unknown ``actor_update``.

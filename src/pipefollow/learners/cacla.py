@@ -8,7 +8,8 @@ All four heads are linear in the same RBF state features φ(s) (paper §4):
 
 The update rules (the update itself in :mod:`.cacla_update`) are compiled functions of plain
 arrays, so that the agent class below and the compiled episode loop run the very same code; the
-general actor-critic (:mod:`.actor_critic`), CACLA with another actor step factor, runs them too.
+general actor-critic (:mod:`.actor_critic`), CACLA with another actor step factor, runs them and
+the agent class too.
 Random numbers are drawn by the caller from a ``numpy.random.Generator`` and passed in as standard
 normals.
 """
@@ -25,8 +26,6 @@ from numba import njit
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from pipefollow.learners import episodes as ep
-from pipefollow.learners.actor_agent import SIGN_AND_MAX, A, ActorAgent, G, K, clip1
-from pipefollow.learners.actor_agent import V as V  # the critic's row, beside A, G, K
 from pipefollow.learners.cacla_update import (
     ACTOR_REPEATS,
     K_EVERY,
@@ -36,13 +35,19 @@ from pipefollow.learners.cacla_update import (
     SAMPLE_CENTRED,
     SAMPLE_LOCATION,
     SAMPLE_MOMENTS,
+    SIGN_AND_MAX,
     STEP_GAMMA,
     STEP_WEIGHTS,
+    A,
+    G,
+    K,
+    clip1,
     update,
 )
+from pipefollow.learners.cacla_update import V as V  # the critic's row, beside A, G, K
 from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals, skew_step_to_gamma
 from pipefollow.learners.heuristic import heuristic_action
-from pipefollow.learners.protocol import LearnerKind
+from pipefollow.learners.protocol import Agent, LearnerKind
 from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite, grid_features, state_grid
 from pipefollow.learners.sums import dot
 from pipefollow.sim import decision as sim
@@ -150,22 +155,26 @@ def update_next_packed(w, phi, a_rl, a_sup, reward, discount, next_obs, grid, no
     return update(w, phi, a_rl, a_sup, reward, discount, phi_next, unpack(hp), rule, var, trace), True
 
 
-class Cacla(ActorAgent):
+class Cacla(Agent):
     """A CACLA agent on RBF features; works on any Gymnasium env with a Box observation.
+
+    It holds the weights (rows :data:`V`, :data:`A`, :data:`G`, :data:`K`: critic, actor mean,
+    skew, supervisor trust), draws the exploration's standard normals, caches the features of the
+    last update's next state (the usual next action's state) and calls the compiled entry points
+    above, so the agent and the compiled loop run the very same code. The actor's step is
+    ``rule(params)``, a code of :func:`~pipefollow.learners.cacla_update.step_factor` (the
+    actor-critic's agent differs in that alone), the running variance of δ that CACLA+Var updates
+    is ``td_var`` and the critic's TD(λ) trace ``critic_trace``.
 
     Args:
         params: step sizes and options.
         grid: the RBF grid of the observation (default: the paper's 1,764-feature grid).
         rng: generator for exploration noise (or ``seed``).
+        seed: seed of a new generator when ``rng`` is None.
         supervisor: ``obs -> a_sup`` for supervised CACLA (default: the paper's heuristic).
     """
 
     algorithm = "cacla"
-    pack = staticmethod(pack)
-    act_packed = staticmethod(act_packed)
-    act_heuristic_packed = staticmethod(act_heuristic_packed)
-    update_packed = staticmethod(update_packed)
-    update_next_packed = staticmethod(update_next_packed)
 
     def __init__(
         self,
@@ -175,7 +184,21 @@ class Cacla(ActorAgent):
         seed: int | None = None,
         supervisor: Callable[[np.ndarray], float] | None = None,
     ) -> None:
-        super().__init__(params, grid, rng, seed, supervisor)
+        super().__init__(params, grid, rng, seed)
+        self.weights = np.zeros((4, grid.n_features))
+        self.td_var = np.ones(1)  # running variance of δ of CACLA+Var (var_0 = 1), updated in place
+        self.critic_trace = np.zeros(grid.n_features)  # the critic's TD(λ) trace, zero at an episode's start
+        self._packed = pack(params)
+        self._rule = self.rule(params)
+        self._draws = 2 if params.skew > 0.0 else 1  # skew-normal samples take two standard normals
+        self.default_supervisor = supervisor is None  # the compiled training loop knows only this one
+        if supervisor is None:
+
+            def supervisor(obs):
+                return heuristic_action(float(obs[0]), float(obs[1]))
+
+        self.supervisor = supervisor
+        self._phi_cache: tuple[bytes, np.ndarray] | None = None  # φ(s') of the last update
 
     @staticmethod
     def rule(params) -> int:
@@ -186,6 +209,87 @@ class Cacla(ActorAgent):
     def name(self) -> str:
         """Short algorithm label."""
         return cacla_label(self.params)
+
+    def begin_episode(self, sigma: float) -> None:
+        """Set the exploration σ for the coming episode; forget any pending action and the critic's trace."""
+        super().begin_episode(sigma)
+        self.critic_trace[:] = 0.0
+
+    @property
+    def supervised(self) -> bool:
+        """Whether a supervisor shares the actions (eq. 10)."""
+        return bool(self.params.supervised)
+
+    def _cached_features(self, obs, key: bytes) -> np.ndarray:
+        """φ(obs), reusing φ(s') of the last update when ``obs`` is that s' (the usual case)."""
+        cache = self._phi_cache
+        if cache is not None and cache[0] == key:
+            return cache[1]
+        phi = self.features(obs)
+        self._phi_cache = (key, phi)
+        return phi
+
+    def act(self, obs, explore: bool = True) -> float:
+        """Executed action for ``obs``; with ``explore`` it samples with the current ``sigma``."""
+        key = _key(obs)
+        phi = self._cached_features(obs, key)
+        sigma = self.sigma if explore else 0.0
+        z0 = z1 = 0.0
+        if sigma > 0.0:
+            z0 = z1 = self.rng.standard_normal()
+            if self._draws == 2:
+                z1 = self.rng.standard_normal()
+        if self.default_supervisor:
+            x = np.asarray(obs, dtype=np.float64)
+            a, a_rl, a_sup = act_heuristic_packed(self.weights, phi, sigma, z0, z1, x[0], x[1], self._packed)
+        else:
+            a_sup = self.supervisor(obs) if self.params.supervised else 0.0
+            a, a_rl = act_packed(self.weights, phi, sigma, z0, z1, a_sup, self._packed)
+        self._pending = (key, phi, a_rl, a_sup)
+        return a
+
+    def actor(self, obs) -> float:
+        """The pure actor's deterministic action clip(A(s)), without the supervisor."""
+        return clip1(dot(self.weights[A], self.features(obs)))
+
+    def update(self, obs, action, reward: float, next_obs, discount: float) -> float:
+        """Learn from ``obs`` → ``next_obs``; ``discount`` is γ_d^n (0 if terminal). Returns δ.
+
+        Uses the learner's own action of the last :meth:`act` call on ``obs``; without one,
+        ``action`` is taken as the learner's action.
+        """
+        key = _key(obs)
+        if self._pending is not None and self._pending[0] == key:
+            _, phi, a_rl, a_sup = self._pending
+        else:
+            phi = self._cached_features(obs, key)
+            a_rl = float(action)
+            a_sup = self.supervisor(obs) if self.params.supervised else 0.0
+        self._pending = None
+        next_obs = np.asarray(next_obs, dtype=np.float64)
+        next_key = next_obs.tobytes()
+        cache = self._phi_cache
+        w, r, d, hp, rule = self.weights, float(reward), float(discount), self._packed, self._rule
+        if cache is not None and cache[0] == next_key:
+            return update_packed(
+                w, phi, a_rl, a_sup, r, d, cache[1], hp, rule, self.td_var, self.critic_trace
+            )
+        if next_obs.shape != (self.grid.ndim,):
+            raise ValueError(f"next_obs must have {self.grid.ndim} entries, got shape {next_obs.shape}")
+        phi_next = np.empty(self.grid.n_features)
+        grid, normalized = self.grid.packed, self.grid.form == "normalized"
+        state = (self.td_var, self.critic_trace)
+        delta, finite = update_next_packed(w, phi, a_rl, a_sup, r, d, next_obs, grid, normalized,
+                                           phi_next, hp, rule, *state)  # fmt: skip
+        if not finite:
+            raise ValueError(f"next_obs must be finite, got {next_obs}")
+        self._phi_cache = (next_key, phi_next)
+        return delta
+
+
+def _key(obs) -> bytes:
+    """An observation's identity for the caches: its float64 bytes."""
+    return np.asarray(obs, dtype=np.float64).tobytes()
 
 
 SAMPLE_SUFFIX = {SAMPLE_LOCATION: "", SAMPLE_CENTRED: " centred", SAMPLE_MOMENTS: " mean/s.d."}
@@ -333,28 +437,16 @@ def policy_fields(agent: Cacla) -> dict:
 
 def from_policy(
     data: dict,
-    version: int,
     seed: int | None = None,
     agent_class: type | None = None,
     params_class: type = CaclaParams,
 ):
-    """An agent and its weights from a policy file's arrays (see :func:`policy_fields`).
-
-    Files before format 3 had a boolean ``skew_centred`` and were trained with eq. 15 moving the
-    weights by Δγ·φ(s): they load with ``skew_step=weights``.
-    """
+    """An agent and its weights from a policy file's arrays (see :func:`policy_fields`)."""
     params = json.loads(str(data["params"]))
     grid = RBFGrid.from_dict(json.loads(str(data["grid"])))
     weights = np.asarray(data["weights"], dtype=np.float64)
-    trained = str(data.get("readings", "default"))
-    if version < 3 and isinstance(params, dict):
-        centred = params.pop("skew_centred", False)
-        params["skew_sample"] = SAMPLE_CENTRED if centred else SAMPLE_LOCATION
-        params["skew_step"] = STEP_WEIGHTS
-        if params.get("skew", 0.0) > 0.0:
-            trained = "skew_step=weights" + (",skew_sample=centred" if centred else "")
     agent = (agent_class or Cacla)(params_class(**params), grid=grid, seed=seed)
-    agent.readings = trained
+    agent.readings = str(data.get("readings", "default"))
     if "td_var" in data:  # CACLA+Var's running variance of δ, for training on
         agent.td_var[...] = np.asarray(data["td_var"], dtype=np.float64).reshape(1)
     return agent, weights

@@ -5,7 +5,9 @@ another actor step factor): the critic's TD error and step (eqs. 4–6; with ``c
 along an eligibility trace, TD(λ)), the actor's step (eq. 7, eq. 12 when supervised; with
 ``actor_repeats`` var made ⌈δ/√var⌉ times, CACLA+Var), the skew head (eq. 15) and the supervisor's
 trust k(s) (eq. 13). The record ``p`` is a :class:`~pipefollow.learners.cacla.CaclaParams` (or one
-that extends it), read by attribute; the codes of its integer fields are defined here.
+that extends it), read by attribute; the codes of its integer fields, the rows of the weight matrix
+(:data:`V`, :data:`A`, :data:`G`, :data:`K`: critic, actor mean, skew, supervisor trust) and the
+codes of the actor's step factor (:func:`step_factor`) are defined here.
 """
 
 from __future__ import annotations
@@ -15,8 +17,13 @@ import math
 import numpy as np
 from numba import njit
 
-from pipefollow.learners.actor_agent import SIGN_AND_MAX, A, G, K, V, clip1, step_factor
 from pipefollow.learners.sums import dot
+
+V, A, G, K = 0, 1, 2, 3  # rows of the weight matrix: critic, actor, skew, supervisor trust
+
+# The actor's step factor on (a − A(s)) (paper §2.1): eq. 9's δ; max(δ, 0), eq. 7's max term alone;
+# sgn(δ), its sign term alone; both terms, max(sgn δ, 0): CACLA's eq. 7, no step at all when δ ≤ 0.
+DELTA, POSITIVE, SIGN, SIGN_AND_MAX = 0, 1, 2, 3
 
 # Readings of open points (docs/design.md, "Readings"); codes as stored in CaclaParams.
 SAMPLE_LOCATION, SAMPLE_CENTRED, SAMPLE_MOMENTS = 0, 1, 2  # skew sample: location/scale, centred, mean/s.d.
@@ -27,6 +34,24 @@ K_EVERY, K_POSITIVE = 0, 1  # eq. 13: k(s) grows at every visit, or only when δ
 REPEAT_ONCE, REPEAT_VAR = 0, 1
 ACTOR_REPEATS = {"once": REPEAT_ONCE, "var": REPEAT_VAR}
 MAX_REPEATS = 100
+
+
+@njit(cache=True)
+def clip1(x):
+    """Clip to the action range [-1, 1]."""
+    return min(1.0, max(-1.0, x))
+
+
+@njit(cache=True)
+def step_factor(delta, rule):
+    """The actor's factor on (a − A(s)) under ``rule``: δ, max(δ, 0), sgn(δ) or max(sgn δ, 0)."""
+    if rule == POSITIVE:
+        return max(delta, 0.0)
+    if rule == SIGN:
+        return float(np.sign(delta))
+    if rule == SIGN_AND_MAX:
+        return 1.0 if delta > 0.0 else 0.0
+    return delta
 
 
 @njit(cache=True)
@@ -63,7 +88,7 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX
     """One CACLA update for the transition from φ(s) with reward and bootstrap ``discount``·V(s').
 
     ``discount`` is γ_d^n for a transition of n decisions (semi-Markov, docs/design.md). Returns δ.
-    The actor's step ``rule`` (:func:`.actor_agent.step_factor`) is eq. 7's (eq. 12 when supervised)
+    The actor's step ``rule`` (:func:`step_factor`) is eq. 7's (eq. 12 when supervised)
     or the actor-critic's: eq. 9 (eq. 11), or one of eq. 7's terms alone. With ``actor_repeats``
     var and the running variance ``var`` (a one-entry array, :func:`repeats`), the actor's step is
     made ⌈δ/√var⌉ times when δ > 0, A(s) recomputed before each (CACLA+Var). With ``critic_lambda``

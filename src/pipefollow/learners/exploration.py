@@ -9,9 +9,9 @@ the readings ``centred`` and ``moments`` shift (and scale) ``z`` instead (docs/d
 σ falls linearly from 1 to 0.01 over the episodes of a trial (paper §4; docs/design.md, "exploration σ").
 
 Randomness comes only from an explicit ``numpy.random.Generator``. The learners draw their
-standard normals themselves and build the sample with :func:`skew_normal_from_normals`, so that
-the Python and the compiled training paths consume the same numbers in the same order; the
-``*_action`` samplers here take the generator directly (numba draws the same numbers as NumPy).
+standard normals themselves (one per exploring action; two, u0 then v, for a skew-normal one) and
+build the sample with :func:`skew_normal_from_normals`, so that the Python and the compiled
+training paths consume the same numbers in the same order.
 """
 
 from __future__ import annotations
@@ -94,26 +94,6 @@ def skew_normal_from_normals(gamma, u0, v):
     delta = gamma / math.sqrt(1.0 + gamma * gamma)
     u1 = delta * u0 + math.sqrt(1.0 - delta * delta) * v
     return u1 if u0 >= 0.0 else -u1
-
-
-@njit(cache=True)
-def skew_normal_z(rng, gamma):
-    """Draw ``z ~ SkewNormal(0, 1, γ)`` (eq. 14) from ``rng``: always two standard normals, u0 then v."""
-    u0 = rng.standard_normal()
-    v = rng.standard_normal()
-    return skew_normal_from_normals(gamma, u0, v)
-
-
-@njit(cache=True)
-def gaussian_action(rng, mu, sigma):
-    """Eq. 8 sample ``clip(μ + σ z, −1, 1)``, ``z ~ N(0, 1)``; draws one normal even when σ = 0."""
-    return min(1.0, max(-1.0, mu + sigma * rng.standard_normal()))
-
-
-@njit(cache=True)
-def skew_normal_action(rng, mu, sigma, gamma):
-    """Eq. 14 sample ``clip(μ + σ z, −1, 1)``, ``z ~ SkewNormal(γ)``; draws two normals even when σ = 0."""
-    return min(1.0, max(-1.0, mu + sigma * skew_normal_z(rng, gamma)))
 
 
 def skew_step_to_gamma(step_deg: float) -> float:

@@ -49,7 +49,7 @@ class LearnerKind:
             :mod:`pipefollow.learners.episodes` (learning if ``run.learn``), writing ``stats`` rows
             (and ``poses`` unless empty).
         policy_fields: ``policy_fields(agent) -> dict`` of the arrays a policy file stores.
-        from_policy: ``from_policy(data, version, seed) -> (agent, weights)`` from a policy file's
+        from_policy: ``from_policy(data, seed) -> (agent, weights)`` from a policy file's
             arrays (``KeyError``, ``ValueError`` or ``TypeError`` when they do not fit); the agent
             carries its readings' id, and the caller checks and copies ``weights`` into it.
     """

@@ -261,15 +261,13 @@ def policy_fields(agent: Sarsa) -> dict:
     }
 
 
-def from_policy(data: dict, version: int, seed: int | None = None):
-    """An agent and its weights from a policy file's arrays; format 1 stored the weights state-major."""
+def from_policy(data: dict, seed: int | None = None):
+    """An agent and its weights from a policy file's arrays (see :func:`policy_fields`)."""
     params = json.loads(str(data["params"]))
     grid = RBFGrid.from_dict(json.loads(str(data["grid"])))
     weights = np.asarray(data["weights"], dtype=np.float64)
     action = RBFGrid.from_dict(json.loads(str(data["action_grid"])))
     agent = Sarsa(SarsaParams(**params), grid=grid, action_grid=action, seed=seed)
-    if version < 2 and weights.shape == agent.weights.shape[::-1]:
-        weights = np.ascontiguousarray(weights.T)
     agent.readings = str(data.get("readings", "default"))
     return agent, weights
 

@@ -157,11 +157,6 @@ def draw(r: Randomization, rng: np.random.Generator) -> Disturbance:
     return from_uniforms(r, rng.random(DRAWS))
 
 
-def draw_many(r: Randomization, rng: np.random.Generator, n: int) -> list[Disturbance]:
-    """``n`` episodes' disturbances, the same as ``n`` calls of :func:`draw` on ``rng``."""
-    return [draw(r, rng) for _ in range(n)]
-
-
 # ---------------------------------------------------------------------------------------------
 # Checks and parsing
 

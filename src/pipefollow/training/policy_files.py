@@ -7,8 +7,7 @@ the learner's own fields (its ``policy_fields``: ``params``, JSON of the agent's
 ``readings``: the id of the readings the policy was trained under (docs/design.md), under which
 it is evaluated unless told otherwise. The loaded agent carries it as ``agent.readings``.
 
-Format versions: 3 adds ``readings`` and CACLA's reading fields; files of version 2 and older were
-trained with eq. 15 moving the weights by Δγ·φ(s), and load with ``skew_step=weights``. 4 adds
+Format versions read: 3 (``readings`` and CACLA's reading fields) and 4, which adds
 ``algorithm`` ``mlp``: a feed-forward network exported from a deep-RL learner
 (:class:`~pipefollow.learners.mlp.MLPPolicy`), stored as ``n_layers``, ``layer{k}_weight`` (out × in) and
 ``layer{k}_bias`` (float64), ``activations`` (JSON list: ``identity``, ``tanh`` or ``relu`` per
@@ -31,7 +30,8 @@ from pipefollow.learners.mlp import MLPPolicy
 from pipefollow.learners.registry import LEARNERS, NAMES, learner_of
 
 FORMAT = "pipefollow-policy"
-FORMAT_VERSION = 4  # 2: SARSA weights per action centre (13 × 1,764); 3: readings; 4: mlp
+FORMAT_VERSION = 4  # 3: readings; 4: mlp
+OLDEST_FORMAT_VERSION = 3  # the first with readings; older files are refused
 
 
 class PolicyError(ValueError):
@@ -132,6 +132,8 @@ def load_policy(path: str | os.PathLike, seed: int | None = None):
         raise PolicyError(f"{src}: missing or malformed entry ({e})") from None
     if version > FORMAT_VERSION:
         raise PolicyError(f"{src}: format version {version} is newer than this pipefollow reads")
+    if version < OLDEST_FORMAT_VERSION:
+        raise PolicyError(f"{src}: format version {version} is older than this pipefollow reads")
     if algorithm not in LEARNERS:
         expected = ", ".join(NAMES)
         raise PolicyError(f"{src}: unknown algorithm '{algorithm}' (expected {expected} or mlp)")
@@ -139,7 +141,7 @@ def load_policy(path: str | os.PathLike, seed: int | None = None):
     if missing:
         raise PolicyError(f"{src}: missing or malformed entry ({missing[0]!r})")
     try:
-        agent, weights = LEARNERS[algorithm].from_policy(data, version, seed)
+        agent, weights = LEARNERS[algorithm].from_policy(data, seed)
     except (TypeError, KeyError, ValueError) as e:
         raise PolicyError(f"{src}: parameters do not fit algorithm '{algorithm}' ({e})") from None
     if weights.shape != agent.weights.shape:
