@@ -191,10 +191,11 @@ class PipelineFollowingEnv(gym.Env):
                 self.observation_space = image_space(self.camera_settings.water)
         self.state = np.zeros(sim.STATE_SIZE)
         self._z = np.zeros(setup.noise_count)  # standard normals of one camera reading
-        self._book = ep.new_book()  # the episode's totals (pipefollow.sim.episode)
+        self._book = ep.new_book()  # the episode's counts (pipefollow.sim.episode)
         self._needs_reset = True
         self.trail: list[tuple[float, float, float]] = []
         self.last_reward: float | None = None  # shown by render()
+        self.episode_return = 0.0  # the rewards returned, summed (the book counts the decisions)
         self._scene = None  # the rendering's figure, made on the first render() and reused
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -214,7 +215,7 @@ class PipelineFollowingEnv(gym.Env):
         self._needs_reset = False
         s = self.state
         self.trail = [(s[sim.X], s[sim.Y], s[sim.PSI])]
-        self.last_reward = None
+        self.last_reward, self.episode_return = None, 0.0
         if self._vision is not None:
             self._vision.reset(self.state, self.pipeline.points, self.pipeline.cumulative, self.np_random)
         if self.render_mode == "human":
@@ -246,20 +247,15 @@ class PipelineFollowingEnv(gym.Env):
         self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
         if self._vision is not None:  # the book's count in view stays the true geometry's
             r = self._vision.step(s, pipe.points, pipe.cumulative, self.np_random, r, a_prev)
-        book[ep.TOTAL] += r
         self._needs_reset = truncated
         self.last_reward = r
+        self.episode_return += r
         if self.render_mode == "human":
             self.render()
         info = self._info()
         if truncated:  # the episode's summary, for clients that log per episode
             info.update(episode_summary(book, s))
         return self._observation(), r, False, truncated, info
-
-    @property
-    def episode_return(self) -> float:
-        """The rewards of the episode so far, summed."""
-        return float(self._book[ep.TOTAL])
 
     def _observation(self) -> np.ndarray:
         if self._vision is None:

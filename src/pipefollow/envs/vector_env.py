@@ -366,7 +366,6 @@ class PipelineFollowingVectorEnv(VectorEnv):
                 m = self._n_points[i]
                 pts, cum = self._points[i, :m], self._cum[i, :m]
                 rewards[i] = self._cams[i].step(self.states[i], pts, cum, rngs[i], rewards[i], a_prev[i])
-        self._books[:, ep.TOTAL] += rewards  # the rewards returned (0 where resetting)
         if any_reset:  # next-step autoreset
             for i in np.flatnonzero(resetting):
                 self._reset_one(int(i))

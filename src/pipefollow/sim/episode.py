@@ -167,9 +167,9 @@ def draw_and_decide(s, a, points, cum, ps, env_rng, dz, book, poses, e):
 def decide_packed(s, a, points, cum, packed, z, book, n_decisions):
     """The environments' decision (packed parameters), counted; returns its reward and :func:`ended`.
 
-    The reward is not added to the book: the environment adds the reward it returns to
-    ``book[TOTAL]``, the vision camera's when it has one. What the book counts in view is the
-    simulation's exact camera, before any detection.
+    The reward is not added to the book: an environment sums the rewards it returns itself (the
+    vision camera's when it has one), in Python, where a float costs less than an array's entry.
+    What the book counts in view is the simulation's exact camera, before any detection.
     """
     r = sim.decide(s, a, points, cum, sim.unpack_params(packed), z)
     count(book, s[sim.IN_VIEW] != 0.0, s[sim.E_DIST])
