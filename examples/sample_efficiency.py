@@ -25,12 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
-from pipefollow.evaluation.benchmark import IN_VIEW, RET, SUCCESS_IN_VIEW, run_episodes
+from pipefollow.evaluation.benchmark import SUCCESS_IN_VIEW, run_episodes
 from pipefollow.evaluation.stats import bootstrap_ci, paired_difference
 from pipefollow.files.atomic import write_text_atomic
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim.decision import PAPER_SIM
 from pipefollow.sim.disturbance import make_disturbance
+from pipefollow.sim.episode import STAT_IN_VIEW, STAT_RETURN
 from pipefollow.sim.suites import get_suite, min_length_for
 from pipefollow.training.agents import make_agent
 from pipefollow.training.phases import disturbance_rng
@@ -103,7 +104,7 @@ def judge(agent) -> dict:
     out = {}
     for name, params in CONDITIONS.items():
         res = run_episodes(agent, pipes, TEST_S, params)[0]
-        out[name] = {"returns": res[:, RET].tolist(), "in_view": res[:, IN_VIEW].tolist()}
+        out[name] = {"returns": res[:, STAT_RETURN].tolist(), "in_view": res[:, STAT_IN_VIEW].tolist()}
     return out
 
 

@@ -5,6 +5,7 @@ from pipefollow.learners.heuristic import Heuristic
 from pipefollow.learners.registry import learner_of
 from pipefollow.sim.decision import PAPER_SIM
 from pipefollow.sim.disturbance import make_disturbance
+from pipefollow.sim.episode import STAT_IN_VIEW, STAT_RETURN
 from pipefollow.sim.suites import get_suite
 
 
@@ -33,7 +34,7 @@ def test_random_disturbances_are_seeded_and_equal_on_both_paths():
         30.0,
         PAPER_SIM._replace(disturbance=params.disturbance._replace(camera_noise=0.0, miss_prob=0.0)),
     )
-    assert not np.array_equal(other[:, bm.RET], compiled[:, bm.RET])  # the noise seed matters
-    assert not np.array_equal(calm[:, bm.RET], compiled[:, bm.RET])  # and the noise is applied
+    assert not np.array_equal(other[:, STAT_RETURN], compiled[:, STAT_RETURN])  # the noise seed matters
+    assert not np.array_equal(calm[:, STAT_RETURN], compiled[:, STAT_RETURN])  # and the noise is applied
     # misses at 5 % per reading: the pipe is lost in some decisions even where the calm run keeps it
-    assert compiled[:, bm.IN_VIEW].mean() < calm[:, bm.IN_VIEW].mean()
+    assert compiled[:, STAT_IN_VIEW].mean() < calm[:, STAT_IN_VIEW].mean()

@@ -11,10 +11,11 @@ from click.testing import CliRunner
 from pipefollow.cli import main
 from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.evaluation import robustness as rb
-from pipefollow.evaluation.benchmark import IN_VIEW, PROGRESS, RET, run_episodes
+from pipefollow.evaluation.benchmark import run_episodes
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.learners.los import LOS
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance, DisturbanceError, check
+from pipefollow.sim.episode import STAT_IN_VIEW, STAT_PROGRESS, STAT_RETURN
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.suites import get_suite, min_length_for
 from pipefollow.training.compiled import run_episode
@@ -88,8 +89,8 @@ def test_scenarios_equal_episodes_through_the_environment(name):
         env = PipelineFollowingEnv(c.pipe, 30.0, disturbance=c.disturbance)
         env.np_random = np.random.default_rng(np.random.SeedSequence([c.noise_seed, 0]))
         ep = run_episode(env, LOS())
-        assert row[RET] == pytest.approx(ep.ret, abs=1e-9)
-        assert row[IN_VIEW] == pytest.approx(ep.pipe_in_view)
+        assert row[STAT_RETURN] == pytest.approx(ep.ret, abs=1e-9)
+        assert row[STAT_IN_VIEW] == pytest.approx(ep.pipe_in_view)
 
 
 def test_a_current_along_a_straight_pipe_carries_the_auv_but_less_than_its_speed():
@@ -100,7 +101,7 @@ def test_a_current_along_a_straight_pipe_carries_the_auv_but_less_than_its_speed
     v, seconds = 0.1, 40.0
     cases = [rb.Scenario(pipe, Disturbance(current_speed=s, current_direction=d), 0) for s, d in
              ((0.0, 0.0), (v, 0.0), (v, math.pi))]  # fmt: skip
-    calm, following, opposing = rb.run_scenarios(Heuristic(), cases, seconds)[:, PROGRESS]
+    calm, following, opposing = rb.run_scenarios(Heuristic(), cases, seconds)[:, STAT_PROGRESS]
     gain, loss = following - calm, calm - opposing
     assert 0.2 * v * seconds < gain < v * seconds
     assert loss == pytest.approx(gain, rel=0.15)
@@ -113,7 +114,7 @@ def test_a_current_along_a_straight_pipe_carries_the_auv_but_less_than_its_speed
 def test_summarize_by_hand():
     def rows(returns, in_view):
         out = np.zeros((len(returns), 5))
-        out[:, RET], out[:, IN_VIEW] = returns, in_view
+        out[:, STAT_RETURN], out[:, STAT_IN_VIEW] = returns, in_view
         return out
 
     a = rows([1.0, 3.0, -5.0], [1.0, 0.96, 0.5])
@@ -176,7 +177,7 @@ def test_cli_writes_the_tables_and_the_figure(tmp_path):
     ]
     # the calm point is the benchmark's number for the same pipes
     bench = run_episodes(Heuristic(), HELDOUT.pipes(4, min_length_for(20.0)), 20.0)[0]
-    assert float(curve[0]["mean_return"]) == pytest.approx(bench[:, RET].mean(), rel=1e-6)
+    assert float(curve[0]["mean_return"]) == pytest.approx(bench[:, STAT_RETURN].mean(), rel=1e-6)
     assert [r["scenarios"] for r in result["scenarios"]] == ["calm"] * 3 + ["misses"] * 3
     assert (out / "robustness.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 

@@ -104,17 +104,18 @@ def test_vector_env_with_the_vision_camera_equals_single_environments():
     singles = [PipelineFollowingEnv("random:medium", **kwargs) for _ in range(3)]
     obs, infos = vec.reset(seed=10)
     single_obs = [e.reset(seed=10 + i)[0] for i, e in enumerate(singles)]
+    ended = [False] * len(singles)  # the single environment's episode has ended: next-step autoreset
     for _ in range(7):  # across an autoreset
         assert np.array_equal(obs, np.array(single_obs))
         actions = np.array([heuristic(o)[0] for o in obs])
         obs, rewards, _, truncated, infos = vec.step(actions)
         stepped = []
         for i, e in enumerate(singles):
-            if e._decisions >= e.max_decisions:
-                o, _ = e.reset()
+            if ended[i]:
+                (o, _), ended[i] = e.reset(), False
                 assert rewards[i] == 0.0
             else:
-                o, r, _, _, info = e.step([actions[i]])
+                o, r, _, ended[i], info = e.step([actions[i]])
                 assert rewards[i] == r and infos["detected"][i] == info["detected"]
             stepped.append(o)
         single_obs = stepped

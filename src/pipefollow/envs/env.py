@@ -25,6 +25,7 @@ from pipefollow.envs.shell import (
 )
 from pipefollow.perception.camera import VisionCamera, camera_settings
 from pipefollow.sim import decision as sim
+from pipefollow.sim import episode as ep
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.randomization import Randomization
@@ -190,12 +191,11 @@ class PipelineFollowingEnv(gym.Env):
                 self.observation_space = image_space(self.camera_settings.water)
         self.state = np.zeros(sim.STATE_SIZE)
         self._z = np.zeros(setup.noise_count)  # standard normals of one camera reading
-        self._decisions = 0
-        self._seen, self._sum_e2 = 0, 0.0
+        self._book = ep.new_book()  # the episode's counts (pipefollow.sim.episode)
         self._needs_reset = True
         self.trail: list[tuple[float, float, float]] = []
         self.last_reward: float | None = None  # shown by render()
-        self.episode_return = 0.0
+        self.episode_return = 0.0  # the rewards returned, summed (the book counts the decisions)
         self._scene = None  # the rendering's figure, made on the first render() and reused
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -211,8 +211,7 @@ class PipelineFollowingEnv(gym.Env):
             self.state, self.suite, self.pipeline, self.np_random, self.episode_setup, self._z,
             opts.lateral_offset, opts.heading_offset_deg,
         )  # fmt: skip
-        self._decisions = 0
-        self._seen, self._sum_e2 = 0, 0.0
+        self._book[:] = 0.0
         self._needs_reset = False
         s = self.state
         self.trail = [(s[sim.X], s[sim.Y], s[sim.PSI])]
@@ -228,7 +227,7 @@ class PipelineFollowingEnv(gym.Env):
         if self._needs_reset:
             raise ResetNeeded(
                 "the episode has ended: call reset() before step()"
-                if self._decisions
+                if self._book[ep.DECISIONS]
                 else "call reset() before the first step()"
             )
         arr = np.asarray(action, dtype=np.float64)
@@ -238,22 +237,16 @@ class PipelineFollowingEnv(gym.Env):
         if math.isnan(a):
             raise ValueError("action is NaN")
         a = min(1.0, max(-1.0, a))
-        s, z = self.state, self._z
+        s, z, book, pipe = self.state, self._z, self._book, self.pipeline
         if z.size:
             self.np_random.standard_normal(out=z)
         a_prev = s[sim.A_PREV]
-        r = sim.decide_packed(
-            s, a, self.pipeline.points, self.pipeline.cumulative, self.episode_setup.packed, z
+        r, truncated = ep.decide_packed(
+            s, a, pipe.points, pipe.cumulative, self.episode_setup.packed, z, book, self.max_decisions
         )
-        self._decisions += 1
         self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
-        if s[sim.IN_VIEW] != 0.0:
-            self._seen += 1
-            self._sum_e2 += s[sim.E_DIST] ** 2
-        if self._vision is not None:  # the episode's summary above stays the true geometry's
-            pipe = self.pipeline
+        if self._vision is not None:  # the book's count in view stays the true geometry's
             r = self._vision.step(s, pipe.points, pipe.cumulative, self.np_random, r, a_prev)
-        truncated = self._decisions >= self.max_decisions
         self._needs_reset = truncated
         self.last_reward = r
         self.episode_return += r
@@ -261,7 +254,7 @@ class PipelineFollowingEnv(gym.Env):
             self.render()
         info = self._info()
         if truncated:  # the episode's summary, for clients that log per episode
-            info.update(episode_summary(self._decisions, self._seen, self._sum_e2, s[sim.PROGRESS_MAX]))
+            info.update(episode_summary(book, s))
         return self._observation(), r, False, truncated, info
 
     def _observation(self) -> np.ndarray:

@@ -20,6 +20,7 @@ import numpy as np
 from gymnasium import spaces
 
 from pipefollow.sim import decision as sim
+from pipefollow.sim import episode as ep
 from pipefollow.sim.disturbance import Disturbance, check, disturbance_from_dict, noise_count
 from pipefollow.sim.pipeline import Pipeline, resolve
 from pipefollow.sim.suites import Suite, min_length_for, parse_random_spec
@@ -287,19 +288,18 @@ def state_infos(states: np.ndarray) -> dict[str, np.ndarray]:
     return {key: (flags if boolean else snap)[index] for key, _, boolean, index in _INFO_INDEX}
 
 
-def episode_summary(decisions, seen, sum_e2, progress_m) -> dict[str, np.ndarray]:
-    """The summary of episodes from their counters (numbers or arrays of one shape).
+def episode_summary(book: np.ndarray, states: np.ndarray) -> dict[str, np.ndarray]:
+    """The summary of episodes from their books (:mod:`pipefollow.sim.episode`) and states.
 
-    ``episode_pipe_in_view`` is the share of decisions that ended with the pipe in view,
-    ``episode_progress_m`` the arc length reached, ``episode_rms_e_dist`` the RMS of ``e_dist``
-    over the decisions in view (NaN if none).
+    One book and state, or a batch of each (rows). ``episode_pipe_in_view`` is the share of
+    decisions that ended with the pipe in view, ``episode_progress_m`` the arc length reached,
+    ``episode_rms_e_dist`` the RMS of ``e_dist`` over the decisions in view (NaN if none).
     """
-    decisions, seen = np.asarray(decisions), np.asarray(seen)
-    sum_e2 = np.asarray(sum_e2, dtype=np.float64)
+    decisions, seen, sum_e2 = book[..., ep.DECISIONS], book[..., ep.SEEN], book[..., ep.E2]
     with np.errstate(invalid="ignore", divide="ignore"):
         rms = np.where(seen > 0, np.sqrt(sum_e2 / np.maximum(seen, 1)), np.nan)
     return {
         "episode_pipe_in_view": np.asarray(seen / np.maximum(decisions, 1)),
-        "episode_progress_m": np.array(progress_m, dtype=np.float64),
+        "episode_progress_m": np.array(states[..., sim.PROGRESS_MAX], dtype=np.float64),
         "episode_rms_e_dist": np.asarray(rms),
     }

@@ -72,6 +72,7 @@ from pipefollow.envs.shell import (
 )
 from pipefollow.perception.camera import VisionCamera, camera_settings
 from pipefollow.sim import decision as sim
+from pipefollow.sim import episode as ep
 from pipefollow.sim.disturbance import NO_DISTURBANCE
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.randomization import MAX_NOISE
@@ -79,17 +80,14 @@ from pipefollow.sim.randomization import resolve as resolve_randomization
 
 
 @njit(cache=True)
-def step_batch(
-    states, actions, points, cum, n_points, packed, z, skip, rewards, decisions, seen, sum_e2, max_n, ended
-):
-    """One decision of every sub-environment not in ``skip``, with its episode counters.
+def step_batch(states, actions, points, cum, n_points, packed, z, skip, rewards, books, max_n, ended):
+    """One decision of every sub-environment not in ``skip``, counted in its book.
 
     ``packed[i]`` is sub-environment i's packed parameters (its own disturbances under a
-    randomization).
+    randomization), ``books[i]`` its episode's book (:mod:`pipefollow.sim.episode`).
 
     Actions are clipped to [-1, 1]; returns False (stepping nothing) if one is NaN. Writes the
-    rewards, counts decisions, decisions ending in view and their Σ e_dist², and marks in
-    ``ended`` the sub-environments whose episode this decision ends.
+    rewards and marks in ``ended`` the sub-environments whose episode this decision ends.
     """
     for i in range(states.shape[0]):
         if math.isnan(actions[i]):
@@ -101,14 +99,43 @@ def step_batch(
             continue
         n = n_points[i]
         a = min(1.0, max(-1.0, actions[i]))
-        s = states[i]
-        rewards[i] = sim.decide_packed(s, a, points[i, :n], cum[i, :n], packed[i], z[i])
-        decisions[i] += 1
-        if s[sim.IN_VIEW] != 0.0:
-            seen[i] += 1
-            sum_e2[i] += s[sim.E_DIST] ** 2
-        ended[i] = decisions[i] >= max_n
+        pts, cm = points[i, :n], cum[i, :n]
+        rewards[i], ended[i] = ep.decide_packed(states[i], a, pts, cm, packed[i], z[i], books[i], max_n)
     return True
+
+
+def _checked_count_and_mode(num_envs, render_mode, autoreset_mode) -> tuple[int, AutoresetMode]:
+    """The number of sub-environments and the autoreset mode, checked; the vector env does not render."""
+    if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
+        raise ValueError(f"num_envs must be an integer ≥ 1, got {num_envs!r}")
+    if render_mode is not None:
+        raise ValueError("the vector environment does not render; use PipelineFollowingEnv")
+    try:
+        mode = AutoresetMode(autoreset_mode)
+    except ValueError:
+        allowed = ", ".join(repr(m.value) for m in AutoresetMode)
+        raise ValueError(f"autoreset_mode must be one of {allowed}, got {autoreset_mode!r}") from None
+    return int(num_envs), mode
+
+
+def _camera_of(kwargs: dict[str, Any]):
+    """The camera settings, popped from ``kwargs`` (left: the shared arguments); unknown keys refused."""
+    unknown = sorted(set(kwargs) - set(SHARED_ARGUMENTS) - set(CAMERA_ARGUMENTS))
+    if unknown:
+        raise TypeError(
+            f"unknown argument(s) {unknown} of the vector environment; allowed: num_envs, pipeline, "
+            f"autoreset_mode, {', '.join(SHARED_ARGUMENTS + CAMERA_ARGUMENTS)}, randomization"
+        )
+    return camera_settings(**{k: kwargs.pop(k) for k in CAMERA_ARGUMENTS if k in kwargs})
+
+
+def _pipeline_specs(pipeline, n: int) -> list:
+    """One pipeline spec per sub-environment: ``pipeline`` for all, or its list of ``n``."""
+    one = is_points(pipeline) or not isinstance(pipeline, list | tuple)
+    specs = [pipeline] * n if one else list(pipeline)
+    if len(specs) != n:
+        raise ValueError(f"pipeline lists {len(specs)} specs for {n} sub-environments")
+    return specs
 
 
 class PipelineFollowingVectorEnv(VectorEnv):
@@ -138,28 +165,10 @@ class PipelineFollowingVectorEnv(VectorEnv):
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         **kwargs: Any,
     ) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
-            raise ValueError(f"num_envs must be an integer ≥ 1, got {num_envs!r}")
-        if render_mode is not None:
-            raise ValueError("the vector environment does not render; use PipelineFollowingEnv")
-        try:
-            mode = AutoresetMode(autoreset_mode)
-        except ValueError:
-            allowed = ", ".join(repr(m.value) for m in AutoresetMode)
-            raise ValueError(f"autoreset_mode must be one of {allowed}, got {autoreset_mode!r}") from None
+        n, mode = _checked_count_and_mode(num_envs, render_mode, autoreset_mode)
         randomization = kwargs.pop("randomization", None)
-        unknown = sorted(set(kwargs) - set(SHARED_ARGUMENTS) - set(CAMERA_ARGUMENTS))
-        if unknown:
-            raise TypeError(
-                f"unknown argument(s) {unknown} of the vector environment; allowed: num_envs, pipeline, "
-                f"autoreset_mode, {', '.join(SHARED_ARGUMENTS + CAMERA_ARGUMENTS)}, randomization"
-            )
-        camera = camera_settings(**{k: kwargs.pop(k) for k in CAMERA_ARGUMENTS if k in kwargs})
-        n = int(num_envs)
-        one = is_points(pipeline) or not isinstance(pipeline, list | tuple)
-        specs = [pipeline] * n if one else list(pipeline)
-        if len(specs) != n:
-            raise ValueError(f"pipeline lists {len(specs)} specs for {n} sub-environments")
+        camera = _camera_of(kwargs)
+        specs = _pipeline_specs(pipeline, n)
         setup = make_setup(**kwargs)
         # gymnasium.make_vec passes the registered spec's max_episode_steps, an upper bound; the
         # episodes end after episode_seconds, as in the single environment
@@ -174,6 +183,13 @@ class PipelineFollowingVectorEnv(VectorEnv):
             self.randomization = resolve_randomization(randomization)
             if setup.params.disturbance != NO_DISTURBANCE:
                 raise ValueError("give a disturbance or a randomization of the disturbances, not both")
+        self._describe(n, mode, camera)
+        self._load_pipelines(specs)
+        self._make_buffers()
+
+    def _describe(self, n: int, mode: AutoresetMode, camera) -> None:
+        """The public attributes: the batch, its autoreset mode, the shared arguments and the spaces."""
+        setup = self.setup
         self.num_envs = n
         self.render_mode = None
         self.autoreset_mode = mode
@@ -190,6 +206,10 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self.single_action_space = setup.action_space
         self.observation_space = batch_space(self.single_observation_space, n)
         self.action_space = batch_space(self.single_action_space, n)
+
+    def _load_pipelines(self, specs: list) -> None:
+        """Each sub-environment's pipeline source, its points in the batch's padded arrays."""
+        n = self.num_envs
         sources = [pipeline_source(s) for s in specs]
         self.suites = [suite for suite, _ in sources]
         self.pipelines = [pipe for _, pipe in sources]
@@ -199,15 +219,17 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self._n_points = np.zeros(n, dtype=np.int64)
         for i, pipe in enumerate(self.pipelines):
             self._load_pipe(i, pipe)
+
+    def _make_buffers(self) -> None:
+        """The batch's states, per sub-environment parameters, normals, books and step buffers."""
+        n, setup = self.num_envs, self.setup
         self.states = np.zeros((n, sim.STATE_SIZE))
         # per sub-environment: packed parameters and normals per camera reading (its episode's)
         self._packed = np.tile(setup.packed, (n, 1))
         self._counts = np.full(n, setup.noise_count, dtype=np.int64)
         self._z = np.zeros((n, MAX_NOISE if self.randomization is not None else setup.noise_count))
         self._rngs: list[np.random.Generator] | None = None
-        self._decisions = np.zeros(n, dtype=np.int64)
-        self._seen = np.zeros(n, dtype=np.int64)
-        self._sum_e2 = np.zeros(n)
+        self._books = ep.new_book(n)  # each sub-environment's episode (pipefollow.sim.episode)
         # sub-environments whose episode ended (next-step: reset at the next step; disabled: must be reset)
         self._ended_before = np.zeros(n, dtype=bool)
         self._started = False
@@ -216,9 +238,9 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self._ended = np.zeros(n, dtype=bool)
         # the vision camera renders and detects per sub-environment after the batched decision
         self._cams = None
-        if camera.renders:
+        if self.camera_settings.renders:
             cam, lost = self.params.camera, self.params.lost_reward
-            self._cams = [VisionCamera(camera, cam, lost) for _ in range(n)]
+            self._cams = [VisionCamera(self.camera_settings, cam, lost) for _ in range(n)]
 
     def _load_pipe(self, i: int, pipe: Pipeline) -> None:
         m = len(pipe.points)
@@ -303,9 +325,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
         )  # fmt: skip
         if pipe is not self.pipelines[i]:
             self._load_pipe(i, pipe)
-        self._decisions[i] = 0
-        self._seen[i] = 0
-        self._sum_e2[i] = 0.0
+        self._books[i] = 0.0
         if self._cams is not None:
             m = self._n_points[i]
             pts, cum = self._points[i, :m], self._cum[i, :m]
@@ -336,7 +356,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
         a_prev = self.states[:, sim.A_PREV].copy() if self._cams is not None else None
         ok = step_batch(
             self.states, a, self._points, self._cum, self._n_points, self._packed, self._z, skip,
-            rewards, self._decisions, self._seen, self._sum_e2, self.max_decisions, ended,
+            rewards, self._books, self.max_decisions, ended,
         )  # fmt: skip
         if not ok:
             raise ValueError("action is NaN")
@@ -398,9 +418,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
                 infos[key] = np.array([d[key] for d in per_env])
                 infos["_" + key] = present.copy()
         if ended is not None and ended.any():
-            summary = episode_summary(
-                self._decisions, self._seen, self._sum_e2, self.states[:, sim.PROGRESS_MAX]
-            )
+            summary = episode_summary(self._books, self.states)
             for key, value in summary.items():
                 infos[key] = np.where(ended, value, 0.0)  # 0 where masked out, as Gymnasium's SyncVectorEnv
                 infos["_" + key] = ended.copy()

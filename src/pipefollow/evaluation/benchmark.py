@@ -39,23 +39,20 @@ from numba import njit
 
 from pipefollow.evaluation.compare import aggregate_intervals
 from pipefollow.evaluation.stats import bootstrap_ci, iqm, paired_difference
-from pipefollow.learners import episodes as ep
 from pipefollow.learners import mlp as mlp_mod
-from pipefollow.learners.episodes import STAT_NAMES, Run, tracks_of
 from pipefollow.learners.heuristic import Heuristic, heuristic_action
 from pipefollow.learners.los import LOS, los_action
 from pipefollow.learners.registry import learner_of
 from pipefollow.sim import decision as sim
+from pipefollow.sim import episode as ep
+from pipefollow.sim.episode import STAT_NAMES, Run, tracks_of
+from pipefollow.sim.episode import STAT_RETURN as RET  # noqa: F401  (the name cli/compare.py reads)
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.suites import Suite, min_length_for
 from pipefollow.training.compiled import run_episode
 
 SUCCESS_IN_VIEW = 0.95
 HEURISTIC, MLP, LOS_KIND = 0, 1, 2  # fixed controllers of the compiled episodes
-
-# Columns of the per-episode results: those of the episode protocol's statistics, without the time lost.
-_COLUMNS = [ep.RETURN, ep.IN_VIEW, ep.PROGRESS, ep.SUM_E2, ep.N_SEEN]
-RET, IN_VIEW, PROGRESS, SUM_E2, N_SEEN = range(len(_COLUMNS))
 
 # Built-in controllers by name: a factory of an agent with ``act``/``begin_episode``. A controller
 # without a compiled loop runs through the environment.
@@ -93,12 +90,11 @@ def _controller_episodes(kind, tracks, run, net, lookahead, z_all, out, poses):
     theta, layout = net
     h0, h1 = np.empty(layout[0, 3]), np.empty(layout[0, 3])
     a_out = np.empty(layout[0, 1])
-    totals = np.empty(ep.TALLY_SIZE)
+    book = np.empty(ep.BOOK_SIZE)
     for e in range(tracks.starts.shape[0]):
         pts, cum, start = ep.pipe_of(tracks, e)
         sim.init_state(s, pts, cum, start[0], start[1], start[2], ps, z_all[e, 0])
-        totals[:] = 0.0
-        ep.record_pose(poses, e, 0, s)
+        ep.start(book, poses, e, s)
         for t in range(run.n_decisions):
             a = 0.0
             if s[sim.IN_VIEW] != 0.0:
@@ -108,10 +104,8 @@ def _controller_episodes(kind, tracks, run, net, lookahead, z_all, out, poses):
                     a = mlp_mod.action1(theta, layout, s[:4], h0, h1, a_out)
                 else:  # LOS from the observation alone, as the LOS agent (y_near = 0)
                     a = los_action(s[sim.X1], s[sim.Y1], s[sim.X2], 0.0, lookahead)
-            z = z_all[e, t + 1]
-            ep.tally(totals, s, sim.decide(s, a, pts, cum, ps, z))
-            ep.record_pose(poses, e, t + 1, s)
-        ep.close_episode(out, e, s, totals, run.n_decisions, decision_s)
+            ep.decide(s, a, pts, cum, ps, z_all[e, t + 1], book, poses, e)
+        ep.close_episode(out, e, book, s[sim.PROGRESS_MAX], decision_s)
 
 
 # Fixed controllers with a compiled kind; learners run their own loop (pipefollow.learners.registry).
@@ -142,8 +136,9 @@ def run_episodes(
     the vision camera the episodes run through the environment, the images and detections drawing
     from the pipe's noise generator, and ``pipe_in_view`` and ``rms_e_dist`` are the exact camera's.
 
-    Returns ``(results, poses)``: (pipes, 5) columns return, pipe_in_view, progress_m, Σ e_dist²
-    and number of decisions in view; (pipes, decisions + 1, 3) poses (x, y, ψ).
+    Returns ``(results, poses)``: (pipes, 6) statistics, the columns of
+    :data:`pipefollow.sim.episode.STAT_NAMES` (return, pipe_in_view, progress_m, time_lost_s,
+    Σ e_dist² and the number of decisions in view); (pipes, decisions + 1, 3) poses (x, y, ψ).
     """
     from pipefollow.sim.disturbance import noise_count
 
@@ -158,20 +153,19 @@ def run_episodes(
         except TypeError:
             learner = None
     if (learner is None and fixed is None) or camera:
-        results = np.zeros((len(pipes), len(_COLUMNS)))
-        _env_episodes(agent, pipes, seconds, params, results, poses, noise_seed, camera)
-        return results, poses
+        _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed, camera)
+        return out, poses
     run = Run(sim.pack_params(params), np.zeros(1), n_decisions, False)
     k = noise_count(params.disturbance)
     if learner is not None and k == 0:  # one call over all pipes, episode e on pipe e
         run = run._replace(sigmas=np.zeros(len(pipes)))
         learner.run(agent, tracks_of(pipes), run, np.random.default_rng(0), np.zeros(0), out, poses)
-        return out[:, _COLUMNS], poses
+        return out, poses
     if learner is not None:  # pipe by pipe: each with its own disturbance generator
         for e, pipe in enumerate(pipes):
             learner.run(agent, tracks_of([pipe]), run, _noise_rng(noise_seed, e), np.zeros(k), out[e : e + 1],
                         poses[e : e + 1])  # fmt: skip
-        return out[:, _COLUMNS], poses
+        return out, poses
     z_all = np.zeros((len(pipes), n_decisions + 1, k))
     if k:
         for e in range(len(pipes)):
@@ -180,7 +174,7 @@ def run_episodes(
     _controller_episodes(
         fixed, tracks_of(pipes), run, net, getattr(agent, "lookahead", 0.0), z_all, out, poses
     )
-    return out[:, _COLUMNS], poses
+    return out, poses
 
 
 def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0, camera=None) -> None:
@@ -191,7 +185,7 @@ def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0
         env = PipelineFollowingEnv(pipe, seconds, params=params, **(camera or {}))
         env.np_random = _noise_rng(noise_seed, i)
         stats = run_episode(env, agent)
-        out[i] = np.asarray(stats.as_full_row())[_COLUMNS]
+        out[i] = stats.as_full_row()
         poses[i] = stats.poses
 
 
@@ -245,7 +239,7 @@ def benchmark(
         h_res, h_poses = res, poses
     else:
         h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params, noise_seed)
-    ret = res[:, RET]
+    ret = res[:, ep.STAT_RETURN]
     lo, hi = bootstrap_ci(ret, seed)
     # the pipes as the runs of one task, in rliable's terms: its percentile interval of the IQM
     iqm_ci = aggregate_intervals(ret[:, None], seed=seed)["ci95_iqm"]
@@ -257,13 +251,13 @@ def benchmark(
         "ci95_mean": [lo, hi],
         "iqm_return": iqm(ret),
         "ci95_iqm": iqm_ci,
-        "success_rate": float(np.mean(res[:, IN_VIEW] >= SUCCESS_IN_VIEW)),
-        "mean_pipe_in_view": float(res[:, IN_VIEW].mean()),
-        "rms_e_dist": _rms(float(res[:, SUM_E2].sum()), float(res[:, N_SEEN].sum())),
-        "mean_progress_m": float(res[:, PROGRESS].mean()),
+        "success_rate": float(np.mean(res[:, ep.STAT_IN_VIEW] >= SUCCESS_IN_VIEW)),
+        "mean_pipe_in_view": float(res[:, ep.STAT_IN_VIEW].mean()),
+        "rms_e_dist": _rms(float(res[:, ep.STAT_SUM_E2].sum()), float(res[:, ep.STAT_N_SEEN].sum())),
+        "mean_progress_m": float(res[:, ep.STAT_PROGRESS].mean()),
     }
     if not is_heuristic:
-        summary["vs_heuristic"] = paired_difference(ret, h_res[:, RET], seed)
+        summary["vs_heuristic"] = paired_difference(ret, h_res[:, ep.STAT_RETURN], seed)
     if camera:  # the controller's camera and water; the heuristic beside it ran on the ideal camera
         from pipefollow.perception.camera import camera_settings
 
@@ -273,14 +267,14 @@ def benchmark(
     summary["episodes"] = [
         {
             "name": pipe.name,
-            "return": float(row[RET]),
-            "pipe_in_view": float(row[IN_VIEW]),
-            "progress_m": float(row[PROGRESS]),
-            "rms_e_dist": _rms(row[SUM_E2], row[N_SEEN]),
+            "return": float(row[ep.STAT_RETURN]),
+            "pipe_in_view": float(row[ep.STAT_IN_VIEW]),
+            "progress_m": float(row[ep.STAT_PROGRESS]),
+            "rms_e_dist": _rms(row[ep.STAT_SUM_E2], row[ep.STAT_N_SEEN]),
         }
         for pipe, row in zip(pipes, res, strict=True)
     ]
-    return BenchmarkRun(summary, pipes, ret, h_res[:, RET].copy(), poses, h_poses)
+    return BenchmarkRun(summary, pipes, ret, h_res[:, ep.STAT_RETURN].copy(), poses, h_poses)
 
 
 def format_summary(r: dict, seconds: float) -> str:

@@ -38,12 +38,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipefollow.evaluation.benchmark import IN_VIEW, RET, SUCCESS_IN_VIEW, run_episodes
+from pipefollow.evaluation.benchmark import SUCCESS_IN_VIEW, run_episodes
 from pipefollow.evaluation.stats import bootstrap_ci, iqm, paired_difference
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim import decision as sim
 from pipefollow.sim import randomization as rz
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance, DisturbanceError
+from pipefollow.sim.episode import STAT_IN_VIEW, STAT_NAMES, STAT_RETURN
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.suites import Suite, min_length_for
 
@@ -169,7 +170,7 @@ def curve_scenarios(
 
 def run_scenarios(agent, cases: Sequence[Scenario], seconds: float, params: sim.SimParams = sim.PAPER_SIM):
     """One deterministic episode of ``agent`` per scenario: rows of :func:`benchmark.run_episodes`."""
-    out = np.empty((len(cases), 5))
+    out = np.empty((len(cases), len(STAT_NAMES)))
     for i, c in enumerate(cases):
         p = params._replace(disturbance=c.disturbance)
         out[i] = run_episodes(agent, [c.pipe], seconds, p, c.noise_seed)[0][0]
@@ -184,9 +185,9 @@ def params_for(agent) -> sim.SimParams:
 
 
 def summarize(label: str, results: Sequence[np.ndarray], heuristic: np.ndarray | None, seed: int = 0) -> dict:
-    """One row: ``results`` has a (pipes, 5) array per policy of ``label``; ``heuristic`` the reference."""
-    stacked = np.stack(results)  # (policies, pipes, 5)
-    per_pipe = stacked[:, :, RET].mean(axis=0)
+    """One row: ``results`` has a (pipes, 6) array per policy of ``label``; ``heuristic`` the reference."""
+    stacked = np.stack(results)  # (policies, pipes, 6)
+    per_pipe = stacked[:, :, STAT_RETURN].mean(axis=0)
     lo, hi = bootstrap_ci(per_pipe, seed)
     row = {
         "controller": label,
@@ -196,12 +197,12 @@ def summarize(label: str, results: Sequence[np.ndarray], heuristic: np.ndarray |
         "ci95_low": lo,
         "ci95_high": hi,
         "iqm_return": iqm(per_pipe),
-        "success_rate": float(np.mean(stacked[:, :, IN_VIEW] >= SUCCESS_IN_VIEW)),
-        "mean_pipe_in_view": float(stacked[:, :, IN_VIEW].mean()),
-        "seed_returns": [float(r[:, RET].mean()) for r in results],
+        "success_rate": float(np.mean(stacked[:, :, STAT_IN_VIEW] >= SUCCESS_IN_VIEW)),
+        "mean_pipe_in_view": float(stacked[:, :, STAT_IN_VIEW].mean()),
+        "seed_returns": [float(r[:, STAT_RETURN].mean()) for r in results],
     }
     if heuristic is not None:
-        d = paired_difference(per_pipe, heuristic[:, RET], seed)
+        d = paired_difference(per_pipe, heuristic[:, STAT_RETURN], seed)
         row |= {"vs_heuristic": d["mean_diff"], "vs_heuristic_low": d["ci95_diff"][0],
                 "vs_heuristic_high": d["ci95_diff"][1]}  # fmt: skip
     return row

@@ -25,7 +25,6 @@ import numpy as np
 from numba import njit
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
-from pipefollow.learners import episodes as ep
 from pipefollow.learners.cacla_update import (
     ACTOR_REPEATS,
     K_EVERY,
@@ -45,12 +44,14 @@ from pipefollow.learners.cacla_update import (
     update,
 )
 from pipefollow.learners.cacla_update import V as V  # the critic's row, beside A, G, K
+from pipefollow.learners.episodes import features_of
 from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals, skew_step_to_gamma
 from pipefollow.learners.heuristic import heuristic_action
 from pipefollow.learners.protocol import Agent, LearnerKind
 from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite, grid_features, state_grid
 from pipefollow.learners.sums import dot
 from pipefollow.sim import decision as sim
+from pipefollow.sim import episode as ep
 from pipefollow.sim import records
 
 
@@ -343,7 +344,7 @@ def params_under(r, skew_deg: float = 0.0, **fields) -> CaclaParams:
 
 
 # ---------------------------------------------------------------------------------------------
-# The compiled episodes (pipefollow.learners.episodes) and what the layers above need
+# The compiled episodes (the protocol of pipefollow.sim.episode) and what the layers above need
 
 
 @njit(cache=True)
@@ -353,7 +354,7 @@ def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats
     ``rule`` is the actor's step factor (:meth:`Cacla.rule`; the actor-critic's runs here too),
     ``var`` the running variance of δ of CACLA+Var (a one-entry array, updated in place), ``trace``
     the critic's eligibility trace of TD(λ) (set to zero at each episode's start).
-    ``rng`` draws the exploration, ``env_rng`` the disturbances (:mod:`pipefollow.learners.episodes`).
+    ``rng`` draws the exploration, ``env_rng`` the disturbances (:mod:`pipefollow.sim.episode`).
     """
     p = unpack(hp)
     ps = sim.unpack_params(run.sim)
@@ -361,17 +362,17 @@ def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats
     nf = w.shape[1]
     s = np.empty(sim.STATE_SIZE)
     phi, phi_pend, phi_next = np.empty(nf), np.empty(nf), np.empty(nf)
-    book, totals = np.empty(ep.BOOK_SIZE), np.empty(ep.TALLY_SIZE)
+    book = np.empty(ep.BOOK_SIZE)
     skewed = p.skew > 0.0
     n = run.n_decisions
     for e in range(run.sigmas.shape[0]):
         sigma = run.sigmas[e]
         points, cum, start = ep.pipe_of(tracks, e)
-        ep.start_episode(s, points, cum, start, ps, env_rng, dz, book, totals, poses, e)
+        ep.start_episode(s, points, cum, start, ps, env_rng, dz, book, poses, e)
         trace[:] = 0.0
         have_phi = False  # phi already holds φ(s) of the current state (computed for the last update)
         a_rl_p = a_sup_p = 0.0
-        for t in range(n):
+        for _ in range(n):
             visible = s[sim.IN_VIEW] != 0.0
             a = a_rl = a_sup = 0.0
             if visible:
@@ -384,21 +385,21 @@ def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats
                 a_sup = heuristic_action(s[sim.X1], s[sim.Y1]) if p.supervised else 0.0
                 a, a_rl = act(w, phi, sigma, z0, z1, a_sup, p)
             have_phi = False
-            r = ep.decide(s, a, points, cum, ps, env_rng, dz, totals, poses, e, t)
+            r = ep.draw_and_decide(s, a, points, cum, ps, env_rng, dz, book, poses, e)
             if not run.learn:
                 continue
             ep.carry(book, visible, r, p.discount)
             if visible:
                 phi, phi_pend = phi_pend, phi  # keep φ(s) for the update; no copy
                 a_rl_p, a_sup_p = a_rl, a_sup
-            if ep.due(book, s[sim.IN_VIEW] != 0.0, t == n - 1):
+            if ep.due(book, s[sim.IN_VIEW] != 0.0, ep.ended(book, n)):
                 grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
                 update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p, rule, var,
                        trace)  # fmt: skip
                 book[ep.PENDING] = 0.0
                 phi, phi_next = phi_next, phi  # φ(s') is the next decision's φ(s)
                 have_phi = True
-        ep.close_episode(stats, e, s, totals, n, decision_s)
+        ep.close_episode(stats, e, book, s[sim.PROGRESS_MAX], decision_s)
 
 
 def check_compiled(agent: Cacla) -> None:
@@ -416,7 +417,7 @@ def check_compiled(agent: Cacla) -> None:
 def run_compiled(agent: Cacla, tracks, run, env_rng, dz, stats, poses) -> None:
     """:func:`episodes` for ``agent`` (a CACLA or an actor-critic agent)."""
     episodes(agent.weights, pack(agent.params), agent.rule(agent.params), agent.td_var, agent.critic_trace,
-             tracks, run, ep.features_of(agent.grid), agent.rng, env_rng, dz, stats, poses)  # fmt: skip
+             tracks, run, features_of(agent.grid), agent.rng, env_rng, dz, stats, poses)  # fmt: skip
 
 
 def policy_fields(agent: Cacla) -> dict:

@@ -46,7 +46,7 @@ class LearnerKind:
             readings (a :class:`pipefollow.readings.Readings`, read by attribute).
         check: ``check(agent)`` raises ``TypeError`` if the compiled loop cannot run that agent.
         run: ``run(agent, tracks, run, env_rng, dz, stats, poses)`` runs the compiled episodes of
-            :mod:`pipefollow.learners.episodes` (learning if ``run.learn``), writing ``stats`` rows
+            the protocol of :mod:`pipefollow.sim.episode` (learning if ``run.learn``), writing ``stats`` rows
             (and ``poses`` unless empty).
         policy_fields: ``policy_fields(agent) -> dict`` of the arrays a policy file stores.
         from_policy: ``from_policy(data, seed) -> (agent, weights)`` from a policy file's

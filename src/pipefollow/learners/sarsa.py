@@ -15,7 +15,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from pipefollow.learners import episodes as ep
+from pipefollow.learners.episodes import features_of
 from pipefollow.learners.protocol import Agent, LearnerKind
 from pipefollow.learners.rbf import (
     ACTION_GRID,
@@ -28,6 +28,7 @@ from pipefollow.learners.rbf import (
 )
 from pipefollow.learners.sums import dot, matvec
 from pipefollow.sim import decision as sim
+from pipefollow.sim import episode as ep
 
 
 class SarsaParams(NamedTuple):
@@ -177,7 +178,7 @@ class Sarsa(Agent):
 
 
 # ---------------------------------------------------------------------------------------------
-# The compiled episodes (pipefollow.learners.episodes) and what the layers above need
+# The compiled episodes (the protocol of pipefollow.sim.episode) and what the layers above need
 
 
 class ActionSearch(NamedTuple):
@@ -199,15 +200,15 @@ def episodes(W, alpha, discount, search, tracks, run, grid, rng, env_rng, dz, st
     s = np.empty(sim.STATE_SIZE)
     phi, phi_pend, phi_next = np.empty(nf), np.empty(nf), np.empty(nf)
     psi, psi_next = np.empty(search.centres.shape[0]), np.empty(search.centres.shape[0])
-    book, totals = np.empty(ep.BOOK_SIZE), np.empty(ep.TALLY_SIZE)
+    book = np.empty(ep.BOOK_SIZE)
     n = run.n_decisions
     for e in range(run.sigmas.shape[0]):
         sigma = run.sigmas[e]
         points, cum, start = ep.pipe_of(tracks, e)
-        ep.start_episode(s, points, cum, start, ps, env_rng, dz, book, totals, poses, e)
+        ep.start_episode(s, points, cum, start, ps, env_rng, dz, book, poses, e)
         has_next = False  # an on-policy action chosen by the last update for the current state
         a_next = a_p = 0.0
-        for t in range(n):
+        for _ in range(n):
             visible = s[sim.IN_VIEW] != 0.0
             a = 0.0
             if visible:
@@ -219,14 +220,14 @@ def episodes(W, alpha, discount, search, tracks, run, grid, rng, env_rng, dz, st
                     grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi)
                     z = rng.standard_normal() if sigma > 0.0 else 0.0
                     a = choose(W, phi, search.actions, search.psi, sigma, z)
-            r = ep.decide(s, a, points, cum, ps, env_rng, dz, totals, poses, e, t)
+            r = ep.draw_and_decide(s, a, points, cum, ps, env_rng, dz, book, poses, e)
             if not run.learn:
                 continue
             ep.carry(book, visible, r, discount)
             if visible:
                 phi_pend[:] = phi
                 a_p = a
-            if ep.due(book, s[sim.IN_VIEW] != 0.0, t == n - 1):
+            if ep.due(book, s[sim.IN_VIEW] != 0.0, ep.ended(book, n)):
                 grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
                 z = rng.standard_normal() if sigma > 0.0 else 0.0
                 a_next = choose(W, phi_next, search.actions, search.psi, sigma, z)
@@ -235,7 +236,7 @@ def episodes(W, alpha, discount, search, tracks, run, grid, rng, env_rng, dz, st
                 dim_activations(a_next, search.centres, search.width, search.normalized, psi_next)
                 update(W, phi_pend, psi, book[ep.ACC], book[ep.DISC], phi_next, psi_next, alpha)
                 book[ep.PENDING] = 0.0
-        ep.close_episode(stats, e, s, totals, n, decision_s)
+        ep.close_episode(stats, e, book, s[sim.PROGRESS_MAX], decision_s)
 
 
 def check_compiled(agent: Sarsa) -> None:
@@ -247,7 +248,7 @@ def run_compiled(agent: Sarsa, tracks, run, env_rng, dz, stats, poses) -> None:
     search = ActionSearch(agent.search_actions, agent.search_psi, agent._action_centres, agent._action_width,
                           agent._action_normalized)  # fmt: skip
     p = agent.params
-    episodes(agent.weights, p.alpha, p.discount, search, tracks, run, ep.features_of(agent.grid), agent.rng,
+    episodes(agent.weights, p.alpha, p.discount, search, tracks, run, features_of(agent.grid), agent.rng,
              env_rng, dz, stats, poses)  # fmt: skip
 
 

@@ -11,7 +11,7 @@ Both paths follow the same protocol (docs/design.md):
 * exploration σ falls linearly from ``sigma_start`` to ``sigma_end`` over the episodes.
 
 The compiled path (:func:`train_compiled`) runs the agent's learner's own compiled loop
-(:mod:`pipefollow.learners.episodes`), which composes the same compiled stage and update
+(the protocol of :mod:`pipefollow.sim.episode`), which composes the same compiled stage and update
 functions as the environment and agent classes, consumes the same random numbers in the same
 order, and so gives the same trajectory, returns and weights (tested to 1e-9). The agent's
 generator drives exploration; a second generator, ``env_rng``, plays the environment's
@@ -27,16 +27,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipefollow.learners import episodes as ep
-from pipefollow.learners.episodes import TRAINING_STATS, Run, Tracks, no_poses, tracks_of
 from pipefollow.learners.exploration import linear_sigma
 from pipefollow.learners.registry import learner_of
 from pipefollow.sim import decision as sim
+from pipefollow.sim import episode as ep
+from pipefollow.sim.episode import TRAINING_STAT_NAMES, Run, Tracks, no_poses, tracks_of
 from pipefollow.sim.pipeline import Pipeline
 
-# Columns of the per-episode statistics of a training run.
-RETURN, IN_VIEW, PROGRESS, TIME_LOST = ep.RETURN, ep.IN_VIEW, ep.PROGRESS, ep.TIME_LOST
-STAT_NAMES = ep.STAT_NAMES[:TRAINING_STATS]
+# The columns of a training run's statistics, under the name the command line and the experiments read.
+STAT_NAMES = TRAINING_STAT_NAMES
 EPISODE_SECONDS = 20.0  # the training episode's length when none is given (the paper's, §4)
 
 
@@ -62,13 +61,24 @@ class EpisodeStats:
     sum_e_dist2: float = 0.0
     n_in_view: int = 0
 
-    def as_row(self) -> tuple[float, float, float, float]:
-        """(return, pipe_in_view, progress_m, time_lost_s)."""
-        return (self.ret, self.pipe_in_view, self.progress_m, self.time_lost_s)
+    @classmethod
+    def from_row(cls, row: np.ndarray, poses: np.ndarray | None = None) -> EpisodeStats:
+        """The statistics of a row of :data:`pipefollow.sim.episode.STAT_NAMES`, and the poses."""
+        return cls(float(row[ep.STAT_RETURN]), float(row[ep.STAT_IN_VIEW]), float(row[ep.STAT_PROGRESS]),
+                   float(row[ep.STAT_TIME_LOST]), poses, float(row[ep.STAT_SUM_E2]),
+                   int(row[ep.STAT_N_SEEN]))  # fmt: skip
 
     def as_full_row(self) -> tuple[float, ...]:
-        """The columns of :data:`pipefollow.learners.episodes.STAT_NAMES`."""
-        return (*self.as_row(), self.sum_e_dist2, float(self.n_in_view))
+        """The columns of :data:`pipefollow.sim.episode.STAT_NAMES`."""
+        row = [0.0] * len(ep.STAT_NAMES)
+        row[ep.STAT_RETURN], row[ep.STAT_IN_VIEW] = self.ret, self.pipe_in_view
+        row[ep.STAT_PROGRESS], row[ep.STAT_TIME_LOST] = self.progress_m, self.time_lost_s
+        row[ep.STAT_SUM_E2], row[ep.STAT_N_SEEN] = self.sum_e_dist2, float(self.n_in_view)
+        return tuple(row)
+
+    def as_row(self) -> tuple[float, ...]:
+        """A training run's columns (:data:`STAT_NAMES`): return, pipe_in_view, progress_m, time_lost_s."""
+        return self.as_full_row()[: len(STAT_NAMES)]
 
 
 def run_episode(
@@ -83,39 +93,35 @@ def run_episode(
 ) -> EpisodeStats:
     """Run one episode of ``agent`` in a :class:`~pipefollow.envs.env.PipelineFollowingEnv`.
 
-    With ``learn`` the agent is updated as described in the module docstring.
+    With ``learn`` the agent is updated as described in the module docstring. The statistics
+    count what the exact camera saw (its ``true_`` infos under the vision camera).
     """
     agent.begin_episode(sigma if explore else 0.0)
     obs, info = env.reset(seed=seed, options=options)
     decision_s = env.unwrapped.params.dt * env.unwrapped.params.substeps
     gamma = agent.discount if learn else 0.0
-    pending = None
-    acc = disc = 0.0
-    total, seen, steps, sum_e2 = 0.0, 0, 0, 0.0
+    book = ep.new_book()
+    pending = None  # the observation and action of the pending transition (its rewards in book)
     done = False
     while not done:
-        visible = info["pipe_in_view"]
+        visible = bool(info["pipe_in_view"])
         a = agent.act(obs, explore=explore) if visible else 0.0
         next_obs, r, terminated, truncated, info = env.step([a])
-        total += r
-        steps += 1
-        if info.get("true_pipe_in_view", info["pipe_in_view"]):  # the exact camera's, under vision too
-            seen += 1
-            sum_e2 += float(info.get("true_e_dist", info["e_dist"])) ** 2
+        in_view = bool(info.get("true_pipe_in_view", info["pipe_in_view"]))
+        e_dist = float(info.get("true_e_dist", info["e_dist"])) if in_view else 0.0
+        ep.tally(book, r, in_view, e_dist)
         done = terminated or truncated
         if learn:
             if visible:
-                pending, acc, disc = (obs, a), r, gamma
-            elif pending is not None:
-                acc += disc * r
-                disc *= gamma
-            if pending is not None and (info["pipe_in_view"] or done):
-                agent.update(pending[0], pending[1], acc, next_obs, 0.0 if terminated else disc)
-                pending = None
+                pending = (obs, a)
+            ep.carry(book, visible, r, gamma)
+            if ep.due(book, bool(info["pipe_in_view"]), done):
+                discount = 0.0 if terminated else book[ep.DISC]
+                agent.update(pending[0], pending[1], book[ep.ACC], next_obs, discount)
+                book[ep.PENDING] = 0.0
         obs = next_obs
     trail = np.array(env.unwrapped.trail)
-    progress = float(info["progress_m"])
-    return EpisodeStats(total, seen / steps, progress, (steps - seen) * decision_s, trail, sum_e2, seen)
+    return EpisodeStats.from_row(ep.statistics_row(book, info["progress_m"], decision_s), trail)
 
 
 def train(
@@ -128,18 +134,18 @@ def train(
     callback: Callable[[int, EpisodeStats], None] | None = None,
 ) -> np.ndarray:
     """Train ``agent`` for ``episodes`` episodes in ``env``; returns (episodes, 4) statistics."""
-    stats = np.empty((episodes, 4))
+    stats = np.empty((episodes, len(STAT_NAMES)))
     for e in range(episodes):
         sigma = linear_sigma(e, episodes, sigma_start, sigma_end)
-        ep = run_episode(env, agent, learn=True, explore=True, sigma=sigma)
-        stats[e] = ep.as_row()
+        stats_e = run_episode(env, agent, learn=True, explore=True, sigma=sigma)
+        stats[e] = stats_e.as_row()
         if callback is not None:
-            callback(e, ep)
+            callback(e, stats_e)
     return stats
 
 
 # ---------------------------------------------------------------------------------------------
-# The compiled path: each learner's own episode loop (pipefollow.learners.episodes)
+# The compiled path: each learner's own episode loop (the protocol of pipefollow.sim.episode)
 
 
 def compiled_setup(agent, episodes, episode_seconds, sigma_start, sigma_end, params, env_rng):
@@ -170,7 +176,7 @@ def compiled_setup(agent, episodes, episode_seconds, sigma_start, sigma_end, par
         kind,
         sigmas,
         n_decisions,
-        np.empty((episodes, TRAINING_STATS)),
+        np.empty((episodes, len(TRAINING_STAT_NAMES))),
         sim.pack_params(params),
         env_rng,
         dz,

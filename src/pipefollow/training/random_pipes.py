@@ -2,7 +2,7 @@
 
 Episode ``e`` draws its pipe from a training family of :mod:`pipefollow.sim.suites`; the pipes of a
 chunk of episodes are generated in Python, concatenated into one array with offsets
-(:class:`~pipefollow.learners.episodes.Tracks`), and the chunk runs in one call of the learner's
+(:class:`~pipefollow.sim.episode.Tracks`), and the chunk runs in one call of the learner's
 compiled loop, episode ``e`` on pipe ``e``.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipefollow.learners.episodes import tracks_of
+from pipefollow.sim.episode import tracks_of
 from pipefollow.training.compiled import EPISODE_SECONDS, train_chunks
 
 
