@@ -1,6 +1,7 @@
 """``pipefollow train`` and an experiment trial train through the one ``train_phases``."""
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -57,3 +58,14 @@ def test_one_trial_experiment_and_train_write_identical_policy_weights(tmp_path,
     assert from_trial.params == trained.params and from_trial.readings == trained.readings
     np.testing.assert_array_equal(from_trial.weights, trained.weights)
     assert np.abs(trained.weights).sum() > 0
+
+
+@pytest.mark.parametrize("readings, scale", [([], 1.0), (["sigma_unit=rad"], 2.0 / math.pi)])
+def test_the_learning_curve_states_the_sigma_that_training_used(tmp_path, readings, scale):
+    # sigma_unit=rad: σ = 1 rad of waypoint bearing is (180/π)° / 90° = 2/π in normalized action units
+    args = ["train", "--algorithm", "cacla", "--episodes", "5", "--seconds", "4", "--out", str(tmp_path)]
+    args += [x for r in readings for x in ("--reading", r)]
+    res = CliRunner().invoke(main, [*args, "--json"])
+    assert res.exit_code == 0, res.output
+    sigma = np.loadtxt(tmp_path / "learning_curve.csv", delimiter=",", skiprows=1)[:, 1]
+    np.testing.assert_allclose(sigma, np.linspace(1.0, 0.01, 5) * scale, rtol=1e-12, atol=0)

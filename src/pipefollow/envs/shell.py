@@ -102,7 +102,7 @@ def make_setup(
     obs_dtype: str | type | np.dtype = "float64",
 ) -> Setup:
     """Check the environments' shared arguments (one-line ``ValueError`` naming the argument)."""
-    decision_seconds = params.dt * params.substeps
+    decision_seconds = sim.decision_seconds(params)
     if not (
         isinstance(episode_seconds, int | float | np.number)
         and math.isfinite(episode_seconds)

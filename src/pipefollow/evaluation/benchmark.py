@@ -85,7 +85,7 @@ def load_controller(spec: str, seed: int = 0, lookahead: float | None = None):
 def _controller_episodes(kind, tracks, run, net, lookahead, z_all, out, poses):
     """Deterministic episodes of a fixed controller (heuristic, LOS, network), pipe ``e`` in episode ``e``."""
     ps = sim.unpack_params(run.sim)
-    decision_s = ps.dt * ps.substeps
+    decision_s = sim.decision_seconds(ps)
     s = np.empty(sim.STATE_SIZE)
     theta, layout = net
     h0, h1 = np.empty(layout[0, 3]), np.empty(layout[0, 3])
@@ -142,7 +142,7 @@ def run_episodes(
     """
     from pipefollow.sim.disturbance import noise_count
 
-    n_decisions = int(round(seconds / (params.dt * params.substeps)))
+    n_decisions = sim.decisions_in(seconds, params)
     out = np.zeros((len(pipes), len(STAT_NAMES)))
     poses = np.zeros((len(pipes), n_decisions + 1, 3))
     learner = learner_of(agent)

@@ -9,14 +9,12 @@ import numpy as np
 
 from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.experiments.config import TrialConfig
-from pipefollow.learners.exploration import linear_sigma
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.learners.registry import learner
-from pipefollow.readings import sigma_scale
 from pipefollow.sim.disturbance import NO_DISTURBANCE, disturbance_from_dict
 from pipefollow.sim.suites import Suite, min_length_for, resolve_training
 from pipefollow.training.compiled import run_episode
-from pipefollow.training.phases import agent_rng, sim_under, train_phases
+from pipefollow.training.phases import agent_rng, phase_sigmas, sim_under, train_phases
 
 
 @dataclass(frozen=True)
@@ -90,13 +88,9 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
         sigma_start=config.sigma_start,
         sigma_end=config.sigma_end,
     )
-    scale = sigma_scale(config.reading)  # σ in normalized action units, as train_phases runs it
-    sigma_start, sigma_end = config.sigma_start * scale, config.sigma_end * scale
     phase = [np.full(ph.episodes, i) for i, ph in enumerate(config.phases)]
-    sigma = [
-        [linear_sigma(e, ph.episodes, sigma_start, sigma_end) for e in range(ph.episodes)]
-        for ph in config.phases
-    ]
+    schedule = (config.reading, config.sigma_start, config.sigma_end)
+    sigma = [phase_sigmas(ph.episodes, *schedule) for ph in config.phases]
     eval_name = config.evaluate_on or config.phases[-1].pipeline
     eval_seconds = config.evaluate_seconds if config.evaluate_on else config.episode_seconds
     eval_pipe = resolve_training(eval_name)

@@ -358,7 +358,7 @@ def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats
     """
     p = unpack(hp)
     ps = sim.unpack_params(run.sim)
-    decision_s = ps.dt * ps.substeps
+    decision_s = sim.decision_seconds(ps)
     nf = w.shape[1]
     s = np.empty(sim.STATE_SIZE)
     phi, phi_pend, phi_next = np.empty(nf), np.empty(nf), np.empty(nf)

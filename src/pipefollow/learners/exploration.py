@@ -26,8 +26,14 @@ from numba import njit, vectorize
 DEGREES_PER_GAMMA = 45.0
 
 
+# The paper's exploration schedule (§4): "The exploration factor starts at σ = 1 and decreases
+# linearly per episode towards σ = 0.01", in the units of the reading sigma_unit.
+SIGMA_START = 1.0
+SIGMA_END = 0.01
+
+
 @njit(cache=True)
-def linear_sigma(episode, n_episodes, start=1.0, end=0.01):
+def linear_sigma(episode, n_episodes, start=SIGMA_START, end=SIGMA_END):
     """Exploration σ of episode ``episode`` (0 … n_episodes − 1), linear from ``start`` to ``end``.
 
     The first episode gets ``start``, the last ``end``; with one episode, ``start``.
@@ -43,6 +49,11 @@ def linear_sigma(episode, n_episodes, start=1.0, end=0.01):
         return float(start)
     t = episode / (n_episodes - 1)
     return (1.0 - t) * start + t * end  # exact at both ends
+
+
+def sigma_schedule(episodes: int, start: float = SIGMA_START, end: float = SIGMA_END) -> np.ndarray:
+    """σ of every episode of a phase of ``episodes`` episodes: :func:`linear_sigma` of each."""
+    return np.array([linear_sigma(e, episodes, start, end) for e in range(episodes)], dtype=np.float64)
 
 
 def _skew_normal_kernel(x, mu, sigma, gamma):

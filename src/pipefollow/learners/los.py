@@ -26,6 +26,8 @@ import math
 import numpy as np
 from numba import njit
 
+from pipefollow.sim.controller import wrap_angle
+
 DEFAULT_LOOKAHEAD = 1.5  # Δ (m), tuned on paper-left and paper-right (docs/decisions.md)
 
 
@@ -39,7 +41,7 @@ def los_action(x1, y1, x2, y_near, lookahead):
         pi_p = math.atan2(dx, dy)  # path angle relative to the heading (rad)
         e = y_near * math.sin(pi_p) - x2 * math.cos(pi_p)  # cross-track error (m)
         chi_d = pi_p - math.atan(e / lookahead)
-        chi_d = (chi_d + math.pi) % (2.0 * math.pi) - math.pi
+        chi_d = wrap_angle(chi_d)
     return min(1.0, max(-1.0, chi_d / (0.5 * math.pi)))
 
 

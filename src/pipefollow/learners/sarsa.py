@@ -195,7 +195,7 @@ class ActionSearch(NamedTuple):
 def episodes(W, alpha, discount, search, tracks, run, grid, rng, env_rng, dz, stats, poses):
     """SARSA's episodes in compiled code: the same numbers as its agent in the environment."""
     ps = sim.unpack_params(run.sim)
-    decision_s = ps.dt * ps.substeps
+    decision_s = sim.decision_seconds(ps)
     nf = W.shape[1]
     s = np.empty(sim.STATE_SIZE)
     phi, phi_pend, phi_next = np.empty(nf), np.empty(nf), np.empty(nf)

@@ -21,11 +21,12 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numba.extending import register_jitable
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from pipefollow.sim import records
 from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, observe, tracking_errors
-from pipefollow.sim.controller import PAPER_CONTROLLER, ControllerParams, pd_force, place_waypoint
+from pipefollow.sim.controller import PAPER_CONTROLLER, ControllerParams, pd_force, place_waypoint, wrap_angle
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance, missed, noise_layout, vary_current
 from pipefollow.sim.disturbance import unpack as unpack_disturbance
 from pipefollow.sim.dynamics import PAPER_AUV, AUVParams, acceleration, kinematics
@@ -58,6 +59,18 @@ PROGRESS, PROGRESS_MAX, LAST_SIDE, A_PREV = 14, 15, 16, 17
 TIME, WP_X, WP_Y, OVERRIDDEN = 18, 19, 20, 21
 CURRENT_SPEED, CURRENT_DIR, MISSED = 22, 23, 24  # V_c (m/s), β_c (rad), last reading missed (0/1)
 STATE_SIZE = 25
+
+
+@register_jitable
+def decision_seconds(p):
+    """The length of one decision (s): ``substeps`` RK4 steps of ``dt`` (1 s = 20 × 0.05 s)."""
+    return p.dt * p.substeps
+
+
+@register_jitable
+def decisions_in(seconds, p):
+    """The number of decisions in ``seconds`` (an episode's length in decisions)."""
+    return int(round(seconds / decision_seconds(p)))
 
 
 @njit(cache=True)
@@ -192,7 +205,7 @@ def decide(s, action, points, cum, p, z=None):
         psi_ref = 0.0
         track = True
     d = p.disturbance
-    seconds = p.dt * p.substeps
+    seconds = decision_seconds(p)
     if z is not None:
         if noise_layout(d)[0] == 2:
             s[CURRENT_SPEED], s[CURRENT_DIR] = vary_current(
@@ -202,7 +215,7 @@ def decide(s, action, points, cum, p, z=None):
     ve = s[CURRENT_SPEED] * math.sin(s[CURRENT_DIR])  # current, east (m/s)
     for _ in range(p.substeps):
         closed_loop_rk4(s, wp_x, wp_y, psi_ref, track, p.dt, p, vn, ve)
-    s[PSI] = (s[PSI] + math.pi) % (2.0 * math.pi) - math.pi
+    s[PSI] = wrap_angle(s[PSI])
     s[TIME] += seconds
     s[WP_X], s[WP_Y] = wp_x, wp_y
     s[OVERRIDDEN] = 1.0 if overridden else 0.0

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipefollow.learners.exploration import linear_sigma
+from pipefollow.learners.exploration import SIGMA_END, SIGMA_START, linear_sigma, sigma_schedule
 from pipefollow.learners.registry import learner_of
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
@@ -98,7 +98,7 @@ def run_episode(
     """
     agent.begin_episode(sigma if explore else 0.0)
     obs, info = env.reset(seed=seed, options=options)
-    decision_s = env.unwrapped.params.dt * env.unwrapped.params.substeps
+    decision_s = sim.decision_seconds(env.unwrapped.params)
     gamma = agent.discount if learn else 0.0
     book = ep.new_book()
     pending = None  # the observation and action of the pending transition (its rewards in book)
@@ -129,8 +129,8 @@ def train(
     agent,
     episodes: int,
     *,
-    sigma_start: float = 1.0,
-    sigma_end: float = 0.01,
+    sigma_start: float = SIGMA_START,
+    sigma_end: float = SIGMA_END,
     callback: Callable[[int, EpisodeStats], None] | None = None,
 ) -> np.ndarray:
     """Train ``agent`` for ``episodes`` episodes in ``env``; returns (episodes, 4) statistics."""
@@ -170,8 +170,8 @@ def compiled_setup(agent, episodes, episode_seconds, sigma_start, sigma_end, par
         if dz.size:
             raise ValueError("params.disturbance has random parts: pass a seeded env_rng")
         env_rng = np.random.default_rng(0)  # not drawn from: no random parts
-    sigmas = np.array([linear_sigma(e, episodes, sigma_start, sigma_end) for e in range(episodes)])
-    n_decisions = int(round(episode_seconds / (params.dt * params.substeps)))
+    sigmas = sigma_schedule(episodes, sigma_start, sigma_end)
+    n_decisions = sim.decisions_in(episode_seconds, params)
     return (
         kind,
         sigmas,
@@ -189,8 +189,8 @@ def train_chunks(
     tracks_for: Callable[[int, int], Tracks],
     *,
     episode_seconds: float = EPISODE_SECONDS,
-    sigma_start: float = 1.0,
-    sigma_end: float = 0.01,
+    sigma_start: float = SIGMA_START,
+    sigma_end: float = SIGMA_END,
     params: sim.SimParams = sim.PAPER_SIM,
     progress: Callable[[int], None] | None = None,
     chunk: int = 50,

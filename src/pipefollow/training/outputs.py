@@ -10,7 +10,6 @@ from pathlib import Path
 import numpy as np
 
 from pipefollow.files.atomic import write_text_atomic
-from pipefollow.learners.exploration import linear_sigma
 from pipefollow.training.compiled import STAT_NAMES
 
 
@@ -24,12 +23,13 @@ def csv_text(header: Sequence[str], rows: Iterable[Sequence]) -> str:
     return buf.getvalue()
 
 
-def write_learning_curve(
-    path: str | Path, stats: np.ndarray, episodes: int, sigma_start: float = 1.0, sigma_end: float = 0.01
-) -> Path:
-    """One row per episode: ``episode, sigma, return, pipe_in_view, progress_m, time_lost_s``."""
+def write_learning_curve(path: str | Path, stats: np.ndarray, sigmas: np.ndarray) -> Path:
+    """One row per episode: ``episode, sigma, return, pipe_in_view, progress_m, time_lost_s``.
+
+    ``sigmas`` is the σ each episode trained with (``training.phases.phase_sigmas``).
+    """
     path = Path(path)
-    rows = ([e, linear_sigma(e, episodes, sigma_start, sigma_end), *stats[e]] for e in range(len(stats)))
+    rows = ([e, sigmas[e], *stats[e]] for e in range(len(stats)))
     write_text_atomic(path, csv_text(["episode", "sigma", *STAT_NAMES], rows))
     return path
 
@@ -38,9 +38,11 @@ TRAINING_OUTPUTS = ("policy.npz", "learning_curve.csv")
 
 
 def write_training_outputs(
-    out: Path, agent, stats: np.ndarray, episodes: int, **metadata
+    out: Path, agent, stats: np.ndarray, sigmas: np.ndarray, **metadata
 ) -> tuple[Path, Path]:
     """Write ``policy.npz`` and ``learning_curve.csv`` of a training run into ``out``, as a pair.
+
+    ``sigmas`` is the σ of every training episode, as the learner ran it (normalized action units).
 
     Each file is written atomically; if the second cannot be written (a full disk), the first is
     removed again, so that ``out`` never holds one without the other from this run.
@@ -48,9 +50,9 @@ def write_training_outputs(
     from pipefollow.training.policy_files import save_policy
 
     policy_name, curve_name = TRAINING_OUTPUTS
-    policy_path = save_policy(agent, Path(out) / policy_name, episodes=episodes, **metadata)
+    policy_path = save_policy(agent, Path(out) / policy_name, episodes=len(sigmas), **metadata)
     try:
-        curve_path = write_learning_curve(Path(out) / curve_name, stats, episodes)
+        curve_path = write_learning_curve(Path(out) / curve_name, stats, sigmas)
     except BaseException:
         policy_path.unlink(missing_ok=True)
         raise

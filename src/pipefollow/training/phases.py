@@ -14,6 +14,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from pipefollow import readings as rd
+from pipefollow.learners.exploration import SIGMA_END, SIGMA_START, sigma_schedule
 from pipefollow.sim import decision as sim
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
 from pipefollow.training.compiled import train_compiled
@@ -35,6 +36,22 @@ def sim_under(readings: rd.Readings, disturbance: Disturbance = NO_DISTURBANCE) 
     return rd.sim_params(readings)._replace(disturbance=disturbance)
 
 
+def sigma_range(readings: rd.Readings = rd.DEFAULT, start: float = SIGMA_START, end: float = SIGMA_END):
+    """σ's first and last value in normalized action units: ``start``, ``end`` in ``sigma_unit``'s units."""
+    scale = rd.sigma_scale(readings)
+    return start * scale, end * scale
+
+
+def phase_sigmas(
+    episodes: int, readings: rd.Readings = rd.DEFAULT, start: float = SIGMA_START, end: float = SIGMA_END
+) -> np.ndarray:
+    """σ of every episode of a phase as :func:`train_phases` trains it (normalized action units).
+
+    The one schedule that training, the learning curve, TensorBoard and the results report.
+    """
+    return sigma_schedule(episodes, *sigma_range(readings, start, end))
+
+
 def train_phases(
     agent,
     phases: Sequence[tuple[str, int]],
@@ -44,8 +61,8 @@ def train_phases(
     disturbance: Disturbance = NO_DISTURBANCE,
     randomization=None,
     episode_seconds: float = 20.0,
-    sigma_start: float = 1.0,
-    sigma_end: float = 0.01,
+    sigma_start: float = SIGMA_START,
+    sigma_end: float = SIGMA_END,
     progress: Callable[[int], None] | None = None,
 ) -> list[np.ndarray]:
     """Train ``agent`` (its ``rng`` from :func:`agent_rng`) through ``phases`` of (pipeline, episodes).
@@ -64,11 +81,11 @@ def train_phases(
         from pipefollow.sim.randomization import resolve
 
         randomization = resolve(randomization)
-    scale = rd.sigma_scale(readings)
+    start, end = sigma_range(readings, sigma_start, sigma_end)  # each phase runs phase_sigmas' schedule
     schedule = dict(
         episode_seconds=episode_seconds,
-        sigma_start=sigma_start * scale,
-        sigma_end=sigma_end * scale,
+        sigma_start=start,
+        sigma_end=end,
         params=sim_under(readings, disturbance),
         env_rng=disturbance_rng(seed),
         randomization=randomization,
