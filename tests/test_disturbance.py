@@ -22,7 +22,6 @@ from pipefollow.sim.disturbance import (
     disturbance_from_dict,
     make_disturbance,
     noise_count,
-    parse_current,
     to_dict,
     vary_current,
 )
@@ -320,11 +319,15 @@ def test_disturbance_from_dict_rejects_bad_values(table, message):
     ("text", "expected"), [("0.1,45", (0.1, 45.0)), (" 0.2 , -90 ", (0.2, -90.0)), ("0,0", (0.0, 0.0))]
 )
 def test_parse_current(text, expected):
+    from pipefollow.cli.parsing import parse_current
+
     assert parse_current(text) == expected
 
 
 @pytest.mark.parametrize("text", ["0.1", "0.1,45,3", "a,b", "-0.1,0", "inf,0", "0.1,nan", ""])
 def test_parse_current_rejects(text):
+    from pipefollow.cli.parsing import parse_current
+
     with pytest.raises(DisturbanceError):
         parse_current(text)
 
