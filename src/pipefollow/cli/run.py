@@ -141,7 +141,9 @@ def train(
     made = first_missing(out_dir)
     out = writable_folder(out_dir, "--out")  # before training, after the checks of --init
     try:
-        with progress_report(episodes, f"training {agent.name}", hidden=as_json, unit="episodes") as bar:
+        with progress_report(
+            episodes, f"training {agent.name}", hidden=as_json, unit="episodes", bar=click.progressbar
+        ) as bar:
             run = train_into(
                 out, agent, pipeline, episodes, seed=seed, readings=reading, disturbance=disturbance,
                 randomization=randomization, seconds=seconds, progress=_counter(bar),
@@ -271,7 +273,9 @@ def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, dis
     resolve_training(pipeline)  # a bad pipeline fails before any work
     out = writable_folder(out_dir, "--out")
     steps = deep.STEPS if steps is None else steps
-    with progress_report(steps, f"training {algorithm.upper()}", hidden=as_json, unit="steps") as bar:
+    with progress_report(
+        steps, f"training {algorithm.upper()}", hidden=as_json, unit="steps", bar=click.progressbar
+    ) as bar:
         extra = {} if disturbance == _disturbance.NO_DISTURBANCE else {"disturbance": disturbance}
         if randomization is not None:
             extra["randomization"] = randomization
