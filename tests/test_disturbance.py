@@ -315,23 +315,6 @@ def test_disturbance_from_dict_rejects_bad_values(table, message):
         disturbance_from_dict(table, "scenario")
 
 
-@pytest.mark.parametrize(
-    ("text", "expected"), [("0.1,45", (0.1, 45.0)), (" 0.2 , -90 ", (0.2, -90.0)), ("0,0", (0.0, 0.0))]
-)
-def test_parse_current(text, expected):
-    from pipefollow.cli.parsing import parse_current
-
-    assert parse_current(text) == expected
-
-
-@pytest.mark.parametrize("text", ["0.1", "0.1,45,3", "a,b", "-0.1,0", "inf,0", "0.1,nan", ""])
-def test_parse_current_rejects(text):
-    from pipefollow.cli.parsing import parse_current
-
-    with pytest.raises(DisturbanceError):
-        parse_current(text)
-
-
 def test_env_refuses_a_bad_record_and_compiled_training_needs_a_generator():
     with pytest.raises(DisturbanceError, match="miss_prob"):
         PipelineFollowingEnv(disturbance=Disturbance(miss_prob=2.0))
