@@ -22,7 +22,6 @@ from pipefollow.sim.disturbance import (
     disturbance_from_dict,
     make_disturbance,
     noise_count,
-    parse_current,
     to_dict,
     vary_current,
 )
@@ -314,19 +313,6 @@ def test_make_disturbance_units_and_round_trip():
 def test_disturbance_from_dict_rejects_bad_values(table, message):
     with pytest.raises(DisturbanceError, match=f"scenario: .*{message}"):
         disturbance_from_dict(table, "scenario")
-
-
-@pytest.mark.parametrize(
-    ("text", "expected"), [("0.1,45", (0.1, 45.0)), (" 0.2 , -90 ", (0.2, -90.0)), ("0,0", (0.0, 0.0))]
-)
-def test_parse_current(text, expected):
-    assert parse_current(text) == expected
-
-
-@pytest.mark.parametrize("text", ["0.1", "0.1,45,3", "a,b", "-0.1,0", "inf,0", "0.1,nan", ""])
-def test_parse_current_rejects(text):
-    with pytest.raises(DisturbanceError):
-        parse_current(text)
 
 
 def test_env_refuses_a_bad_record_and_compiled_training_needs_a_generator():

@@ -100,3 +100,17 @@ def test_every_package_with_compiled_code_sets_numba_s_cache_before_compiling():
         if any(re.search(r"^@njit\b", text, re.MULTILINE) for text in texts):
             init = (folder / "__init__.py").read_text(encoding="utf-8")
             assert "configure_numba_cache()" in init, folder.name
+
+
+def test_only_the_command_line_imports_click():
+    wrong = []
+    for path in sorted(ROOT.rglob("*.py")):
+        rel = path.relative_to(ROOT)
+        if rel.parts[0] == "cli":
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else []
+            if isinstance(node, ast.ImportFrom) and not node.level:
+                names = [node.module or ""]
+            wrong += [f"{rel}:{node.lineno}: {n}" for n in names if n.split(".")[0] == "click"]
+    assert wrong == []

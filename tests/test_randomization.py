@@ -195,3 +195,23 @@ def test_the_vision_preset_spans_the_calibrated_detector_up_to_turbidity_0_2():
 def test_unknown_preset_name_lists_the_presets():
     with pytest.raises(DisturbanceError, match="choose from none, mild, moderate, vision, harsh"):
         rz.resolve("calm-ish")
+
+
+@pytest.mark.parametrize(
+    ("disturbance", "randomization", "both"),
+    [
+        (None, "mild", False),
+        (NO_DISTURBANCE, "mild", False),
+        ({}, {"preset": "mild"}, False),
+        (NO_DISTURBANCE._replace(camera_noise=0.1), None, False),
+        (NO_DISTURBANCE._replace(camera_noise=0.1), "mild", True),
+        ({"camera_noise": 0.0}, {"preset": "mild"}, True),  # a table given counts, even of zeros
+    ],
+)
+def test_a_disturbance_and_a_randomization_are_not_both_given(disturbance, randomization, both):
+    assert rz.both_given(disturbance, randomization) is both
+    if both:
+        with pytest.raises(DisturbanceError, match="not both"):
+            rz.check_not_both(disturbance, randomization)
+    else:
+        rz.check_not_both(disturbance, randomization)

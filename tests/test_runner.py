@@ -412,16 +412,17 @@ def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, monkeypatch):
 
 
 def test_compilation_is_its_own_phase_before_the_trials_progress_bar(tmp_path, monkeypatch, capsys):
+    import click
+
     from pipefollow.experiments import runner
 
     events = []
-    real_bar = runner.click.progressbar
     monkeypatch.setattr(runner, "warm_up", lambda configs, parallel=False: events.append("compile"))
-    monkeypatch.setattr(
-        runner.click, "progressbar", lambda *a, **k: (events.append("trials bar"), real_bar(*a, **k))[1]
-    )
     monkeypatch.setattr(runner.sys.stderr, "isatty", lambda: True)
-    run_experiment(with_overrides(TINY, trials=["sarsa"]), tmp_path, backend="serial")
+    run_experiment(
+        with_overrides(TINY, trials=["sarsa"]), tmp_path, backend="serial",
+        progress_bar=lambda **k: (events.append("trials bar"), click.progressbar(**k))[1],
+    )  # fmt: skip
     # the bar's time estimate starts after compiling: its first estimate is per trial, not per build
     assert events == ["compile", "trials bar"]
     assert "compiling" in capsys.readouterr().err

@@ -17,34 +17,6 @@ from pipefollow.cli.options import (
 )
 
 
-def _write_figures(run_dir: Path, required: bool, results=None) -> list[Path]:
-    """Figures and REPORT.md through ``pipefollow.experiments.report``, if that module exists.
-
-    ``results``: the run's trial results in memory (``RunSummary.results``), or None to read them.
-    """
-    try:
-        from pipefollow.experiments import report
-    except ModuleNotFoundError as e:
-        if e.name != "pipefollow.experiments.report":
-            raise
-        if required:
-            raise click.ClickException(
-                "figures need pipefollow.experiments.report, which is missing"
-            ) from None
-        click.echo("note: figures skipped (pipefollow.experiments.report is not available)", err=True)
-        return []
-    return [Path(p) for p in report.write_outputs(run_dir, results)]
-
-
-def _preload_figures() -> None:
-    """While the trials run: import what the figures need (``report.preload``), if that module exists."""
-    try:
-        from pipefollow.experiments import report
-    except ModuleNotFoundError:
-        return
-    report.preload()
-
-
 @click.command()
 @click.option(
     "--out",
@@ -129,91 +101,27 @@ def reproduce(
     (policies/), results.csv and evaluation.csv (tidy tables for pandas), and the figures and
     REPORT.md. An interrupted run resumes where it stopped when started again with the same options.
     """
-    from pipefollow.experiments import sensitivity
-    from pipefollow.experiments.config import load_experiment, with_overrides
-    from pipefollow.experiments.runner import RunInterrupted, run_experiment
-    from pipefollow.experiments.store import summary
+    from pipefollow.experiments import reproduction
+    from pipefollow.experiments.runner import RunInterrupted
 
-    if quick:
-        repeats = 2 if repeats is None else repeats
-        episodes = 30 if episodes is None else episodes
-    base = load_experiment(experiment)
-    exp = with_overrides(
-        base, repeats=repeats, episodes=episodes, seed=seed, trials=list(trials), readings=list(readings)
-    )
-    exp = sensitivity.expand(exp)
-    if not out_dir:
-        stem = "reproduction" if base.name == "paper" else f"reproduction-{base.name}"
-        out_dir = f"{stem}-quick" if quick else stem
-    out = Path(out_dir)
     try:
-        run = run_experiment(
-            exp,
-            out,
-            backend=backend,
-            workers=workers,
-            ray_address=ray_address,
-            show_progress=not as_json,
-            while_waiting=None if no_figures else _preload_figures,
-        )
+        rep = reproduction.reproduce(
+            experiment, out_dir,
+            overrides=dict(repeats=repeats, episodes=episodes, seed=seed, trials=trials, readings=readings),
+            quick=quick, figures=not no_figures, note=_note, backend=backend, workers=workers,
+            ray_address=ray_address, show_progress=not as_json, progress_bar=click.progressbar,
+        )  # fmt: skip
     except RunInterrupted as e:
         click.echo(f"pipefollow: {e.message}", err=True)
         sys.exit(130)
-    outputs = list(run.tables)
-    if run.read_only:
-        click.echo(f"note: '{run.run_dir}' is complete and read-only: summarised, nothing written", err=True)
-    elif not no_figures:
-        outputs += _write_figures(run.run_dir, required=False, results=run.results)
     if as_json:
-        click.echo(
-            json.dumps(
-                {
-                    "run_dir": str(run.run_dir),
-                    "backend": run.backend,
-                    "workers": run.workers,
-                    "trials_total": run.trials_total,
-                    "trials_computed": run.trials_computed,
-                    "trials_reused": run.trials_reused,
-                    "wall_seconds": run.wall_seconds,
-                    "outputs": [str(p) for p in outputs],
-                    "trials": summary(run.run_dir, exp, results=run.results or None),
-                }
-            )
-        )
-        return
-    click.echo(
-        f"{exp.name}: {run.trials_total} trials ({run.trials_computed} computed, {run.trials_reused} reused) "
-        f"in {run.wall_seconds:.1f} s, backend {run.backend} "
-        f"({run.workers} worker{'s' if run.workers != 1 else ''})"
-    )
-    if exp.compare_readings:
-        _echo_sensitivity(run.run_dir, outputs)
-        return
-    per_trial = summary(run.run_dir, exp, results=run.results or None)
-    width = max(len(r["label"]) for r in per_trial.values()) if per_trial else 5
-    click.echo(f"{'trial':<{width}}  {'return, last 50 (mean ± sd over seeds)':>38}  {'in view':>7}")
-    for row in per_trial.values():
-        ret = f"{row['mean_return_last50']:.2f} ± {row['std_return_last50']:.2f}"
-        click.echo(f"{row['label']:<{width}}  {ret:>38}  {row['mean_pipe_in_view_last50']:>7.1%}")
-    for name, row in per_trial.items():
-        if exp.trial(name).evaluate_on:
-            evals = ", ".join(f"{c} {v:.2f}" for c, v in row["evaluation_mean_return"].items())
-            click.echo(f"{row['label']} on {row['evaluation_pipeline']} (mean return): {evals}")
-    for p in outputs:
-        click.echo(f"wrote {p}")
+        click.echo(json.dumps(reproduction.summary(rep)))
+    else:
+        click.echo(reproduction.summary_text(rep))
 
 
-def _echo_sensitivity(run_dir: Path, outputs: list[Path]) -> None:
-    """The per-claim lines of a sensitivity study."""
-    from pipefollow.experiments import sensitivity
-
-    table = run_dir / sensitivity.READINGS_CSV
-    # the table this run just wrote holds every verdict; without it (--no-figures) compute them
-    s = sensitivity.read_csv(table) if table in outputs else sensitivity.load(run_dir)
-    for claim in s.claim_ids():
-        click.echo(f"claim {claim}: {s.verdict_line(claim)}")
-    for p in outputs:
-        click.echo(f"wrote {p}")
+def _note(text: str) -> None:
+    click.echo(text, err=True)
 
 
 @click.command()
@@ -222,10 +130,14 @@ def _echo_sensitivity(run_dir: Path, outputs: list[Path]) -> None:
 @guard
 def plot(run_dir, as_json):
     """Redraw all figures and REPORT.md of a run folder from its stored results."""
+    from pipefollow.experiments.reproduction import ReportMissing, write_figures
     from pipefollow.experiments.store import read_config
 
     read_config(run_dir)  # a one-line error if RUN_DIR is not a run folder
-    outputs = _write_figures(Path(run_dir), required=True)
+    try:
+        outputs = write_figures(Path(run_dir), required=True)
+    except ReportMissing as e:
+        raise click.ClickException(str(e)) from None
     if as_json:
         click.echo(json.dumps({"run_dir": str(run_dir), "outputs": [str(p) for p in outputs]}))
         return

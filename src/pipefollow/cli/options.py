@@ -11,6 +11,7 @@ import functools
 
 import click
 
+from pipefollow.cli import parsing
 from pipefollow.cli.common import SEED, UserError, finite
 
 # The longest episode an option takes: experiments.schema.MAX_SECONDS, kept here so that the
@@ -124,17 +125,16 @@ def disturbance_options(fn):
     :class:`~pipefollow.sim.disturbance.Disturbance`). Bad values are click usage errors that name the
     option (exit status 2).
     """
-    import functools
 
-    def checked(name):
+    def checked(parse):
         def callback(ctx, param, value):
             if value is None:
                 return None
-            from pipefollow.sim import disturbance
+            from pipefollow.sim.disturbance import DisturbanceError
 
             try:
-                return getattr(disturbance, name)(value)
-            except disturbance.DisturbanceError as e:
+                return parse(value)
+            except DisturbanceError as e:
                 raise click.BadParameter(str(e), ctx=ctx, param=param) from None
 
         return callback
@@ -152,7 +152,7 @@ def disturbance_options(fn):
             "--current",
             metavar="SPEED,DIR_DEG",
             default=None,
-            callback=checked("parse_current"),
+            callback=checked(parsing.parse_current),
             help="Ocean current: SPEED m/s flowing towards DIR_DEG degrees clockwise from north.",
         ),
         click.option(
@@ -160,7 +160,7 @@ def disturbance_options(fn):
             type=float,
             default=None,
             metavar="M",
-            callback=checked("check_camera_noise"),
+            callback=checked(parsing.parse_camera_noise),
             help="Standard deviation (m) of Gaussian noise on the camera's pipe end points. [default: 0]",
         ),
         click.option(
@@ -168,7 +168,7 @@ def disturbance_options(fn):
             type=float,
             default=None,
             metavar="P",
-            callback=checked("check_miss_prob"),
+            callback=checked(parsing.parse_miss_prob),
             help="Probability per decision that the camera misses the pipe. [default: 0]",
         ),
     ]

@@ -6,7 +6,6 @@ import sys
 from pathlib import Path
 
 import click
-import numpy as np
 
 from pipefollow.cli.common import (
     UserError,
@@ -14,6 +13,7 @@ from pipefollow.cli.common import (
     echo_result,
     finite,
     guard,
+    policy_file,
     writable_folder,
 )
 from pipefollow.cli.options import (
@@ -29,15 +29,15 @@ from pipefollow.cli.options import (
 from pipefollow.files.progress import progress as progress_report
 from pipefollow.learners.registry import NAMES as LEARNER_NAMES
 from pipefollow.sim import disturbance as _disturbance
+from pipefollow.training.runs import EPISODES, SECONDS
 
-# the learners' step sizes and discount: not options of train, kept from the policy under --init
-_LEARNING_RATES = ("alpha", "alpha_v", "alpha_pi", "discount", "delta_k", "k_max", "forgetting")
+DEEP = ("ppo", "sac")  # the learners of Stable-Baselines3 (pipefollow.training.deep)
 
 
 @click.command()
 @click.option(
     "--algorithm",
-    type=click.Choice([*LEARNER_NAMES, "ppo", "sac"]),
+    type=click.Choice([*LEARNER_NAMES, *DEEP]),
     required=True,
     help="The paper's learners (sarsa, cacla; ac: the general actor-critic of eq. 9), or PPO / SAC "
     "from Stable-Baselines3 (extra 'deep').",
@@ -59,8 +59,8 @@ _LEARNING_RATES = ("alpha", "alpha_v", "alpha_pi", "discount", "delta_k", "k_max
     "Built-in name or JSON file to train on, or random[:FAMILY] for a new pipe every episode "
     "(families: see 'pipefollow suites'; random = random:mixed)."
 )
-@episodes_option(500, "Training episodes (σ falls linearly from 1 to 0.01 over them); SARSA and CACLA.")
-@seconds_option(default=20.0)
+@episodes_option(EPISODES, "Training episodes (σ falls linearly from 1 to 0.01 over them); SARSA and CACLA.")
+@seconds_option(default=SECONDS)
 @click.option(
     "--steps",
     type=click.IntRange(min=1, max=100_000_000),
@@ -124,138 +124,122 @@ def train(
     An --out folder that already holds them is refused unless --force is given. Ctrl-C stops
     without writing anything (exit status 130).
     """
-    from pipefollow.training.outputs import TRAINING_OUTPUTS
-
-    existing = [name for name in TRAINING_OUTPUTS if (Path(out_dir) / name).exists()]
-    if existing and not force:
-        raise UserError(f"--out '{out_dir}' already holds {existing[0]}; use --force to replace it")
-    if randomization is not None:
-        from pipefollow.sim.randomization import load
-
-        randomization = load(randomization)
-        if disturbance != _disturbance.NO_DISTURBANCE:
-            raise UserError("--randomization replaces --current, --camera-noise and --miss-prob: give one")
+    _refuse_existing(out_dir, force)
+    randomization = _randomization(randomization, disturbance)
     if tensorboard_dir:
-        from pipefollow.files.tensorboard import TensorBoardMissing, check_available
-
-        if algorithm in ("ppo", "sac"):
-            raise UserError(f"--tensorboard applies to --algorithm sarsa and cacla, not {algorithm}")
-        try:
-            check_available()
-        except TensorBoardMissing as e:
-            raise UserError(str(e)) from None
-    if algorithm in ("ppo", "sac"):
+        _check_tensorboard(algorithm)
+    if algorithm in DEEP:
         return _train_deep(
             algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization
         )
     if steps is not None:
         raise UserError("--steps applies to --algorithm ppo and sac only (use --episodes)")
+    from pipefollow.files.output_paths import first_missing
+    from pipefollow.training.runs import train_into
+
+    agent, reading = _learner(algorithm, pipeline, seed, init_policy, readings, skew, supervised)
+    made = first_missing(out_dir)
+    out = writable_folder(out_dir, "--out")  # before training, after the checks of --init
+    try:
+        with progress_report(
+            episodes, f"training {agent.name}", hidden=as_json, unit="episodes", bar=click.progressbar
+        ) as bar:
+            run = train_into(
+                out, agent, pipeline, episodes, seed=seed, readings=reading, disturbance=disturbance,
+                randomization=randomization, seconds=seconds, progress=_counter(bar),
+                tensorboard=tensorboard_dir, made=made,
+            )  # fmt: skip
+    except KeyboardInterrupt:
+        click.echo(f"pipefollow: interrupted; nothing written to '{out_dir}'", err=True)
+        sys.exit(130)
+    _echo_trained(run.summary(), disturbance, randomization, as_json, run.text)
+
+
+def _counter(bar, every: int = 0, total: int | None = None):
+    """A ``progress(n)`` callback (n: the work done so far) moving ``bar`` by at least ``every``.
+
+    With ``total``, the bar stops there and the last step is always shown.
+    """
+    done = [0]
+
+    def progress(n):
+        if n - done[0] >= every or (total is not None and n >= total):
+            n = n if total is None else min(n, total)
+            bar.update(n - done[0])
+            done[0] = n
+
+    return progress
+
+
+def _refuse_existing(out_dir: str, force: bool) -> None:
+    """An --out folder holding a policy or learning curve is refused without --force."""
+    from pipefollow.training.outputs import TRAINING_OUTPUTS
+
+    existing = [name for name in TRAINING_OUTPUTS if (Path(out_dir) / name).exists()]
+    if existing and not force:
+        raise UserError(f"--out '{out_dir}' already holds {existing[0]}; use --force to replace it")
+
+
+def _randomization(spec: str | None, disturbance):
+    """``--randomization``, read; refused beside the fixed disturbance options."""
+    if spec is None:
+        return None
+    from pipefollow.cli.parsing import parse_randomization
+    from pipefollow.sim.randomization import both_given
+
+    randomization = parse_randomization(spec)
+    if both_given(disturbance, randomization):
+        raise UserError("--randomization replaces --current, --camera-noise and --miss-prob: give one")
+    return randomization
+
+
+def _check_tensorboard(algorithm: str) -> None:
+    """``--tensorboard``: SARSA and CACLA only, and the extra installed."""
+    from pipefollow.files.tensorboard import TensorBoardMissing, check_available
+
+    if algorithm in DEEP:
+        raise UserError(f"--tensorboard applies to --algorithm sarsa and cacla, not {algorithm}")
+    try:
+        check_available()
+    except TensorBoardMissing as e:
+        raise UserError(str(e)) from None
+
+
+def _learner(algorithm, pipeline, seed, init_policy, readings, skew, supervised):
+    """The agent to train and its readings: a new one, or the policy of --init with its options."""
     from pipefollow.learners.registry import learner, taking
     from pipefollow.sim.suites import resolve_training
-    from pipefollow.training.agents import make_agent
-    from pipefollow.training.compiled import STAT_NAMES
-    from pipefollow.training.phases import agent_rng, train_phases
+    from pipefollow.training.runs import new_agent
 
     for option, flag, value in (("skew_deg", "--skew", skew), ("supervised", "--supervised", supervised)):
         if value and option not in learner(algorithm).options:
             raise UserError(f"{flag} applies to --algorithm {' and '.join(taking(option))} only")
-    pipe = resolve_training(pipeline)  # a Pipeline, or a Suite for random[:FAMILY]
-    rng = agent_rng(seed)
-    if init_policy:
-        from pipefollow.cli.common import policy_file
-        from pipefollow.training.policy_files import load_policy
-
-        init_policy = policy_file(init_policy, "--init")
-        agent = load_policy(init_policy)
-        reading = apply_readings(readings, agent.readings)
-        if agent.algorithm != algorithm:
-            raise UserError(f"--init {init_policy}: holds a {agent.name} policy, not {algorithm}")
-        _check_init_options(agent, reading, init_policy, skew, supervised)
-        agent.readings = reading.id
-        agent.rng = rng
-    else:
+    resolve_training(pipeline)  # a bad pipeline fails before a policy is read
+    if not init_policy:
         reading = apply_readings(readings)
-        agent = make_agent(algorithm, skew_deg=skew, supervised=supervised, rng=rng, readings=reading)
-    from pipefollow.files.output_paths import first_missing, remove_empty_folders
-    from pipefollow.training.outputs import write_training_outputs
+        return new_agent(algorithm, seed, reading, skew, supervised), reading
+    from pipefollow.training.phases import agent_rng
+    from pipefollow.training.policy_files import load_policy
 
-    made = first_missing(out_dir)
-    out = writable_folder(out_dir, "--out")  # before training, after the checks of --init
-    try:
-        with progress_report(episodes, f"training {agent.name}", hidden=as_json, unit="episodes") as bar:
-            done = [0]
-
-            def progress(n):
-                bar.update(n - done[0])
-                done[0] = n
-
-            (stats,) = train_phases(
-                agent,
-                [(pipeline, episodes)],
-                seed=seed,
-                readings=reading,
-                disturbance=disturbance,
-                randomization=randomization,
-                episode_seconds=seconds,
-                progress=progress,
-            )
-        policy_path, curve_path = write_training_outputs(
-            out, agent, stats, episodes, pipeline=pipe.name, seed=seed
-        )
-        if tensorboard_dir:
-            from pipefollow.readings import sigma_scale
-
-            _write_tensorboard(tensorboard_dir, stats, episodes, sigma_scale(reading))
-    except BaseException as e:
-        remove_empty_folders(out, made)  # an interrupted or failed run leaves no empty --out behind
-        if isinstance(e, KeyboardInterrupt):
-            click.echo(f"pipefollow: interrupted; nothing written to '{out_dir}'", err=True)
-            sys.exit(130)
-        raise
-    result = {
-        "algorithm": agent.name,
-        "readings": reading.id,
-        "policy": str(policy_path),
-        "learning_curve": str(curve_path),
-        "returns": stats[:, 0].tolist(),
-        **{f"final_mean_{n}": float(stats[-min(50, episodes) :, i].mean()) for i, n in enumerate(STAT_NAMES)},
-    }
-    k = min(10, episodes)
-    _echo_trained(
-        result, disturbance, randomization, as_json,
-        lambda: f"{agent.name}: mean return of the first {k} episodes {stats[:k, 0].mean():.2f}, "
-        f"of the last {k} {stats[-k:, 0].mean():.2f}\npolicy: {policy_path}\nlearning curve: {curve_path}",
-    )  # fmt: skip
-
-
-def _write_tensorboard(folder, stats, episodes: int, scale: float) -> None:
-    """Per-episode return, pipe in view, progress, time lost and σ (the schedule train used)."""
-    from pipefollow.files.tensorboard import write_scalars
-    from pipefollow.learners.exploration import linear_sigma
-    from pipefollow.training.compiled import STAT_NAMES
-
-    series = {name: stats[:, i] for i, name in enumerate(STAT_NAMES)}
-    series["sigma"] = [linear_sigma(e, episodes, scale, 0.01 * scale) for e in range(episodes)]
-    write_scalars(folder, series)
+    init_policy = policy_file(init_policy, "--init")
+    agent = load_policy(init_policy)
+    reading = apply_readings(readings, agent.readings)
+    if agent.algorithm != algorithm:
+        raise UserError(f"--init {init_policy}: holds a {agent.name} policy, not {algorithm}")
+    _check_init_options(agent, reading, init_policy, skew, supervised)
+    agent.readings = reading.id
+    agent.rng = agent_rng(seed)
+    return agent, reading
 
 
 def _check_init_options(agent, reading, init_policy, skew, supervised) -> None:
     """``train --init``: the saved policy's --skew and --supervised unless given; differences named."""
-    from click.core import ParameterSource
+    from pipefollow.training.runs import option_differences
 
-    from pipefollow.training.agents import make_agent
-
-    ctx = click.get_current_context()
-    given = {n for n in ("skew", "supervised") if ctx.get_parameter_source(n) == ParameterSource.COMMANDLINE}
-    held = agent.params
-    keep = supervised if "supervised" in given else bool(getattr(held, "supervised", False))
-    skew_deg = skew if "skew" in given else 0.0
-    wanted = make_agent(agent.algorithm, skew_deg=skew_deg, supervised=keep, readings=reading).params
-    if "skew" not in given and "skew" in wanted._fields:
-        wanted = wanted._replace(skew=held.skew)
-    held = held._replace(**{k: getattr(wanted, k) for k in wanted._fields if k in _LEARNING_RATES})
-    differ = [f"{f} {getattr(held, f)!r} (this run: {getattr(wanted, f)!r})" for f in wanted._fields
-              if getattr(held, f) != getattr(wanted, f)]  # fmt: skip
+    given = _given("skew", "supervised")
+    differ = option_differences(
+        agent, reading, skew if "--skew" in given else None, supervised if "--supervised" in given else None
+    )
     if differ:
         raise UserError(
             f"--init {init_policy}: holds a {agent.name} policy (readings '{agent.readings}') whose options "
@@ -263,17 +247,18 @@ def _check_init_options(agent, reading, init_policy, skew, supervised) -> None:
         )
 
 
-def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization=None):
-    """``train --algorithm ppo|sac``: :func:`pipefollow.training.deep.train_to_folder`."""
+def _given(*names: str) -> list[str]:
+    """The options (``--skew``) of the parameters ``names`` given on the command line, in that order."""
     from click.core import ParameterSource
 
     ctx = click.get_current_context()
     option = {p.name: p.opts[0] for p in ctx.command.params}  # a parameter's name → its option
-    given = [
-        option[name]
-        for name in ("skew", "supervised", "episodes", "init_policy", "readings")
-        if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE
-    ]
+    return [option[n] for n in names if ctx.get_parameter_source(n) == ParameterSource.COMMANDLINE]
+
+
+def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization=None):
+    """``train --algorithm ppo|sac``: :func:`pipefollow.training.deep.train_to_folder`."""
+    given = _given("skew", "supervised", "episodes", "init_policy", "readings")
     if given:
         budget = "; its budget is --steps" if "--episodes" in given else ""
         raise UserError(f"{', '.join(given)} not available with --algorithm {algorithm}{budget}")
@@ -287,30 +272,18 @@ def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, dis
 
     resolve_training(pipeline)  # a bad pipeline fails before any work
     out = writable_folder(out_dir, "--out")
-    steps = 100_000 if steps is None else steps
-    with progress_report(steps, f"training {algorithm.upper()}", hidden=as_json, unit="steps") as bar:
-        done = [0]
-
-        def progress(n):
-            if n - done[0] >= 256 or n >= steps:
-                bar.update(min(n, steps) - done[0])
-                done[0] = min(n, steps)
-
+    steps = deep.STEPS if steps is None else steps
+    with progress_report(
+        steps, f"training {algorithm.upper()}", hidden=as_json, unit="steps", bar=click.progressbar
+    ) as bar:
         extra = {} if disturbance == _disturbance.NO_DISTURBANCE else {"disturbance": disturbance}
         if randomization is not None:
             extra["randomization"] = randomization
         result = deep.train_to_folder(
-            algorithm, pipeline, out, steps=steps, seconds=seconds, seed=seed, progress=progress, **extra
-        )
-    r = result["returns"]
-    k = min(10, len(r))
-    _echo_trained(
-        result, disturbance, randomization, as_json,
-        lambda: f"{algorithm.upper()}: {result['steps']} steps in {result['wall_s']:.1f} s; "
-        f"mean return of the first {k} episodes {np.mean(r[:k]) if k else float('nan'):.2f}, of the last {k} "
-        f"{np.mean(r[-k:]) if k else float('nan'):.2f}\n"
-        f"policy: {result['policy']}\nhyper-parameters: {result['hyperparameters']}",
-    )  # fmt: skip
+            algorithm, pipeline, out, steps=steps, seconds=seconds, seed=seed,
+            progress=_counter(bar, every=256, total=steps), **extra,
+        )  # fmt: skip
+    _echo_trained(result, disturbance, randomization, as_json, lambda: deep.result_text(result))
 
 
 def _echo_trained(result: dict, disturbance, randomization, as_json: bool, text) -> None:

@@ -121,12 +121,12 @@ def _coerce(cls, data: dict, where: str):
 def _check_randomization(value, where: str, disturbance) -> dict:
     """A preset name or a table → the table (``{"preset": name}`` for a name); one-line errors."""
     from pipefollow.sim.disturbance import DisturbanceError
-    from pipefollow.sim.randomization import resolve
+    from pipefollow.sim.randomization import both_given, resolve
 
     table = {"preset": value} if isinstance(value, str) else value
     if not isinstance(table, dict):
         raise ConfigError(f"{where} must be a preset name or a table, got {value!r}")
-    if disturbance:
+    if both_given(disturbance or None, table):
         raise ConfigError(f"{where}: give a disturbance or a randomization, not both")
     try:
         resolve(table, where)

@@ -28,8 +28,6 @@ from contextlib import closing
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import click
-
 from pipefollow.experiments import folder, store
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig
 from pipefollow.experiments.trial import TrialResult, run_trial
@@ -186,10 +184,10 @@ def _compile_phase(name: str, configs: list[TrialConfig], parallel: bool, hidden
     if hidden:
         warm_up(configs, parallel=parallel)
         return
-    click.echo(f"{name}: compiling (cached after the first run) ...", file=sys.stderr, nl=False)
+    print(f"{name}: compiling (cached after the first run) ...", file=sys.stderr, end="", flush=True)
     t0 = time.perf_counter()
     warm_up(configs, parallel=parallel)
-    click.echo(f" {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+    print(f" {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
 
 
 def _failed(e: BaseException, config: TrialConfig, seed: int) -> BaseException:
@@ -328,6 +326,89 @@ def _ray(
 # ---------------------------------------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class _How:
+    """How :func:`run_experiment` runs its work: the backend and its settings, the progress shown."""
+
+    backend: str
+    workers: int | None
+    ray_address: str | None
+    trial_fn: TrialFn
+    while_waiting: Callable[[], object] | None
+    hidden: bool
+    bar: Callable | None
+
+
+def _check_backend(backend: str, workers: int | None) -> None:
+    """Refuse an unknown backend or fewer than one worker; a missing Ray before any work."""
+    if backend not in BACKENDS:
+        raise ConfigError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    if workers is not None and workers < 1:
+        raise ConfigError(f"workers must be at least 1, got {workers}")
+    if backend == "ray":
+        import_ray()
+
+
+def _prepare(run_dir: Path, exp: ExperimentConfig, created: bool) -> None:
+    """Write (or check) the run folder's configuration; a folder this run created goes if that fails."""
+    try:
+        store.prepare(run_dir, exp)
+    except Exception:
+        if created:  # a folder holding another run (or none) is left as it is
+            folder.discard_unfinished(run_dir, exp, created)
+        raise
+
+
+def _results(work: Work, n_workers: int, how: _How, ray_info: dict):
+    """The backend's iterator of (config, result) over ``work``."""
+    if how.backend == "serial" or not work:
+        return _serial(work, how.trial_fn)
+    if how.backend == "process":
+        return _process(work, how.trial_fn, n_workers, how.while_waiting)
+    return _ray(work, how.trial_fn, how.workers, how.ray_address, ray_info, how.while_waiting)
+
+
+def _run_work(run_dir: Path, exp: ExperimentConfig, done: set, in_hand: dict, created: bool, how: _How):
+    """Compute the trials of ``exp`` not in ``done``, saving each as it arrives into ``in_hand`` too.
+
+    Returns:
+        The workers used and the trials computed.
+    """
+    work = [(t, seed) for t in exp.trials for seed in exp.seeds() if (t.name, seed) not in done]
+    total = len(exp.trials) * exp.repeats
+    n_workers = 1
+    if how.backend == "process":
+        n_workers = max(1, min(how.workers or os.cpu_count() or 1, len(work)))
+    ray_info = {"cpus": 0}
+    computed = 0
+    try:
+        if work and (how.backend != "serial" or how.trial_fn is run_trial):
+            # Compiling (or loading the compiled code) is a phase of its own: inside the
+            # trials' progress bar it made the first time estimate many times too long.
+            _compile_phase(exp.name, [c for c, _ in work], n_workers > 1, how.hidden)
+        label = f"{exp.name}: trials"
+        with progress(total, label, hidden=how.hidden, unit="trials", bar=how.bar) as bar:
+            bar.update(len(done))
+            with closing(_results(work, n_workers, how, ray_info)) as results:
+                for config, result in results:
+                    store.save_trial(run_dir, result, config)
+                    in_hand[config.name, result.seed] = result
+                    computed += 1
+                    bar.update(1)
+    except KeyboardInterrupt:
+        raise RunInterrupted(run_dir, len(done) + computed, total) from None
+    except Exception as e:
+        # nothing half-made stays: a policy without its trial, empty folders, a config alone
+        folder.discard_unfinished(run_dir, exp, created)
+        saved = len(done) + computed
+        if saved:
+            e.add_note(f"{saved} of {total} trials are saved in '{run_dir}'; running again resumes")
+        raise
+    if how.backend == "ray":
+        n_workers = ray_info["cpus"] or 1
+    return n_workers, computed
+
+
 def run_experiment(
     exp: ExperimentConfig,
     out_dir: str | os.PathLike,
@@ -337,6 +418,7 @@ def run_experiment(
     show_progress: bool = True,
     trial_fn: TrialFn = run_trial,
     while_waiting: Callable[[], object] | None = None,
+    progress_bar: Callable | None = None,
 ) -> RunSummary:
     """Run every (trial, seed) of ``exp`` not yet finished in the run folder ``out_dir``.
 
@@ -346,12 +428,13 @@ def run_experiment(
         backend: ``serial``, ``process`` or ``ray``.
         workers: trials at the same time (default: all cores; for Ray, the CPUs of a local instance).
         ray_address: address of a running Ray cluster (default: start a local instance).
-        show_progress: progress bar on stderr, when it is a terminal.
+        show_progress: progress on stderr: a bar on a terminal (``progress_bar``), else lines.
         trial_fn: the unit of work, ``run_trial`` or a function with its signature (picklable
             for the ``process`` backend on platforms without ``fork``).
         while_waiting: called once in this process when the trials have been handed to the
             ``process`` or ``ray`` workers, before their results are awaited: work for what
             follows the run (the command imports Matplotlib there, instead of after the trials).
+        progress_bar: the bar drawn on a terminal (see :func:`pipefollow.files.progress.progress`).
 
     Returns:
         A :class:`RunSummary`; the results are in the run folder.
@@ -362,12 +445,7 @@ def run_experiment(
         RunInterrupted: on Ctrl-C, after stopping the workers; finished trials stay saved.
     """
     t0 = time.perf_counter()
-    if backend not in BACKENDS:
-        raise ConfigError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    if workers is not None and workers < 1:
-        raise ConfigError(f"workers must be at least 1, got {workers}")
-    if backend == "ray":
-        import_ray()
+    _check_backend(backend, workers)
     check_inputs(exp)
     total = len(exp.trials) * exp.repeats
     run_dir = Path(out_dir)
@@ -376,53 +454,13 @@ def run_experiment(
         return RunSummary(run_dir, backend, 1, total, 0, total, time.perf_counter() - t0, read_only=True)
     created = not (run_dir / store.CONFIG_FILE).exists()
     made = first_missing(run_dir)
-    hidden = not show_progress
+    how = _How(backend, workers, ray_address, trial_fn, while_waiting, not show_progress, progress_bar)
     try:
         with folder.locked(out_dir) as run_dir:
-            try:
-                store.prepare(run_dir, exp)
-            except Exception:
-                if created:  # a folder holding another run (or none) is left as it is
-                    folder.discard_unfinished(run_dir, exp, created)
-                raise
+            _prepare(run_dir, exp, created)
             in_hand: dict[tuple[str, int], TrialResult] = {}  # every result read or computed
             done = store.finished(run_dir, exp, in_hand)
-            work = [(t, seed) for t in exp.trials for seed in exp.seeds() if (t.name, seed) not in done]
-            n_workers = 1
-            if backend == "process":
-                n_workers = max(1, min(workers or os.cpu_count() or 1, len(work)))
-            ray_info = {"cpus": 0}
-            computed = 0
-            try:
-                if work and (backend != "serial" or trial_fn is run_trial):
-                    # Compiling (or loading the compiled code) is a phase of its own: inside the
-                    # trials' progress bar it made the first time estimate many times too long.
-                    _compile_phase(exp.name, [c for c, _ in work], n_workers > 1, hidden)
-                with progress(total, f"{exp.name}: trials", hidden=hidden, unit="trials") as bar:
-                    bar.update(len(done))
-                    if backend == "serial" or not work:
-                        results = _serial(work, trial_fn)
-                    elif backend == "process":
-                        results = _process(work, trial_fn, n_workers, while_waiting)
-                    else:
-                        results = _ray(work, trial_fn, workers, ray_address, ray_info, while_waiting)
-                    with closing(results):
-                        for config, result in results:
-                            store.save_trial(run_dir, result, config)
-                            in_hand[config.name, result.seed] = result
-                            computed += 1
-                            bar.update(1)
-            except KeyboardInterrupt:
-                raise RunInterrupted(run_dir, len(done) + computed, total) from None
-            except Exception as e:
-                # nothing half-made stays: a policy without its trial, empty folders, a config alone
-                folder.discard_unfinished(run_dir, exp, created)
-                saved = len(done) + computed
-                if saved:
-                    e.add_note(f"{saved} of {total} trials are saved in '{run_dir}'; running again resumes")
-                raise
-            if backend == "ray":
-                n_workers = ray_info["cpus"] or 1
+            n_workers, computed = _run_work(run_dir, exp, done, in_hand, created, how)
             store.ensure_policies(run_dir, exp)
             results = store.stored_results(run_dir, exp, in_hand)
             tables = store.write_tables(run_dir, exp, results)

@@ -44,9 +44,16 @@ class _Lines:
             self._line(now)
 
 
+class _Silent:
+    """``update(n)`` that reports nothing (``--json``)."""
+
+    def update(self, n: int) -> None:
+        pass
+
+
 @contextmanager
-def progress(length: int, label: str, *, hidden: bool = False, file=None, unit: str = "done"):
-    """A progress reporter with ``update(n)``: click's bar on a terminal, lines otherwise, or nothing.
+def progress(length: int, label: str, *, hidden: bool = False, file=None, unit: str = "done", bar=None):
+    """A progress reporter with ``update(n)``: a bar on a terminal, lines otherwise, or nothing.
 
     Args:
         length: the total of the work.
@@ -54,13 +61,17 @@ def progress(length: int, label: str, *, hidden: bool = False, file=None, unit: 
         hidden: report nothing (``--json``).
         file: where to report (default stderr).
         unit: the name of the counted things in lines (``episodes``, ``trials``).
+        bar: the bar to draw on a terminal, a context manager factory called with ``length``,
+            ``label``, ``file`` and ``show_pos`` (the command line passes ``click.progressbar``);
+            without one, a terminal gets the lines too.
     """
-    import click
-
     file = sys.stderr if file is None else file
-    if hidden or file.isatty():
-        with click.progressbar(length=length, label=label, file=file, hidden=hidden, show_pos=True) as bar:
-            yield bar
+    if hidden:
+        yield _Silent()
+        return
+    if bar is not None and file.isatty():
+        with bar(length=length, label=label, file=file, show_pos=True) as drawn:
+            yield drawn
         return
     lines = _Lines(length, label, file, unit)
     yield lines

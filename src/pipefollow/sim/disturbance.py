@@ -21,8 +21,8 @@ draws from its ``np_random``, the compiled loops from the generator they are giv
 ``(x1, y1, x2, y_near)`` (if on), the last one the missed detection (if on): the reading is
 missed when ``Φ(z) < miss_prob``, which has probability ``miss_prob``.
 
-The command-line options and TOML tables are parsed and checked here too
-(:func:`parse_current`, :func:`check_camera_noise`, :func:`check_miss_prob`, :func:`disturbance_from_dict`).
+TOML tables are read and checked here too (:func:`disturbance_from_dict`); single values with
+:func:`non_negative` and :func:`probability`.
 """
 
 from __future__ import annotations
@@ -134,14 +134,16 @@ def _number(value: Any, name: str, source: str) -> float:
     return value
 
 
-def _at_least_zero(value: Any, name: str, source: str) -> float:
+def non_negative(value: Any, name: str, source: str = "") -> float:
+    """``value`` as a finite float ≥ 0; a :class:`DisturbanceError` naming ``source`` and ``name``."""
     value = _number(value, name, source)
     if value < 0.0:
         raise DisturbanceError(f"{source}{name} must be ≥ 0, got {value:g}")
     return value
 
 
-def _probability(value: Any, name: str, source: str) -> float:
+def probability(value: Any, name: str, source: str = "") -> float:
+    """``value`` as a float in [0, 1]; a :class:`DisturbanceError` naming ``source`` and ``name``."""
     value = _number(value, name, source)
     if not 0.0 <= value <= 1.0:
         raise DisturbanceError(f"{source}{name} must be a probability in [0, 1], got {value:g}")
@@ -156,7 +158,7 @@ def _buried(value: Any, name: str, source: str) -> tuple[tuple[float, ...], tupl
     for k, pair in enumerate(value):
         if not isinstance(pair, list | tuple) or len(pair) != 2:
             raise DisturbanceError(f"{source}{name}[{k}] must be a pair [from, to] (m), got {pair!r}")
-        s0 = _at_least_zero(pair[0], f"{name}[{k}] from", source)
+        s0 = non_negative(pair[0], f"{name}[{k}] from", source)
         s1 = _number(pair[1], f"{name}[{k}] to", source)
         if not s0 < s1:
             raise DisturbanceError(f"{source}{name}[{k}] must have from < to, got [{s0:g}, {s1:g}]")
@@ -185,11 +187,11 @@ def make_disturbance(
         DisturbanceError: a value out of range; the message starts with ``source``.
     """
     src = f"{source}: " if source else ""
-    speed = _at_least_zero(current_speed, "current_speed", src)
+    speed = non_negative(current_speed, "current_speed", src)
     direction = _number(current_direction_deg, "current_direction_deg", src)
-    tc = _at_least_zero(current_time_constant, "current_time_constant", src)
-    speed_sd = _at_least_zero(current_speed_sd, "current_speed_sd", src)
-    dir_sd = _at_least_zero(current_direction_sd_deg, "current_direction_sd_deg", src)
+    tc = non_negative(current_time_constant, "current_time_constant", src)
+    speed_sd = non_negative(current_speed_sd, "current_speed_sd", src)
+    dir_sd = non_negative(current_direction_sd_deg, "current_direction_sd_deg", src)
     if (speed_sd > 0.0 or dir_sd > 0.0) and tc <= 0.0:
         raise DisturbanceError(f"{src}a varying current needs current_time_constant > 0 (s)")
     starts, ends = _buried(list(buried), "buried", src)
@@ -199,8 +201,8 @@ def make_disturbance(
         tc,
         speed_sd,
         math.radians(dir_sd),
-        _at_least_zero(camera_noise, "camera_noise", src),
-        _probability(miss_prob, "miss_prob", src),
+        non_negative(camera_noise, "camera_noise", src),
+        probability(miss_prob, "miss_prob", src),
         starts,
         ends,
     )
@@ -273,29 +275,3 @@ def to_dict(d: Disturbance) -> dict[str, Any]:
         "miss_prob": d.miss_prob,
         "buried": [[a, b] for a, b in zip(d.buried_from, d.buried_to, strict=True) if math.isfinite(a)],
     }
-
-
-def parse_current(text: str) -> tuple[float, float]:
-    """``"SPEED,DIR_DEG"`` → ``(V_c m/s, β_c degrees)``; raises :class:`DisturbanceError`."""
-    parts = str(text).split(",")
-    if len(parts) != 2:
-        raise DisturbanceError(f"expected SPEED,DIR_DEG (m/s, degrees towards, from north), got {text!r}")
-    try:
-        speed, direction = float(parts[0]), float(parts[1])
-    except ValueError:
-        raise DisturbanceError(f"expected two numbers SPEED,DIR_DEG, got {text!r}") from None
-    if not (math.isfinite(speed) and math.isfinite(direction)):
-        raise DisturbanceError(f"SPEED and DIR_DEG must be finite, got {text!r}")
-    if speed < 0.0:
-        raise DisturbanceError(f"SPEED must be ≥ 0 m/s, got {speed:g}")
-    return speed, direction
-
-
-def check_camera_noise(value: Any) -> float:
-    """A camera-noise s.d. (m) given on the command line: a finite number ≥ 0."""
-    return _at_least_zero(value, "camera noise", "")
-
-
-def check_miss_prob(value: Any) -> float:
-    """A miss probability given on the command line: a number in [0, 1]."""
-    return _probability(value, "miss probability", "")

@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from pipefollow.sim.disturbance import MAX_BURIED, Disturbance, DisturbanceError
+from pipefollow.sim.disturbance import MAX_BURIED, NO_DISTURBANCE, Disturbance, DisturbanceError
 
 DRAWS = 4 + 3 * MAX_BURIED  # uniforms consumed by one draw (module docstring)
 MAX_NOISE = 2 + 4 + 1  # the most standard normals a camera reading consumes (current, noise, miss)
@@ -263,26 +263,30 @@ def resolve(spec: Any, source: str = "randomization") -> Randomization:
     return check(preset(spec, source), source)
 
 
-def load(spec: str) -> Randomization:
-    """A preset name, or a TOML file (``.toml``) holding the table or a ``[randomization]`` table.
+NOT_BOTH = "give a disturbance or a randomization of the disturbances, not both"
+
+
+def both_given(disturbance: Any, randomization: Any) -> bool:
+    """Whether a fixed disturbance comes with a randomization, which draws each episode's own.
+
+    Args:
+        disturbance: a :class:`~pipefollow.sim.disturbance.Disturbance` (``NO_DISTURBANCE`` is
+            none), a table of one (an empty table is none) or None.
+        randomization: a randomization in any form :func:`resolve` takes, or None.
+    """
+    if randomization is None or disturbance is None or disturbance == NO_DISTURBANCE:
+        return False
+    return not (isinstance(disturbance, Mapping) and not disturbance)
+
+
+def check_not_both(disturbance: Any, randomization: Any) -> None:
+    """Refuse a fixed disturbance together with a randomization (:func:`both_given`).
 
     Raises:
-        DisturbanceError: an unreadable file, bad TOML, an unknown preset or a bad table.
+        DisturbanceError: both are given.
     """
-    if not str(spec).endswith(".toml"):
-        return resolve(spec, "--randomization")
-    import tomllib
-
-    from pipefollow.files.atomic import read_text_file
-
-    source = f"--randomization {spec}"
-    try:
-        table = tomllib.loads(read_text_file(spec, source, DisturbanceError))
-    except tomllib.TOMLDecodeError as e:
-        raise DisturbanceError(f"{source}: not valid TOML ({e})") from None
-    if isinstance(table.get("randomization"), Mapping):
-        table = table["randomization"]
-    return from_dict(table, source)
+    if both_given(disturbance, randomization):
+        raise DisturbanceError(NOT_BOTH)
 
 
 def to_dict(r: Randomization) -> dict[str, Any]:

@@ -225,11 +225,10 @@ def _train_randomized(agent, episodes, tracks_for, episode_seconds, sigma_start,
                       env_rng, randomization):  # fmt: skip
     """:func:`train_chunks` under domain randomization: a compiled call per episode, its own disturbances."""
     from pipefollow.sim import randomization as rz
-    from pipefollow.sim.disturbance import NO_DISTURBANCE, noise_count
+    from pipefollow.sim.disturbance import noise_count
 
     randomization = rz.resolve(randomization)
-    if params.disturbance != NO_DISTURBANCE:
-        raise ValueError("give a disturbance or a randomization of the disturbances, not both")
+    rz.check_not_both(params.disturbance, randomization)
     if env_rng is None:
         raise ValueError("a randomization draws the disturbances: pass a seeded env_rng")
     kind, sigmas, n_decisions, stats, _, env_rng, _ = compiled_setup(

@@ -312,6 +312,22 @@ def write_hyperparameters(path: str | Path, algorithm: str, hp: dict[str, Any], 
     return path
 
 
+STEPS = 100_000  # the budget of a training run in environment steps (decisions)
+
+
+def result_text(result: dict[str, Any]) -> str:
+    """A :func:`train_to_folder` summary in three lines: steps and time, mean returns, the files."""
+    r = result["returns"]
+    k = min(10, len(r))
+    first = np.mean(r[:k]) if k else float("nan")
+    last = np.mean(r[-k:]) if k else float("nan")
+    return (
+        f"{result['algorithm'].upper()}: {result['steps']} steps in {result['wall_s']:.1f} s; "
+        f"mean return of the first {k} episodes {first:.2f}, of the last {k} {last:.2f}\n"
+        f"policy: {result['policy']}\nhyper-parameters: {result['hyperparameters']}"
+    )
+
+
 def train_to_folder(
     algorithm: str,
     pipeline: str,
