@@ -19,7 +19,7 @@ from pipefollow import readings as rd
 from pipefollow.learners.registry import learner
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
 from pipefollow.training.compiled import STAT_NAMES
-from pipefollow.training.phases import train_phases
+from pipefollow.training.phases import phase_sigmas, train_phases
 
 EPISODES = 500  # training episodes of a run (paper §4.1)
 SECONDS: float = signature(train_phases).parameters["episode_seconds"].default  # episode length (s)
@@ -66,14 +66,12 @@ def option_differences(
     ]
 
 
-def write_tensorboard(folder, stats: np.ndarray, episodes: int, reading: rd.Readings) -> None:
-    """Per-episode return, pipe in view, progress, time lost and σ (the schedule training used)."""
+def write_tensorboard(folder, stats: np.ndarray, sigmas: np.ndarray) -> None:
+    """Per-episode return, pipe in view, progress, time lost and σ (``sigmas``: the schedule trained with)."""
     from pipefollow.files.tensorboard import write_scalars
-    from pipefollow.learners.exploration import linear_sigma
 
-    scale = rd.sigma_scale(reading)
     series = {name: stats[:, i] for i, name in enumerate(STAT_NAMES)}
-    series["sigma"] = [linear_sigma(e, episodes, scale, 0.01 * scale) for e in range(episodes)]
+    series["sigma"] = list(sigmas)
     write_scalars(folder, series)
 
 
@@ -139,7 +137,7 @@ def train_into(
         out: an existing, writable folder.
         agent: an agent of the registry, its ``rng`` from :func:`~pipefollow.training.phases.agent_rng`.
         pipeline: a built-in name, a JSON file or ``random[:FAMILY]``.
-        episodes: training episodes (σ falls linearly from 1 to 0.01 over them).
+        episodes: training episodes (σ falls linearly over them: :func:`.phases.phase_sigmas`).
         seed: the run's seed (random pipes and disturbances; recorded in the policy file).
         readings: the readings it trains under.
         disturbance: fixed disturbances, or
@@ -166,9 +164,10 @@ def train_into(
             progress=progress,
         )
         name = resolve_training(pipeline).name
-        policy, curve = write_training_outputs(out, agent, stats, episodes, pipeline=name, seed=seed)
+        sigmas = phase_sigmas(episodes, readings)  # the σ train_phases trained with
+        policy, curve = write_training_outputs(out, agent, stats, sigmas, pipeline=name, seed=seed)
         if tensorboard:
-            write_tensorboard(tensorboard, stats, episodes, readings)
+            write_tensorboard(tensorboard, stats, sigmas)
     except BaseException:
         remove_empty_folders(out, made)  # an interrupted or failed run leaves no empty folder behind
         raise
