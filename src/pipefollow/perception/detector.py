@@ -6,7 +6,7 @@ pipe's two edges paired into a centre line (two parallel groups of segments abou
 apart), each edge refined by a least-squares fit to its edge pixels, then both ends followed
 along the two edges beyond the straight leg, through bends and curves. The result is the paper's
 observation ``(x1, y1, x2)`` in camera metres by the pixel conventions of
-:mod:`pipefollow.perception.image` (also ``y_near``), plus a confidence.
+:mod:`pipefollow.perception.pixels` (also ``y_near``), plus a confidence.
 
 It works on any grey ``uint8`` image of the footprint, not only on this package's renders, and on
 other sizes and footprints when told the footprint. OpenCV is the optional extra ``vision``
@@ -440,15 +440,15 @@ def refine_edges(edges, grid, frame, extent, rho_a, rho_b):
         sums = np.zeros((2, 5))  # per edge: n, Σu, Σs, Σu², Σus
         u_lo, u_hi = 0.0, extent
         for r in range(h):
-            py = row_y(r, grid)
+            y = row_y(r, grid)
             for c in range(w):
                 if edges[r, c] == 0:
                     continue
-                px_x = column_x(c, grid)
-                u = px_x * frame.dx + py * frame.dy - frame.t_lo
+                x = column_x(c, grid)
+                u = x * frame.dx + y * frame.dy - frame.t_lo
                 if u < -reach or u > extent + reach:
                     continue
-                ps = px_x * frame.nx + py * frame.ny
+                ps = x * frame.nx + y * frame.ny
                 for e in range(2):
                     if abs(ps - fit[e, 0] - fit[e, 1] * u) < tol:
                         u_lo, u_hi = min(u_lo, u), max(u_hi, u)

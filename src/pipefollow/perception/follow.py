@@ -7,6 +7,9 @@ in short steps; each step tries turns of up to :data:`MAX_TURN` and a pixel of s
 takes the one whose two edge lines (half the measured edge separation either side of the centre)
 fall on the most edge pixels. It stops where no step keeps both edges (the pipe ends, is buried
 or leaves the footprint), which is the visible piece's end.
+
+:func:`add_edge_pixel` and :func:`fit_edge` are the least-squares fit of an edge (offset across
+against position along) that both the detector's leg and the walk's end refit use.
 """
 
 from __future__ import annotations

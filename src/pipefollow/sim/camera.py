@@ -52,6 +52,8 @@ class Piece(NamedTuple):
     y_near: float
     s_near: float  # arc length (m) of the near end ...
     s_far: float  # ... and of the far end
+
+
 _NONE4 = (math.inf, math.inf, math.inf, math.inf)  # no buried stretch
 
 
