@@ -190,10 +190,11 @@ def refine_end(edges, tail_x, tail_y, x, y, half_sep, half_width, depth, exited)
 
     The walk's steps turn by whole multiples of 7.5° and shift by whole pixels, so its last step
     can be a few centimetres off the pipe's centre line, which a border crossing at a shallow
-    angle magnifies. Each edge is fitted (offset across against position along) to its edge
-    pixels within 1.5 pixels of the stretch from ``(tail_x, tail_y)`` to the end; the end is then
-    the refitted centre line's point at the same distance along, or, if the walk ``exited``, where
-    that line leaves the footprint. With too few edge pixels the end stays.
+    angle magnifies. Each edge is fitted (offset across against position along, :func:`fit_edge`)
+    to its edge pixels within :data:`REFIT_BAND_PX` pixels of the stretch from ``(tail_x, tail_y)``
+    to the end; the end is then the refitted centre line's point at the same distance along, or,
+    if the walk ``exited``, where that line leaves the footprint. With too few edge pixels
+    (:data:`MIN_REFIT_PIXELS`) the end stays.
     """
     h, w = edges.shape
     grid = pixel_grid(half_width, depth, h, w)
