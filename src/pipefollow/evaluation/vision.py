@@ -185,7 +185,9 @@ def sample_figure(
             img = renderer.render(pipe.points, pipe.cumulative, f.pose, make_textures(frng), frng)
             det = detect_pipe(img)
             ax = axes[r, c]
-            ax.imshow(img, cmap="gray", vmin=0, vmax=255, extent=(-1, 1, 0, 3))
+            cam = renderer.camera  # the image spans the footprint, row 0 at its far edge
+            footprint = (-cam.half_width, cam.half_width, 0.0, cam.depth)
+            ax.imshow(img, cmap="gray", vmin=0, vmax=255, extent=footprint)
             x1, y1, x2, yn = f.truth
             ax.plot([x2, x1], [yn, y1], color="lime", lw=1.0)
             if det.found:

@@ -1,9 +1,10 @@
 """Perception: the downward camera's grey image of the footprint and a pipe detector on it.
 
-``water`` holds the one parameter record of water and camera settings, ``image`` renders the
-footprint as the camera sees it, ``detector`` finds the pipe in a grey image (OpenCV, the optional
-extra ``vision``), ``follow`` walks along the pipe's edges to the ends of the visible piece, and
-``camera`` joins them to the simulation's observation slots.
+``water`` holds the one parameter record of water and camera settings, ``pixels`` the image's
+pixel ↔ camera-metre conventions, ``image`` renders the footprint as the camera sees it,
+``detector`` finds the pipe in a grey image (OpenCV, the optional extra ``vision``), ``follow``
+walks along the pipe's edges to the ends of the visible piece (and holds the least-squares edge
+fit both use), and ``camera`` joins them to the simulation's observation slots.
 """
 
 from pipefollow.files.compile_cache import configure_numba_cache

@@ -15,12 +15,13 @@ after each decision; both draw from the environment's seeded generator only.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from pipefollow.perception.detector import NOT_FOUND, Detection, detect_pipe, require_cv2
 from pipefollow.perception.image import Renderer, Textures, make_textures
+from pipefollow.perception.pixels import column_at, pixel_grid, row_at
 from pipefollow.perception.water import Water, water_from
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams, tracking_errors
@@ -45,6 +46,27 @@ class CameraSettings:
         """Whether the environment renders camera images at all."""
         return self.camera == "vision" or self.observation == "image"
 
+
+class Sighting(NamedTuple):
+    """The observation slots of the simulation state a detection fills (camera metres, radians)."""
+
+    x1: float = 0.0  # the far end
+    y1: float = 0.0
+    x2: float = 0.0  # the near end's lateral position ...
+    y_near: float = 0.0  # ... and its forward position
+    e_dist: float = 0.0  # tracking errors (sim.camera.tracking_errors)
+    e_angl: float = 0.0
+    side: float = 1.0  # the side the pipe was last seen on: +1 starboard (x1 ≥ 0), −1 port
+
+
+class TrueView(NamedTuple):
+    """What the exact camera sees from the same pose (the simulation state's slots)."""
+
+    in_view: bool
+    x1: float
+    y1: float
+    x2: float
+    y_near: float
 
 
 def camera_settings(
@@ -83,16 +105,14 @@ class VisionCamera:
         self.renderer = Renderer(settings.water, camera)
         self.image = np.zeros((settings.water.height, settings.water.width), dtype=np.uint8)
         self.detection: Detection = NOT_FOUND
-        self.truth = (False, 0.0, 0.0, 0.0, 0.0)  # in view, x1, y1, x2, y_near of the exact camera
+        self.truth = TrueView(False, 0.0, 0.0, 0.0, 0.0)
         self._textures: Textures | None = None
-        self._last = np.zeros(7)  # the last detection's slots (x1, y1, x2, y_near, e_dist, e_angl, side)
-        self._last[6] = 1.0
+        self._last = Sighting()  # the last detection's slots
 
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
         """A new scene (seabed and growth textures from ``rng``) and its first image."""
         self._textures = make_textures(rng)
-        self._last[:] = 0.0
-        self._last[6] = 1.0
+        self._last = Sighting()
         self.detection = NOT_FOUND  # no tracking across episodes
         self._look(state, points, cum, rng)
 
@@ -121,7 +141,7 @@ class VisionCamera:
         return reward(s[sim.VX], s[sim.E_DIST], s[sim.E_ANGL], s[sim.A_PREV], previous_action)
 
     def _look(self, s: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
-        self.truth = (bool(s[sim.IN_VIEW]), s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR])
+        self.truth = TrueView(bool(s[sim.IN_VIEW]), s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR])
         self._true_errors = (s[sim.E_DIST], s[sim.E_ANGL])
         pose = (s[sim.X], s[sim.Y], s[sim.PSI])
         self.renderer.render(points, cum, pose, self._textures, rng, out=self.image)
@@ -130,13 +150,14 @@ class VisionCamera:
         wt, cam = self.settings.water, self.camera
         det = detect_pipe(self.image, cam.half_width, cam.depth, wt.pipe_diameter, previous=self.detection)
         self.detection = det
-        last = self._last
         if det.found:
             e_dist, e_angl = tracking_errors(det.x1, det.y1, det.x2, det.y_near)
-            last[:] = (det.x1, det.y1, det.x2, det.y_near, e_dist, e_angl, 1.0 if det.x1 >= 0.0 else -1.0)
+            side = 1.0 if det.x1 >= 0.0 else -1.0
+            self._last = Sighting(det.x1, det.y1, det.x2, det.y_near, e_dist, e_angl, side)
         # a lost pipe keeps the last detection, as the exact camera keeps its last sighting
-        s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR] = last[0], last[1], last[2], last[3]
-        s[sim.E_DIST], s[sim.E_ANGL], s[sim.LAST_SIDE] = last[4], last[5], last[6]
+        last = self._last
+        s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR] = last.x1, last.y1, last.x2, last.y_near
+        s[sim.E_DIST], s[sim.E_ANGL], s[sim.LAST_SIDE] = last.e_dist, last.e_angl, last.side
         s[sim.IN_VIEW] = 1.0 if det.found else 0.0
 
     def observation(self, state: np.ndarray, dtype=np.float64) -> np.ndarray:
@@ -147,7 +168,7 @@ class VisionCamera:
 
     def info(self) -> dict[str, np.ndarray]:
         """The camera's entries of ``info`` (0-d arrays): the detection and the exact camera's view."""
-        out: dict[str, np.ndarray] = {"true_pipe_in_view": np.array(self.truth[0])}
+        out: dict[str, np.ndarray] = {"true_pipe_in_view": np.array(self.truth.in_view)}
         if self.settings.camera == "vision":
             out["detected"] = np.array(self.detection.found, dtype=bool)
             out["detection_confidence"] = np.array(float(self.detection.confidence))
@@ -161,14 +182,16 @@ class VisionCamera:
         k = max(1, height // h)
         grey = np.repeat(np.repeat(self.image, k, axis=0), k, axis=1)
         rgb = np.stack([grey] * 3, axis=-1)
-        cam = self.camera
+        # the footprint as a single pixel: a point's coordinates in it are its shares of the
+        # footprint's width and depth, which the panel's w·k × h·k pixels scale
+        whole = pixel_grid(float(self.camera.half_width), float(self.camera.depth), 1, 1)
 
         def draw(x_a, y_a, x_b, y_b, colour):
-            for t in np.linspace(0.0, 1.0, 4 * k * max(h, w)):
-                x, y = x_a + t * (x_b - x_a), y_a + t * (y_b - y_a)
-                c = int((x + cam.half_width) / (2.0 * cam.half_width) * w * k)
-                r = int((cam.depth - y) / cam.depth * h * k)
-                rgb[min(max(r, 0), h * k - 1), min(max(c, 0), w * k - 1)] = colour
+            t = np.linspace(0.0, 1.0, 4 * k * max(h, w))
+            x, y = x_a + t * (x_b - x_a), y_a + t * (y_b - y_a)
+            c = (column_at(x, whole) * w * k).astype(np.int64)  # the panel pixels the points lie in
+            r = (row_at(y, whole) * h * k).astype(np.int64)
+            rgb[np.clip(r, 0, h * k - 1), np.clip(c, 0, w * k - 1)] = colour
 
         seen, x1, y1, x2, y_near = self.truth
         if seen:

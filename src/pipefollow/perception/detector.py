@@ -6,7 +6,7 @@ pipe's two edges paired into a centre line (two parallel groups of segments abou
 apart), each edge refined by a least-squares fit to its edge pixels, then both ends followed
 along the two edges beyond the straight leg, through bends and curves. The result is the paper's
 observation ``(x1, y1, x2)`` in camera metres by the pixel conventions of
-:mod:`pipefollow.perception.image` (also ``y_near``), plus a confidence.
+:mod:`pipefollow.perception.pixels` (also ``y_near``), plus a confidence.
 
 It works on any grey ``uint8`` image of the footprint, not only on this package's renders, and on
 other sizes and footprints when told the footprint. OpenCV is the optional extra ``vision``
@@ -21,16 +21,41 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from pipefollow.perception.follow import extend_ends
+from pipefollow.perception.follow import add_edge_pixel, extend_ends, fit_edge
+from pipefollow.perception.pixels import column_x, pixel_grid, pixel_pitch, row_y
 from pipefollow.sim.camera import clip_segment
 
 MIN_SIDE = 16  # smallest image side (pixels) the detector accepts
-EDGE_FACTOR = 3.2  # Canny's high threshold in mean gradients of the image ...
-MIN_EDGE = 24.0  # ... and at least this (Canny's 3×3 Sobel units)
-MIN_EDGE_SHARE = 0.1  # the weaker edge's segment length, at least this share of the stronger's
-MIN_SUPPORT = 0.25  # the two edges' segment length, at least this share of the footprint's longer side
-EXTEND = 0.4  # m: how far edge pixels may lengthen the Hough segments' extent (and the walk starts back)
+
+# The thresholds, each with its unit and what it guards against; docs/decisions.md ("edge
+# thresholds", "Hough", "pairing", "refinement") has the measurements behind them.
+# -- the edge image and the Hough segments (detect_pipe)
+BLANK_SD = 2.0  # grey levels: below this s.d. the image is blank or saturated (no edges: skip the work)
+SMOOTH_KERNEL = 5  # pixels: the Gaussian pre-blur's kernel side ...
+SMOOTH_SIGMA = 1.0  # ... and σ (pixels): single-pixel noise and snow specks would give edges of their own
+EDGE_FACTOR = 3.2  # Canny's high threshold in mean gradients (texture and noise): the pipe's stand 4–9× above
+MIN_EDGE = 24.0  # ... and at least this (Canny's 3×3 Sobel units): a flat image's noise is no edge
 SOBEL_GAIN = 8.0  # a 3×3 Sobel gives 8× the central-difference gradient
+CANNY_LOW = 0.5  # Canny's low threshold, a share of the high one: weak pixels continue a strong edge only
+HOUGH_RHO_PX = 1.0  # pixels: the Hough accumulator's offset step ...
+HOUGH_THETA = math.pi / 180.0  # ... and angle step (rad), 1°: at 2° a staircase edge often gave no segment
+HOUGH_MIN_VOTES = 8  # edge pixels a Hough line needs at least (tiny images), ...
+HOUGH_SIDE_SHARE = 8  # ... and 1/this of the shorter side in votes and length: texture makes short segments
+HOUGH_MAX_GAP = 6  # pixels a segment bridges: at 3 an edge cut by the border broke into unpairable pieces
+# -- the strongest straight leg among the segments (leg)
+ANGLE_BINS = 36  # bins of the direction histogram over 180° (5° each): finer bins split one edge's segments
+NEIGHBOUR_WEIGHT = 0.5  # the histogram's circular smoothing: a direction on a bin's border counts in both
+MAX_MISALIGNMENT = math.radians(12.0)  # rad from the peak: the pipe's segments; wider takes in a bend's leg
+EDGE_LINK = 0.3  # diameters: segments closer than this across are one edge (a staircase edge's pieces)
+MIN_PAIR_SEPARATION = 0.45  # diameters: the two edges at least this far apart and ... (texture lines are
+MAX_PAIR_SEPARATION = 1.4  # ... at most this far: a pipe's edges are parallel, a diameter apart; ... not)
+MIN_EDGE_SHARE = 0.1  # weaker edge's length / stronger's, ≥ this: one line is no pipe; one cut at a turn is
+MIN_SUPPORT = 0.25  # the two edges' length, ≥ this share of the footprint's longer side (not a texture patch)
+FIT_BANDS_PX = (2.5, 1.5)  # pixels: the refit's bands, around the Hough line (good to 1°), then the first fit
+MIN_FIT_PIXELS = 6  # edge pixels an edge's refit needs; with fewer the Hough line stays (noise pixels)
+MIN_FIT_SPREAD = 0.05  # share of the extent the pixels must spread along (s.d.) to tilt the line (a blob)
+EXTEND = 0.4  # m: how far edge pixels may lengthen the Hough segments' extent (and the walk starts back)
+SNAP_PX = 4.0  # pixels: an end this near the border goes onto it (Canny loses the last pixels at the border)
 _CV2 = None
 
 
@@ -100,7 +125,8 @@ def detect_pipe(
             column 0 the port edge x = −half_width.
         half_width: the footprint's lateral half-width (m).
         depth: the footprint's forward extent (m).
-        pipe_diameter: the pipe's diameter (m); edge pairs from 0.45 to 1.4 of it are accepted.
+        pipe_diameter: the pipe's diameter (m); edge pairs from :data:`MIN_PAIR_SEPARATION` to
+            :data:`MAX_PAIR_SEPARATION` of it apart are accepted.
         min_confidence: detections below this confidence count as not found.
         previous: the previous frame's detection, when the images come in a sequence: a pipe found
             in both has its ends ordered the previous one's way (:func:`same_way`).
@@ -111,24 +137,26 @@ def detect_pipe(
     img = check_image(image)
     cv2 = require_cv2()
     h, w = img.shape
-    if float(cv2.meanStdDev(img)[1][0, 0]) < 2.0:  # blank or saturated: no edges to find
+    if float(cv2.meanStdDev(img)[1][0, 0]) < BLANK_SD:  # blank or saturated: no edges to find
         return NOT_FOUND
-    smooth = cv2.GaussianBlur(img, (5, 5), 1.0)
+    smooth = cv2.GaussianBlur(img, (SMOOTH_KERNEL, SMOOTH_KERNEL), SMOOTH_SIGMA)
     # thresholds from the image's own gradients: their mean is the texture's and the noise's (the
     # pipe's edges are a few percent of the pixels); an edge must stand out of it
     high = max(EDGE_FACTOR * SOBEL_GAIN * gradient_level(smooth), MIN_EDGE)
-    edges = cv2.Canny(smooth, 0.5 * high, high, L2gradient=True)
+    edges = cv2.Canny(smooth, CANNY_LOW * high, high, L2gradient=True)
     short = min(h, w)
     segs = cv2.HoughLinesP(
-        edges, 1.0, math.pi / 180.0, threshold=max(8, short // 8), minLineLength=short / 8.0, maxLineGap=6
+        edges,
+        HOUGH_RHO_PX,
+        HOUGH_THETA,
+        threshold=max(HOUGH_MIN_VOTES, short // HOUGH_SIDE_SHARE),
+        minLineLength=short / HOUGH_SIDE_SHARE,
+        maxLineGap=HOUGH_MAX_GAP,
     )
     if segs is None:
         return NOT_FOUND
     segs = np.asarray(segs, dtype=np.float64).reshape(-1, 4)  # (N, 1, 4) in OpenCV 4, (N, 4) in 5
-    found, x1, y1, x2, y_near, confidence = centre_line(
-        segs, edges, half_width, depth, pipe_diameter, min_confidence
-    )
-    det = Detection(bool(found), x1, y1, x2, y_near, confidence)
+    det = centre_line(segs, edges, half_width, depth, pipe_diameter, min_confidence)
     if previous is None or not previous.found or not det.found:
         return det
     return same_way(det, previous)
@@ -165,15 +193,15 @@ def gradient_level(img):
 def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     """From Hough segments (pixels ``x0, y0, x1, y1``) and the edge image to the pipe's centre line.
 
-    Returns ``(found, x1, y1, x2, y_near, confidence)`` in camera metres (see :func:`detect_pipe`).
-    The strongest straight leg is found first (:func:`leg`); a pipe that bends or curves in view
-    goes on beyond it, so both ends are then followed along the pipe's two edges to the ends of the
-    visible piece (:func:`~pipefollow.perception.follow.extend_ends`), as the exact camera's
-    observation spans the visible piece from its near to its far end.
+    Returns a :class:`Detection` in camera metres (see :func:`detect_pipe`). The strongest straight
+    leg is found first (:func:`leg`); a pipe that bends or curves in view goes on beyond it, so
+    both ends are then followed along the pipe's two edges to the ends of the visible piece
+    (:func:`~pipefollow.perception.follow.extend_ends`), as the exact camera's observation spans
+    the visible piece from its near to its far end.
     """
     found, ends, confidence, sep = leg(segs, edges, half_width, depth, diameter, min_confidence)
     if not found:
-        return False, 0.0, 0.0, 0.0, 0.0, confidence
+        return Detection(False, 0.0, 0.0, 0.0, 0.0, confidence)
     extend_ends(ends, edges, 0.5 * sep, half_width, depth, EXTEND)
     xa, ya, xb, yb = ends[0, 0], ends[0, 1], ends[1, 0], ends[1, 1]
     # the near end is the one nearer the AUV (the footprint's origin): the pipe comes from behind
@@ -184,157 +212,283 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     y1 = min(max(yb, 0.0), depth)
     x2 = min(max(xa, -half_width), half_width)
     y_near = min(max(ya, 0.0), depth)
-    return True, x1, y1, x2, y_near, confidence
+    return Detection(True, x1, y1, x2, y_near, confidence)
+
+
+class Leg(NamedTuple):
+    """What :func:`leg` found: the strongest straight piece of pipe."""
+
+    found: bool
+    ends: np.ndarray  # 2 × 2: the centre line's two ends inside the footprint (rows x, y; unordered)
+    confidence: float  # in [0, 1] (:func:`pair_confidence`)
+    separation: float  # distance between the two fitted edges (m)
+
+
+class Segments(NamedTuple):
+    """Hough segments in camera metres (arrays, one entry a segment)."""
+
+    ax: np.ndarray  # lateral position of one end (m) ...
+    ay: np.ndarray  # ... and its forward position
+    bx: np.ndarray  # the other end
+    by: np.ndarray
+    length: np.ndarray  # m
+    theta: np.ndarray  # direction (rad) in [0, π): a line's direction modulo π
+
+
+class LegFrame(NamedTuple):
+    """Coordinates along and across a leg: ``u = p·(dx, dy) − t_lo`` along, ``s = p·(nx, ny)`` across."""
+
+    dx: float  # unit vector along the leg
+    dy: float
+    nx: float  # unit vector across it (the along vector turned 90° anticlockwise)
+    ny: float
+    t_lo: float  # the leg's start along (dx, dy) from the origin (m)
 
 
 @njit(cache=True)
 def leg(segs, edges, half_width, depth, diameter, min_confidence):
-    """The strongest straight piece of pipe among the Hough segments.
+    """The strongest straight piece of pipe among the Hough segments, as a :class:`Leg`.
 
-    Returns ``(found, ends, confidence, separation)``: the centre line's two ends inside the
-    footprint (a 2 × 2 array, unordered) and the distance between the two fitted edges (m).
+    The stages: the segments in metres (:func:`segment_geometry`), their dominant direction
+    (:func:`dominant_direction`) and the segments along it (:func:`aligned_segments`), those
+    grouped into edges by their offset across (:func:`edge_groups`), the pair of edges a pipe
+    diameter apart (:func:`edge_pair`), its confidence (:func:`pair_confidence`), both edges
+    refitted to the edge pixels (:func:`refine_edges`), and the centre line's ends
+    (:func:`leg_ends`).
     """
     nothing = np.zeros((2, 2))
     h, w = edges.shape
-    sx, sy = 2.0 * half_width / w, depth / h  # metres per column, per row
+    grid = pixel_grid(half_width, depth, h, w)
+    sg = segment_geometry(segs, grid)
+    idx, dirn = aligned_segments(sg.theta, sg.length, dominant_direction(sg.theta, sg.length))
+    k = idx.size
+    if k < 2:
+        return Leg(False, nothing, 0.0, 0.0)
+    dx, dy = math.cos(dirn), math.sin(dirn)
+    nx, ny = -dy, dx
+    rho = np.empty(k)  # each segment's offset across, at its midpoint
+    wk = np.empty(k)
+    for j in range(k):
+        i = idx[j]
+        rho[j] = 0.5 * (sg.ax[i] + sg.bx[i]) * nx + 0.5 * (sg.ay[i] + sg.by[i]) * ny
+        wk[j] = sg.length[i]
+    group, g_rho, g_len = edge_groups(rho, wk, diameter)
+    pa, pb, score = edge_pair(g_rho, g_len, diameter)
+    if pa < 0:
+        return Leg(False, nothing, 0.0, 0.0)
+    # the pair's extent along the leg: from the first to the last end of its segments
+    t_lo, t_hi = math.inf, -math.inf
+    for j in range(k):
+        if group[j] == pa or group[j] == pb:
+            i = idx[j]
+            ta = sg.ax[i] * dx + sg.ay[i] * dy
+            tb = sg.bx[i] * dx + sg.by[i] * dy
+            t_lo, t_hi = min(t_lo, ta, tb), max(t_hi, ta, tb)
+    extent = t_hi - t_lo
+    confidence = pair_confidence(score, extent, g_rho[pb] - g_rho[pa], diameter)
+    if confidence < min_confidence or score < MIN_SUPPORT * max(depth, 2.0 * half_width):
+        return Leg(False, nothing, confidence, 0.0)
+    frame = LegFrame(dx, dy, nx, ny, t_lo)
+    fit, u_lo, u_hi = refine_edges(edges, grid, frame, extent, g_rho[pa], g_rho[pb])
+    found, ends = leg_ends(fit, frame, u_lo, u_hi, grid)
+    if not found:
+        return Leg(False, nothing, confidence, 0.0)
+    sep = abs(fit[1, 0] - fit[0, 0] + (fit[1, 1] - fit[0, 1]) * 0.5 * extent)
+    return Leg(True, ends, confidence, sep)
+
+
+@njit(cache=True)
+def segment_geometry(segs, grid):
+    """The Hough segments (rows of pixel coordinates ``x0, y0, x1, y1``) as :class:`Segments` in metres.
+
+    A segment's end pixel ``(column, row)`` stands for its pixel's centre.
+    """
     m = segs.shape[0]
-    ax = -half_width + (segs[:, 0] + 0.5) * sx
-    ay = depth - (segs[:, 1] + 0.5) * sy
-    bx = -half_width + (segs[:, 2] + 0.5) * sx
-    by = depth - (segs[:, 3] + 0.5) * sy
+    ax = column_x(segs[:, 0], grid)
+    ay = row_y(segs[:, 1], grid)
+    bx = column_x(segs[:, 2], grid)
+    by = row_y(segs[:, 3], grid)
     length = np.sqrt((bx - ax) ** 2 + (by - ay) ** 2)
     theta = np.empty(m)
     for i in range(m):
         theta[i] = math.atan2(by[i] - ay[i], bx[i] - ax[i]) % math.pi
-    # the dominant direction: length-weighted histogram of 5° bins, circularly smoothed
-    bins = 36
-    hist = np.zeros(bins)
-    for i in range(m):
-        hist[int(theta[i] / math.pi * bins) % bins] += length[i]
+    return Segments(ax, ay, bx, by, length, theta)
+
+
+@njit(cache=True)
+def dominant_direction(theta, length):
+    """The direction (rad, in [0, π)) that most segment length shares: a histogram's peak.
+
+    The histogram of ``theta`` has :data:`ANGLE_BINS` bins weighted by length and is smoothed
+    circularly (a bin plus :data:`NEIGHBOUR_WEIGHT` of each neighbour); the peak bin's centre is
+    returned.
+    """
+    hist = np.zeros(ANGLE_BINS)
+    for i in range(theta.size):
+        hist[int(theta[i] / math.pi * ANGLE_BINS) % ANGLE_BINS] += length[i]
     best_bin, best_val = 0, -1.0
-    for b in range(bins):
-        v = hist[b] + 0.5 * (hist[(b - 1) % bins] + hist[(b + 1) % bins])
+    for b in range(ANGLE_BINS):
+        v = hist[b] + NEIGHBOUR_WEIGHT * (hist[(b - 1) % ANGLE_BINS] + hist[(b + 1) % ANGLE_BINS])
         if v > best_val:
             best_bin, best_val = b, v
-    peak = (best_bin + 0.5) * math.pi / bins
-    keep = np.zeros(m, dtype=np.bool_)
-    s2, c2 = 0.0, 0.0  # doubled angles average a direction modulo π
-    for i in range(m):
+    return (best_bin + 0.5) * math.pi / ANGLE_BINS
+
+
+@njit(cache=True)
+def aligned_segments(theta, length, peak):
+    """The segments within :data:`MAX_MISALIGNMENT` of direction ``peak``, and their mean direction.
+
+    Returns ``(idx, direction)``: the segments' indices and their length-weighted mean direction
+    (rad; doubled angles average a direction modulo π).
+    """
+    keep = np.zeros(theta.size, dtype=np.bool_)
+    s2, c2 = 0.0, 0.0
+    for i in range(theta.size):
         diff = abs((theta[i] - peak + 0.5 * math.pi) % math.pi - 0.5 * math.pi)
-        if diff < math.radians(12.0):
+        if diff < MAX_MISALIGNMENT:
             keep[i] = True
             s2 += length[i] * math.sin(2.0 * theta[i])
             c2 += length[i] * math.cos(2.0 * theta[i])
-    idx = np.nonzero(keep)[0]
-    k = idx.size
-    if k < 2:
-        return False, nothing, 0.0, 0.0
-    dirn = 0.5 * math.atan2(s2, c2)
-    dx, dy = math.cos(dirn), math.sin(dirn)
-    nx, ny = -dy, dx
-    rho = np.empty(k)
-    wk = np.empty(k)
-    for j in range(k):
-        i = idx[j]
-        rho[j] = 0.5 * (ax[i] + bx[i]) * nx + 0.5 * (ay[i] + by[i]) * ny
-        wk[j] = length[i]
-    # edges: groups of segments whose offsets across lie within 0.3 diameters (single linkage)
+    return np.nonzero(keep)[0], 0.5 * math.atan2(s2, c2)
+
+
+@njit(cache=True)
+def edge_groups(rho, weight, diameter):
+    """Segments grouped into edges by their offsets across ``rho`` (m): single linkage.
+
+    Consecutive offsets (sorted) closer than :data:`EDGE_LINK` diameters are one edge.
+
+    Returns:
+        ``(group, g_rho, g_len)``: each segment's group, and per group its weighted mean offset
+        and its total ``weight`` (segment length).
+    """
+    k = rho.size
     order = np.argsort(rho)
     group = np.empty(k, dtype=np.int64)
     g = 0
     group[order[0]] = 0
     for j in range(1, k):
-        if rho[order[j]] - rho[order[j - 1]] >= 0.3 * diameter:
+        if rho[order[j]] - rho[order[j - 1]] >= EDGE_LINK * diameter:
             g += 1
         group[order[j]] = g
     n_groups = g + 1
     g_rho = np.zeros(n_groups)
     g_len = np.zeros(n_groups)
     for j in range(k):
-        g_rho[group[j]] += wk[j] * rho[j]
-        g_len[group[j]] += wk[j]
+        g_rho[group[j]] += weight[j] * rho[j]
+        g_len[group[j]] += weight[j]
     g_rho /= g_len
-    # the pair 0.45–1.4 diameters apart whose weaker edge has the most segment length
-    # (an edge cut short by the border still counts: the pair's score is its total length, and
-    # the weaker edge must reach MIN_EDGE_SHARE of the stronger)
+    return group, g_rho, g_len
+
+
+@njit(cache=True)
+def edge_pair(g_rho, g_len, diameter):
+    """The two edges that make the pipe: ``(pa, pb, score)``, ``pa = −1`` if no pair qualifies.
+
+    A pair qualifies if its edges lie :data:`MIN_PAIR_SEPARATION` to :data:`MAX_PAIR_SEPARATION`
+    diameters apart and its weaker edge has at least :data:`MIN_EDGE_SHARE` of the stronger's
+    segment length; of those, the pair with the most segment length wins (``score``, m). An edge
+    cut short by the border still counts.
+    """
     pa, pb, score = -1, -1, 0.0
-    for i in range(n_groups):
-        for j in range(i + 1, n_groups):
+    for i in range(g_rho.size):
+        for j in range(i + 1, g_rho.size):
             sep = g_rho[j] - g_rho[i]
             total = g_len[i] + g_len[j]
             if (
-                0.45 * diameter <= sep <= 1.4 * diameter
+                MIN_PAIR_SEPARATION * diameter <= sep <= MAX_PAIR_SEPARATION * diameter
                 and min(g_len[i], g_len[j]) >= MIN_EDGE_SHARE * max(g_len[i], g_len[j])
                 and total > score
             ):
                 pa, pb, score = i, j, total
-    if pa < 0:
-        return False, nothing, 0.0, 0.0
-    t_lo, t_hi = math.inf, -math.inf
-    for j in range(k):
-        if group[j] == pa or group[j] == pb:
-            i = idx[j]
-            ta = ax[i] * dx + ay[i] * dy
-            tb = bx[i] * dx + by[i] * dy
-            t_lo, t_hi = min(t_lo, ta, tb), max(t_hi, ta, tb)
-    extent = t_hi - t_lo
-    sep = g_rho[pb] - g_rho[pa]
-    confidence = min(1.0, 0.5 * score / extent) * math.exp(-(((sep - diameter) / diameter) ** 2))
-    if confidence < min_confidence or score < MIN_SUPPORT * max(depth, 2.0 * half_width):
-        return False, nothing, confidence, 0.0
-    # refine each edge: least squares of the offset across against the position along, on its
-    # edge pixels near it; twice, the second time in a narrower band around the first fit (the
-    # Hough direction is only good to a degree or two)
-    fit = np.empty((2, 2))  # offset at t_lo and slope, per edge
-    fit[0, 0], fit[1, 0], fit[0, 1], fit[1, 1] = g_rho[pa], g_rho[pb], 0.0, 0.0
+    return pa, pb, score
+
+
+@njit(cache=True)
+def pair_confidence(score, extent, sep, diameter):
+    """A pair's confidence in [0, 1]: its edges' coverage of its extent, times the separation's fit.
+
+    ``score`` is the two edges' segment length and ``extent`` the pair's length along the leg
+    (m): their ratio halved is the mean edge's coverage (at most 1). The separation's relative
+    error enters as ``exp(−err²)``.
+    """
+    return min(1.0, 0.5 * score / extent) * math.exp(-(((sep - diameter) / diameter) ** 2))
+
+
+@njit(cache=True)
+def refine_edges(edges, grid, frame, extent, rho_a, rho_b):
+    """Both edges of a leg fitted by least squares to their edge pixels.
+
+    Each edge is a line ``s = offset + slope·u`` across against along (``frame``: a
+    :class:`LegFrame`), starting at the Hough groups' offsets ``rho_a``, ``rho_b`` and no slope.
+    Two passes, each on the edge pixels in a band of :data:`FIT_BANDS_PX` around the previous
+    fit: the Hough direction is only good to a degree or two, so the second pass looks in a
+    narrower band, and it may lengthen the leg by :data:`EXTEND` beyond the first's extent.
+
+    Returns:
+        ``(fit, u_lo, u_hi)``: per edge (rows) its offset at ``u = 0`` and its slope, and the
+        last pass's range along of the pixels on either edge (at least ``[0, extent]``).
+    """
+    h, w = edges.shape
+    px = pixel_pitch(grid)
+    fit = np.empty((2, 2))  # per edge: offset at u = 0, slope
+    fit[0, 0], fit[1, 0], fit[0, 1], fit[1, 1] = rho_a, rho_b, 0.0, 0.0
     u_lo, u_hi = 0.0, extent
-    for tol in (2.5 * max(sx, sy), 1.5 * max(sx, sy)):
-        sums = np.zeros((2, 5))  # n, Σu, Σs, Σuu, Σus per edge
-        reach = 0.0 if tol > 2.0 * max(sx, sy) else EXTEND  # the second pass may lengthen the line
+    for band in range(len(FIT_BANDS_PX)):
+        tol = FIT_BANDS_PX[band] * px
+        reach = 0.0 if band == 0 else EXTEND  # the second pass may lengthen the line
+        sums = np.zeros((2, 5))  # per edge: n, Σu, Σs, Σu², Σus
         u_lo, u_hi = 0.0, extent
         for r in range(h):
-            py = depth - (r + 0.5) * sy
+            y = row_y(r, grid)
             for c in range(w):
                 if edges[r, c] == 0:
                     continue
-                px = -half_width + (c + 0.5) * sx
-                u = px * dx + py * dy - t_lo
+                x = column_x(c, grid)
+                u = x * frame.dx + y * frame.dy - frame.t_lo
                 if u < -reach or u > extent + reach:
                     continue
-                ps = px * nx + py * ny
+                ps = x * frame.nx + y * frame.ny
                 for e in range(2):
                     if abs(ps - fit[e, 0] - fit[e, 1] * u) < tol:
                         u_lo, u_hi = min(u_lo, u), max(u_hi, u)
-                        sums[e, 0] += 1.0
-                        sums[e, 1] += u
-                        sums[e, 2] += ps
-                        sums[e, 3] += u * u
-                        sums[e, 4] += u * ps
+                        add_edge_pixel(sums, e, u, ps)
         for e in range(2):
-            n_e, su, ss, suu, sus = sums[e, 0], sums[e, 1], sums[e, 2], sums[e, 3], sums[e, 4]
-            var = n_e * suu - su * su
-            if n_e >= 6 and math.sqrt(max(var, 0.0)) / n_e > 0.05 * extent:
-                fit[e, 1] = (n_e * sus - su * ss) / var
-                fit[e, 0] = (ss - fit[e, 1] * su) / n_e
+            if sums[e, 0] >= MIN_FIT_PIXELS:
+                offset, slope, sloped = fit_edge(sums, e, MIN_FIT_SPREAD * extent)
+                if sloped:  # too short a cluster keeps the previous fit
+                    fit[e, 0], fit[e, 1] = offset, slope
+    return fit, u_lo, u_hi
+
+
+@njit(cache=True)
+def leg_ends(fit, frame, u_lo, u_hi, grid):
+    """The centre line between two fitted edges, from ``u_lo`` to ``u_hi`` along, inside the footprint.
+
+    Ends within :data:`SNAP_PX` pixels of the border are moved onto it (:func:`snap_to_border`);
+    the line is then clipped to the footprint (the wider edges reach beyond the centre line's exit).
+
+    Returns:
+        ``(inside, ends)``: whether any of it lies inside, and its two ends (rows x, y).
+    """
     icpt = 0.5 * (fit[0, 0] + fit[1, 0])
     slope = 0.5 * (fit[0, 1] + fit[1, 1])
     ends = np.empty((2, 2))
     for e in range(2):
         u = u_lo if e == 0 else u_hi
         s = icpt + slope * u
-        t = t_lo + u
-        ends[e, 0], ends[e, 1] = t * dx + s * nx, t * dy + s * ny
-    snap_to_border(ends, half_width, depth, 4.0 * max(sx, sy))
-    # the centre line's part inside the footprint (the wider edges reach beyond its exit)
+        t = frame.t_lo + u
+        ends[e, 0], ends[e, 1] = t * frame.dx + s * frame.nx, t * frame.dy + s * frame.ny
+    half_width, depth = grid.half_width, grid.depth
+    snap_to_border(ends, half_width, depth, SNAP_PX * pixel_pitch(grid))
     ax0, ay0, bx0, by0 = ends[0, 0], ends[0, 1], ends[1, 0], ends[1, 1]
     t0, t1 = clip_segment(ax0, ay0, bx0, by0, -half_width, half_width, 0.0, depth)
-    if t0 > t1:
-        return False, nothing, confidence, 0.0
     out = np.empty((2, 2))
+    if t0 > t1:
+        return False, out
     out[0, 0], out[0, 1] = ax0 + t0 * (bx0 - ax0), ay0 + t0 * (by0 - ay0)
     out[1, 0], out[1, 1] = ax0 + t1 * (bx0 - ax0), ay0 + t1 * (by0 - ay0)
-    sep = abs(fit[1, 0] - fit[0, 0] + (fit[1, 1] - fit[0, 1]) * 0.5 * extent)
-    return True, out, confidence, sep
+    return True, out
 
 
 @njit(cache=True)

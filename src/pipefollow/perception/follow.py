@@ -7,14 +7,20 @@ in short steps; each step tries turns of up to :data:`MAX_TURN` and a pixel of s
 takes the one whose two edge lines (half the measured edge separation either side of the centre)
 fall on the most edge pixels. It stops where no step keeps both edges (the pipe ends, is buried
 or leaves the footprint), which is the visible piece's end.
+
+:func:`add_edge_pixel` and :func:`fit_edge` are the least-squares fit of an edge (offset across
+against position along) that both the detector's leg and the walk's end refit use.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+
+from pipefollow.perception.pixels import column_at, column_x, pixel_grid, pixel_pitch, row_at, row_y
 
 STEP_PX = 4.0  # step length in pixels
 SAMPLES = 8  # points on each edge line over a step's look-ahead
@@ -25,17 +31,69 @@ MIN_HEADING = math.cos(math.radians(120.0))  # the walk turns at most 120° from
 MIN_HITS = 0.75  # share of the step's edge points that must lie on edge pixels
 SHIFTS = 3  # sideways shifts tried per turn: 0, ±1 pixel
 TAIL = 3  # steps: the end's line is refitted to the edge pixels of the walk's last TAIL steps
+MAX_RETRACT = 0.4  # share of a leg's length a walk may start back inside it (the rest is trusted)
+MIN_VALID = 4  # edge points inside the footprint a step needs to be scored (fewer: it looks out of view)
+REFIT_BAND_PX = 1.5  # pixels: edge pixels this close to an edge line count for the end's refit
+MIN_REFIT_STRETCH_PX = 2.0  # pixels: a shorter last stretch gives no direction, the end stays
+MIN_REFIT_PIXELS = 4  # edge pixels per edge the end's refit needs; with fewer the end stays
+MIN_REFIT_SPREAD = 0.2  # share of the stretch the pixels' positions along must spread (s.d.) for a slope
+
+
+class Walk(NamedTuple):
+    """Where :func:`follow_pipe` stopped."""
+
+    x: float  # the last point on the pipe inside the footprint (camera metres), lateral ...
+    y: float  # ... and forward; on the border if the walk exited
+    steps: int  # steps taken
+    tail_x: float  # the walk's point TAIL steps before the end (or its start), lateral ...
+    tail_y: float  # ... and forward
+    exited: bool  # whether the walk left the footprint
 
 
 @njit(cache=True)
-def on_edge(edges, x, y, half_width, depth, sx, sy):
+def add_edge_pixel(sums, e, u, s):
+    """Add an edge pixel at position ``u`` along and offset ``s`` across to edge ``e``'s sums.
+
+    ``sums[e]`` holds n, Σu, Σs, Σu², Σus: the sufficient statistics of :func:`fit_edge`.
+    """
+    sums[e, 0] += 1.0
+    sums[e, 1] += u
+    sums[e, 2] += s
+    sums[e, 3] += u * u
+    sums[e, 4] += u * s
+
+
+@njit(cache=True)
+def fit_edge(sums, e, min_spread):
+    """Least-squares line ``s = intercept + slope·u`` through edge ``e``'s pixels (:func:`add_edge_pixel`).
+
+    The detector's leg and the walk's ends both fit an edge as its offset across against the
+    position along. The slope is fitted only if the pixels' positions along spread (s.d.) more
+    than ``min_spread``: a short cluster gives no direction, so the slope is then 0 and the
+    intercept the mean offset. ``sums[e, 0]`` (the pixel count) must be positive.
+
+    Returns:
+        ``(intercept, slope, sloped)``, ``sloped`` whether the slope was fitted.
+    """
+    n, su, ss, suu, sus = sums[e, 0], sums[e, 1], sums[e, 2], sums[e, 3], sums[e, 4]
+    var = n * suu - su * su  # n² times the positions' variance
+    slope = 0.0
+    sloped = math.sqrt(max(var, 0.0)) / n > min_spread
+    if sloped:
+        slope = (n * sus - su * ss) / var
+    return (ss - slope * su) / n, slope, sloped
+
+
+@njit(cache=True)
+def on_edge(edges, x, y, grid):
     """1 if the point (camera metres) lies within a pixel of a set pixel of ``edges``, 0 if not, −1 outside.
 
-    The pixel of tolerance lets an edge line a pixel off (a staircase edge, a step's rounding) hit.
+    ``grid`` is the image's :class:`~pipefollow.perception.pixels.PixelGrid`. The pixel of
+    tolerance lets an edge line a pixel off (a staircase edge, a step's rounding) hit.
     """
     h, w = edges.shape
-    c = int(math.floor((x + half_width) / sx))
-    r = int(math.floor((depth - y) / sy))
+    c = int(math.floor(column_at(x, grid)))
+    r = int(math.floor(row_at(y, grid)))
     if c < 0 or c >= w or r < 0 or r >= h:
         return -1
     for rr in range(max(r - 1, 0), min(r + 2, h)):
@@ -61,13 +119,13 @@ def follow_pipe(edges, x, y, ux, uy, half_sep, half_width, depth, max_steps):
         max_steps: at most this many steps.
 
     Returns:
-        ``(x, y, steps, tail_x, tail_y, exited)``: the last point on the pipe inside the footprint
-        (on its border if the walk ``exited``), the steps taken, and the walk's point :data:`TAIL`
-        steps before the end (or its start).
+        A :class:`Walk`: the last point on the pipe inside the footprint (on its border if the
+        walk ``exited``), the steps taken, and the walk's point :data:`TAIL` steps before the end
+        (or its start).
     """
     h, w = edges.shape
-    sx, sy = 2.0 * half_width / w, depth / h
-    px = max(sx, sy)
+    grid = pixel_grid(half_width, depth, h, w)
+    px = pixel_pitch(grid)
     step = STEP_PX * px
     n = 0
     tail_x, tail_y = np.empty(TAIL + 1), np.empty(TAIL + 1)  # the last points, a ring
@@ -91,12 +149,11 @@ def follow_pipe(edges, x, y, ux, uy, half_sep, half_width, depth, max_steps):
                     a = LOOK_AHEAD * step * s / SAMPLES
                     qx, qy = x + shift * mx + a * vx, y + shift * my + a * vy
                     for side in (-1.0, 1.0):
-                        e = on_edge(edges, qx + side * half_sep * mx, qy + side * half_sep * my,
-                                    half_width, depth, sx, sy)  # fmt: skip
+                        e = on_edge(edges, qx + side * half_sep * mx, qy + side * half_sep * my, grid)
                         if e >= 0:
                             valid += 1
                             hits += e
-                if valid >= 4:
+                if valid >= MIN_VALID:
                     score = hits / valid
                     if score > best:
                         best = score
@@ -120,11 +177,11 @@ def follow_pipe(edges, x, y, ux, uy, half_sep, half_width, depth, max_steps):
                 f = min(f, (depth - y) / (by - y))
             f = max(f, 0.0)
             k = (n - min(n, TAIL)) % (TAIL + 1)
-            return x + f * (bx - x), y + f * (by - y), n, tail_x[k], tail_y[k], True
+            return Walk(x + f * (bx - x), y + f * (by - y), n, tail_x[k], tail_y[k], True)
         x, y, ux, uy = bx, by, bux, buy
         tail_x[n % (TAIL + 1)], tail_y[n % (TAIL + 1)] = x, y
     k = (n - min(n, TAIL)) % (TAIL + 1)
-    return x, y, n, tail_x[k], tail_y[k], False
+    return Walk(x, y, n, tail_x[k], tail_y[k], False)
 
 
 @njit(cache=True)
@@ -133,53 +190,49 @@ def refine_end(edges, tail_x, tail_y, x, y, half_sep, half_width, depth, exited)
 
     The walk's steps turn by whole multiples of 7.5° and shift by whole pixels, so its last step
     can be a few centimetres off the pipe's centre line, which a border crossing at a shallow
-    angle magnifies. Each edge is fitted (offset across against position along) to its edge
-    pixels within 1.5 pixels of the stretch from ``(tail_x, tail_y)`` to the end; the end is then
-    the refitted centre line's point at the same distance along, or, if the walk ``exited``, where
-    that line leaves the footprint. With too few edge pixels the end stays.
+    angle magnifies. Each edge is fitted (offset across against position along, :func:`fit_edge`)
+    to its edge pixels within :data:`REFIT_BAND_PX` pixels of the stretch from ``(tail_x, tail_y)``
+    to the end; the end is then the refitted centre line's point at the same distance along, or,
+    if the walk ``exited``, where that line leaves the footprint. With too few edge pixels
+    (:data:`MIN_REFIT_PIXELS`) the end stays.
     """
     h, w = edges.shape
-    sx, sy = 2.0 * half_width / w, depth / h
-    px = max(sx, sy)
+    grid = pixel_grid(half_width, depth, h, w)
+    px = pixel_pitch(grid)
     ux, uy = x - tail_x, y - tail_y
     length = math.sqrt(ux * ux + uy * uy)
-    if length < 2.0 * px:
+    if length < MIN_REFIT_STRETCH_PX * px:
         return x, y
     ux, uy = ux / length, uy / length
     nx, ny = -uy, ux
-    tol = 1.5 * px
+    tol = REFIT_BAND_PX * px
+    # the box around the stretch that holds every pixel within tol of an edge line
     reach = half_sep + 2.0 * tol
-    sums = np.zeros((2, 5))  # n, Σa, Σs, Σaa, Σas per edge
-    c_lo = max(int((min(tail_x, x) - reach + half_width) / sx), 0)
-    c_hi = min(int((max(tail_x, x) + reach + half_width) / sx) + 1, w)
-    r_lo = max(int((depth - max(tail_y, y) - reach) / sy), 0)
-    r_hi = min(int((depth - min(tail_y, y) + reach) / sy) + 1, h)
+    sums = np.zeros((2, 5))  # per edge: n, Σa, Σs, Σa², Σas (a along from the tail, s across)
+    c_lo = max(int(column_at(min(tail_x, x) - reach, grid)), 0)
+    c_hi = min(int(column_at(max(tail_x, x) + reach, grid)) + 1, w)
+    r_lo = max(int(row_at(max(tail_y, y) + reach, grid)), 0)
+    r_hi = min(int(row_at(min(tail_y, y) - reach, grid)) + 1, h)
     for r in range(r_lo, r_hi):
-        qy = depth - (r + 0.5) * sy - tail_y
+        qy = row_y(r, grid) - tail_y
         for c in range(c_lo, c_hi):
             if edges[r, c] == 0:
                 continue
-            qx = -half_width + (c + 0.5) * sx - tail_x
+            qx = column_x(c, grid) - tail_x
             a = qx * ux + qy * uy
             if a < 0.0 or a > length + px:
                 continue
             s = qx * nx + qy * ny
             for e in range(2):
                 if abs(s - (2 * e - 1) * half_sep) < tol:
-                    sums[e, 0] += 1.0
-                    sums[e, 1] += a
-                    sums[e, 2] += s
-                    sums[e, 3] += a * a
-                    sums[e, 4] += a * s
-    icpt, slope = 0.0, 0.0
+                    add_edge_pixel(sums, e, a, s)
+    icpt, slope = 0.0, 0.0  # of the centre line: the mean of the two edges' fits
     for e in range(2):
-        n_e, sa, ss, saa, sas = sums[e, 0], sums[e, 1], sums[e, 2], sums[e, 3], sums[e, 4]
-        if n_e < 4:
+        if sums[e, 0] < MIN_REFIT_PIXELS:
             return x, y
-        var = n_e * saa - sa * sa
-        b = (n_e * sas - sa * ss) / var if math.sqrt(max(var, 0.0)) / n_e > 0.2 * length else 0.0
-        icpt += 0.5 * ((ss - b * sa) / n_e)
-        slope += 0.5 * b
+        edge_icpt, edge_slope, _ = fit_edge(sums, e, MIN_REFIT_SPREAD * length)
+        icpt += 0.5 * edge_icpt
+        slope += 0.5 * edge_slope
     # the refitted centre line: tail + a·u + (icpt + slope·a)·n
     dx, dy = ux + slope * nx, uy + slope * ny
     norm = math.sqrt(dx * dx + dy * dy)
@@ -207,12 +260,14 @@ def refine_end(edges, tail_x, tail_y, x, y, half_sep, half_width, depth, exited)
 def extend_ends(ends, edges, half_sep, half_width, depth, retract):
     """Follow the pipe beyond both ends of a straight leg (rows of ``ends``, in place).
 
-    Each walk starts ``retract`` (m) back inside the leg, at most 0.4 of its length: the leg's
-    fitted line may have been lengthened that far (the detector's ``EXTEND``) past a bend.
+    Each walk starts ``retract`` (m) back inside the leg, at most :data:`MAX_RETRACT` of its
+    length: the leg's fitted line may have been lengthened that far (the detector's ``EXTEND``)
+    past a bend.
 
     Returns the number of steps taken beyond the leg's ends.
     """
     h, w = edges.shape
+    px = pixel_pitch(pixel_grid(half_width, depth, h, w))
     max_steps = int((h + w) / STEP_PX) + 1
     total = 0
     leg = ends.copy()
@@ -223,16 +278,17 @@ def extend_ends(ends, edges, half_sep, half_width, depth, retract):
             continue
         ux, uy = dx / norm, dy / norm
         # start back inside the leg: its fitted line may overshoot a bend along the other leg's edge
-        back = min(retract, 0.4 * norm)
-        x, y, n, tx, ty, exited = follow_pipe(edges, leg[e, 0] - back * ux, leg[e, 1] - back * uy, ux, uy,
-                                              half_sep, half_width, depth, max_steps)  # fmt: skip
-        if n * STEP_PX * max(2.0 * half_width / w, depth / h) < back:
+        back = min(retract, MAX_RETRACT * norm)
+        walk = follow_pipe(edges, leg[e, 0] - back * ux, leg[e, 1] - back * uy, ux, uy,
+                           half_sep, half_width, depth, max_steps)  # fmt: skip
+        if walk.steps * STEP_PX * px < back:
             # it did not get back to the leg's end (patchy edges, or a start off a curved pipe):
             # from the leg's end itself, and where no step is taken there the fitted end stays
-            x, y, n, tx, ty, exited = follow_pipe(edges, leg[e, 0], leg[e, 1], ux, uy, half_sep, half_width,
-                                                  depth, max_steps)  # fmt: skip
-            if n == 0:
+            walk = follow_pipe(edges, leg[e, 0], leg[e, 1], ux, uy, half_sep, half_width, depth, max_steps)
+            if walk.steps == 0:
                 continue
-        ends[e, 0], ends[e, 1] = refine_end(edges, tx, ty, x, y, half_sep, half_width, depth, exited)
-        total += n
+        ends[e, 0], ends[e, 1] = refine_end(
+            edges, walk.tail_x, walk.tail_y, walk.x, walk.y, half_sep, half_width, depth, walk.exited
+        )
+        total += walk.steps
     return total

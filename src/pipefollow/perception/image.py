@@ -1,10 +1,11 @@
 """The downward camera's grey image of the footprint (issue 15, item 1).
 
-Pixel conventions, which tests and users rely on: the image covers the footprint
-``x ∈ [−hw, hw]`` (columns, column 0 at x = −hw, port) and ``y ∈ [0, depth]`` (rows, row 0 at the
-far edge y = depth, the last row at y = 0). Pixel ``(r, c)`` has its centre at
-``x = −hw + (c + ½)·2hw/W``, ``y = depth − (r + ½)·depth/H``; by default hw = 1 m, depth = 3 m,
-W × H = 64 × 96 (square pixels of 3.125 cm), grey ``uint8``.
+Pixel conventions, which tests and users rely on (written once, in
+:mod:`pipefollow.perception.pixels`): the image covers the footprint ``x ∈ [−hw, hw]`` (columns,
+column 0 at x = −hw, port) and ``y ∈ [0, depth]`` (rows, row 0 at the far edge y = depth, the
+last row at y = 0). Pixel ``(r, c)`` has its centre at ``x = −hw + (c + ½)·2hw/W``,
+``y = depth − (r + ½)·depth/H``; by default hw = 1 m, depth = 3 m, W × H = 64 × 96 (square pixels
+of 3.125 cm), grey ``uint8``.
 
 Contents, in the order they are made:
 
@@ -32,6 +33,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from pipefollow.perception.pixels import column_at, column_x, pixel_grid, row_at, row_y
 from pipefollow.perception.water import CLEAR, Water
 from pipefollow.sim.camera import PAPER_CAMERA, CameraParams
 
@@ -52,6 +54,35 @@ class Textures(NamedTuple):
 
     seabed: np.ndarray  # albedo, indexed by earth (x, y) / TILE_RES modulo TILE
     growth: np.ndarray  # ranks in [0, 1), indexed by (arc length, position across the pipe)
+
+
+class FrameSettings(NamedTuple):
+    """What every frame of a :class:`Renderer` shares: the footprint, the pipe and the optics."""
+
+    half_width: float  # the footprint's lateral half-width (m)
+    depth: float  # the footprint's forward extent (m)
+    radius: float  # the pipe's radius (m)
+    burial: float  # share of the pipe's width covered by sand, from its starboard edge
+    growth: float  # share of the pipe's surface covered by marine growth
+    blur: float  # σ of the Gaussian blur (pixels): the optics' and the forward scattering's
+    noise: float  # sensor noise s.d. (grey levels)
+
+
+class Buffers(NamedTuple):
+    """A renderer's per-pixel working arrays (H × W, float32), reused frame after frame."""
+
+    img: np.ndarray  # the grey levels being made
+    tmp: np.ndarray  # the blur's first pass
+    dist: np.ndarray  # distance to the pipe's centre line (m); inf far from the pipe
+    across: np.ndarray  # signed offset across the pipe (m), positive to its starboard
+    along: np.ndarray  # arc length along the pipe (m)
+
+
+class Lighting(NamedTuple):
+    """Per pixel (H × W, float32): grey level = ``gain``·albedo + ``veil`` (:func:`light_and_water`)."""
+
+    gain: np.ndarray  # grey levels per unit of albedo: the light's fall-off and the water's attenuation
+    veil: np.ndarray  # grey levels of backscatter
 
 
 def _smooth_noise(rng: np.random.Generator, beta: float) -> np.ndarray:
@@ -105,33 +136,33 @@ def pipe_segments(points, cum, x, y, psi, hw, depth, margin):
 
 
 @njit(cache=True)
-def _pipe_distance(segs, hw, depth, w, h, radius, dist, across, along):
+def _pipe_distance(segs, grid, radius, buffers):
     """Per pixel: distance to the pipe's centre line, signed offset across it, arc length.
 
     Only pixels within ``radius`` of a segment are visited (a row's column range per segment);
-    ``dist`` must hold ``inf`` on entry.
+    ``buffers.dist`` must hold ``inf`` on entry.
     """
-    px = 2.0 * hw / w
-    py = depth / h
+    dist, across, along = buffers.dist, buffers.across, buffers.along
+    h, w = dist.shape
     for j in range(segs.shape[0]):
         ax, ay, bx, by, s0 = segs[j, 0], segs[j, 1], segs[j, 2], segs[j, 3], segs[j, 4]
         ex, ey = bx - ax, by - ay
         length2 = ex * ex + ey * ey
         length = math.sqrt(length2)
-        r_lo = int((depth - (max(ay, by) + radius)) / py)
-        r_hi = int((depth - (min(ay, by) - radius)) / py) + 1
+        r_lo = int(row_at(max(ay, by) + radius, grid))
+        r_hi = int(row_at(min(ay, by) - radius, grid)) + 1
         for r in range(max(r_lo, 0), min(r_hi, h)):
-            cy = depth - (r + 0.5) * py
+            cy = row_y(r, grid)
             # columns within the capsule: the segment's x at this row ± radius/|sin|, inside its box
             x_lo, x_hi = min(ax, bx) - radius, max(ax, bx) + radius
             if abs(ey) > 1e-12:
                 xc = ax + ex * (cy - ay) / ey
                 half = radius * length / abs(ey)
                 x_lo, x_hi = max(x_lo, xc - half - radius), min(x_hi, xc + half + radius)
-            c_lo = int((x_lo + hw) / px)
-            c_hi = int((x_hi + hw) / px) + 1
+            c_lo = int(column_at(x_lo, grid))
+            c_hi = int(column_at(x_hi, grid)) + 1
             for c in range(max(c_lo, 0), min(c_hi, w)):
-                cx = -hw + (c + 0.5) * px
+                cx = column_x(c, grid)
                 qx, qy = cx - ax, cy - ay
                 t = (qx * ex + qy * ey) / length2
                 t = min(max(t, 0.0), 1.0)
@@ -144,8 +175,8 @@ def _pipe_distance(segs, hw, depth, w, h, radius, dist, across, along):
                     along[r, c] = s0 + t * length
 
 
-def light_and_water(water: Water, camera: CameraParams) -> tuple[np.ndarray, np.ndarray]:
-    """Per pixel, the gain ``a`` on the albedo and the veil ``b``: grey level = a·albedo + b.
+def light_and_water(water: Water, camera: CameraParams) -> Lighting:
+    """Per pixel, the gain on the albedo and the veil: grey level = gain·albedo + veil.
 
     They depend only on the water and the geometry, not on the pose, so a renderer computes them
     once. The gain puts the seabed's mean albedo at the image centre at grey level 100.
@@ -158,27 +189,35 @@ def light_and_water(water: Water, camera: CameraParams) -> tuple[np.ndarray, np.
     t = np.exp(-water.turbidity * path)
     t0 = math.exp(-water.turbidity * 2.0 * water.altitude)
     gain = 100.0 / (SEABED_ALBEDO[0] * t0 + VEIL * (1.0 - t0))
-    return (gain * light * t).astype(np.float32), (gain * light * VEIL * (1.0 - t)).astype(np.float32)
+    veil = gain * light * VEIL * (1.0 - t)
+    return Lighting((gain * light * t).astype(np.float32), veil.astype(np.float32))
 
 
 @njit(cache=True)
-def _compose(
-    img, x, y, psi, hw, depth, radius, burial, growth_share, seabed, growth, dist, across, along, a, b
-):
-    """Albedo per pixel (seabed, pipe, sand, growth) times the gain ``a`` plus the veil ``b``."""
+def _compose(img, pose, settings, textures, buffers, light):
+    """Albedo per pixel (seabed, pipe, sand, growth) times the light's gain plus its veil.
+
+    ``pose`` is (x, y, ψ); ``settings`` a :class:`FrameSettings`, ``textures`` the scene's
+    :class:`Textures`, ``buffers`` the :class:`Buffers` filled by :func:`_pipe_distance`,
+    ``light`` the :class:`Lighting`.
+    """
     h, w = img.shape
-    px, py = 2.0 * hw / w, depth / h
+    x, y, psi = pose
+    radius, burial, growth_share = settings.radius, settings.burial, settings.growth
+    seabed, growth = textures.seabed, textures.growth
+    dist, across, along, a, b = buffers.dist, buffers.across, buffers.along, light.gain, light.veil
+    grid = pixel_grid(settings.half_width, settings.depth, h, w)
     cs, sn = math.cos(psi), math.sin(psi)
     mask = seabed.shape[0] - 1  # the tile's size is a power of two
     sand_from = radius * (1.0 - 2.0 * burial)
     # the seabed, bilinear in the earth-fixed tile: a row's tile coordinates advance by a fixed
     # step per column; the row first without the pipe (a loop without branches), then its pipe pixels
-    dex, dey = -sn * px / TILE_RES, cs * px / TILE_RES
+    dex, dey = -sn * grid.dx / TILE_RES, cs * grid.dx / TILE_RES
     ground = np.empty(w, dtype=np.float32)
     one = np.float32(1.0)
     for r in range(h):
-        cy = depth - (r + 0.5) * py
-        cx = -hw + 0.5 * px
+        cy = row_y(r, grid)
+        cx = column_x(0, grid)  # the row's first column; the next ones a step (dex, dey) on
         ex = (x + cs * cy - sn * cx) / TILE_RES
         ey = (y + sn * cy + cs * cx) / TILE_RES
         for c in range(w):
@@ -258,24 +297,25 @@ def _finish(img, noise, sd, out):
 
 
 @njit(cache=True)
-def _render(out, img, tmp, dist, across, along, a, b, segs, seabed, growth, snow, noise, scalars, x, y, psi):
-    """One frame in one compiled call (a Python call per stage cost more than some stages)."""
-    hw, depth, radius, burial, growth_share, sigma, sd = (
-        scalars[0], scalars[1], scalars[2], scalars[3], scalars[4], scalars[5], scalars[6],
-    )  # fmt: skip
+def _render(out, buffers, light, settings, segs, textures, snow, noise, pose):
+    """One frame in one compiled call (a Python call per stage cost more than some stages).
+
+    ``segs`` are the pipe's segments near the footprint (:func:`pipe_segments`), ``snow`` three
+    uniform numbers per marine-snow speck (row, column, brightness), ``noise`` a frame of standard
+    normals, ``pose`` (x, y, ψ); the records as in :func:`_compose`.
+    """
+    img = buffers.img
     h, w = img.shape
-    dist[:] = np.inf
-    _pipe_distance(segs, hw, depth, w, h, radius, dist, across, along)
-    _compose(
-        img, x, y, psi, hw, depth, radius, burial, growth_share, seabed, growth, dist, across, along, a, b
-    )
+    buffers.dist[:] = np.inf
+    _pipe_distance(segs, pixel_grid(settings.half_width, settings.depth, h, w), settings.radius, buffers)
+    _compose(img, pose, settings, textures, buffers, light)
     lo, span = SNOW_LEVEL[0], SNOW_LEVEL[1] - SNOW_LEVEL[0]
     for i in range(snow.size // 3):
         r = min(int(snow[3 * i] * h), h - 1)
         c = min(int(snow[3 * i + 1] * w), w - 1)
         img[r, c] += lo + span * snow[3 * i + 2]
-    _blur(img, tmp, sigma)
-    _finish(img, noise, np.float32(sd), out)
+    _blur(img, buffers.tmp, settings.blur)
+    _finish(img, noise, np.float32(settings.noise), out)
 
 
 class Renderer:
@@ -284,25 +324,17 @@ class Renderer:
     def __init__(self, water: Water = CLEAR, camera: CameraParams = PAPER_CAMERA) -> None:
         self.water, self.camera = water, camera
         shape = (water.height, water.width)
-        self._img = np.empty(shape, dtype=np.float32)
-        self._tmp = np.empty(shape, dtype=np.float32)
-        self._dist = np.empty(shape, dtype=np.float32)
-        self._across = np.zeros(shape, dtype=np.float32)
-        self._along = np.zeros(shape, dtype=np.float32)
-        self._a, self._b = light_and_water(water, camera)
+        self._buffers = Buffers(*(np.zeros(shape, dtype=np.float32) for _ in Buffers._fields))
+        self._light = light_and_water(water, camera)
         self._no_pipe = np.zeros((0, 5))
-        # the scalars of a frame: footprint, pipe radius, burial, growth, blur σ, noise s.d.
-        sigma = math.hypot(water.blur, SCATTER_BLUR * water.turbidity)
-        self._scalars = np.array(
-            [
-                camera.half_width,
-                camera.depth,
-                0.5 * water.pipe_diameter,
-                water.burial,
-                water.growth,
-                sigma,
-                water.noise,
-            ]
+        self._settings = FrameSettings(
+            half_width=float(camera.half_width),
+            depth=float(camera.depth),
+            radius=0.5 * water.pipe_diameter,
+            burial=float(water.burial),
+            growth=float(water.growth),
+            blur=math.hypot(water.blur, SCATTER_BLUR * water.turbidity),
+            noise=float(water.noise),
         )
         self._noise_bank: np.ndarray | None = None  # drawn from the first frame's generator
 
@@ -329,10 +361,9 @@ class Renderer:
         segs = self._no_pipe
         if points.shape[0] >= 2:
             segs = pipe_segments(points, cum, x, y, psi, cam.half_width, cam.depth, 0.5 * wt.pipe_diameter)
-        _render(
-            out, self._img, self._tmp, self._dist, self._across, self._along, self._a, self._b,
-            segs, textures.seabed, textures.growth, snow, self._noise_frame(rng), self._scalars, x, y, psi,
-        )  # fmt: skip
+        noise = self._noise_frame(rng)
+        pose = (float(x), float(y), float(psi))
+        _render(out, self._buffers, self._light, self._settings, segs, textures, snow, noise, pose)
         return out
 
     def _noise_frame(self, rng: np.random.Generator) -> np.ndarray:
@@ -342,16 +373,14 @@ class Renderer:
         is drawn once from the first frame's generator, and every frame reads it from an offset
         drawn from its own generator.
         """
-        size = self._img.size
+        size = self._buffers.img.size
         if self._noise_bank is None:
             self._noise_bank = rng.standard_normal(max(NOISE_BANK, 4 * size), dtype=np.float32)
         start = int(rng.integers(0, self._noise_bank.size - size))
-        return self._noise_bank[start : start + size].reshape(self._img.shape)
+        return self._noise_bank[start : start + size].reshape(self._buffers.img.shape)
 
 
 def pixel_centres(water: Water = CLEAR, camera: CameraParams = PAPER_CAMERA) -> tuple[np.ndarray, np.ndarray]:
-    """Camera coordinates (m) of the columns' and the rows' pixel centres (the conventions above)."""
-    hw, depth = camera.half_width, camera.depth
-    xs = -hw + (np.arange(water.width) + 0.5) * 2.0 * hw / water.width
-    ys = depth - (np.arange(water.height) + 0.5) * depth / water.height
-    return xs, ys
+    """Camera coordinates (m) of the columns' and the rows' pixel centres (:mod:`.pixels`)."""
+    grid = pixel_grid(float(camera.half_width), float(camera.depth), water.height, water.width)
+    return column_x(np.arange(water.width), grid), row_y(np.arange(water.height), grid)

@@ -28,6 +28,32 @@ class CameraParams(NamedTuple):
 
 
 PAPER_CAMERA = CameraParams()
+
+
+class View(NamedTuple):
+    """What :func:`observe` reports: the visible piece that continues from the AUV's progress."""
+
+    in_view: bool  # whether any pipe is in view; if not, the other fields are zero
+    x1: float  # the piece's far end (camera metres) ...
+    y1: float
+    x2: float  # ... and its near end
+    y_near: float
+    s_near: float  # arc length (m) of the near end ...
+    s_far: float  # ... and of the far end
+
+
+class Piece(NamedTuple):
+    """A visible piece of pipe while :func:`observe` assembles the pieces and keeps the best one."""
+
+    gap: float  # arc-length gap (m) between the piece and the AUV's progress; inf: no piece yet
+    x1: float  # the far end (camera metres) ...
+    y1: float
+    x2: float  # ... and the near end
+    y_near: float
+    s_near: float  # arc length (m) of the near end ...
+    s_far: float  # ... and of the far end
+
+
 _NONE4 = (math.inf, math.inf, math.inf, math.inf)  # no buried stretch
 
 
@@ -75,9 +101,9 @@ def clip_segment(ax, ay, bx, by, xmin, xmax, ymin, ymax):
 def observe(points, cum, x, y, psi, progress, cam, buried_from=None, buried_to=None):
     """What the camera sees from pose (x, y, ψ).
 
-    Returns ``(in_view, x1, y1, x2, y_near, s_near, s_far)``: the far end, the near end's lateral
-    and forward position, and the arc lengths of the near and far ends of the chosen piece.
-    When nothing is in view, ``in_view`` is False and the other values are zero.
+    Returns a :class:`View` ``(in_view, x1, y1, x2, y_near, s_near, s_far)``: the far end, the
+    near end's lateral and forward position, and the arc lengths of the near and far ends of the
+    chosen piece. When nothing is in view, ``in_view`` is False and the other values are zero.
 
     ``buried_from``/``buried_to`` (optional, sorted and disjoint arc-length intervals, unused
     slots ``inf``) are stretches the camera cannot see: they are cut out of the visible polyline,
@@ -92,9 +118,8 @@ def observe(points, cum, x, y, psi, progress, cam, buried_from=None, buried_to=N
 def _observe(points, cum, x, y, psi, progress, cam, buried_from, buried_to):
     w, depth = cam.half_width, cam.depth
     buried = buried_from[0] < math.inf
-    # best piece so far: (gap to progress, x1, y1, x2, y_near, s_near, s_far)
-    best = (math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    piece = best  # the piece being assembled; piece[0] unused
+    best = Piece(math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # the best piece so far
+    piece = best  # the piece being assembled; its gap unused
     open_piece = False
     continues = False  # the open piece reached the end of its last segment
     ax, ay = to_camera(points[0, 0], points[0, 1], x, y, psi)
@@ -139,7 +164,7 @@ def _observe(points, cum, x, y, psi, progress, cam, buried_from, buried_to):
         ax, ay = bx, by
     if open_piece:
         best = _closer(best, piece, progress)
-    return best[0] < math.inf, best[1], best[2], best[3], best[4], best[5], best[6]
+    return View(best.gap < math.inf, best.x1, best.y1, best.x2, best.y_near, best.s_near, best.s_far)
 
 
 @njit(cache=True)
@@ -154,18 +179,18 @@ def _extend(best, piece, open_piece, continues, progress, ax, ay, bx, by, ta, tb
         if open_piece:
             best = _closer(best, piece, progress)
         near_x, near_y = ax + ta * (bx - ax), ay + ta * (by - ay)
-        piece = (0.0, 0.0, 0.0, near_x, near_y, s0 + ta * seg, 0.0)
+        piece = Piece(0.0, 0.0, 0.0, near_x, near_y, s0 + ta * seg, 0.0)
     far_x, far_y = ax + tb * (bx - ax), ay + tb * (by - ay)
-    return best, (0.0, far_x, far_y, piece[3], piece[4], piece[5], s0 + tb * seg)
+    return best, Piece(0.0, far_x, far_y, piece.x2, piece.y_near, piece.s_near, s0 + tb * seg)
 
 
 @njit(cache=True)
 def _closer(best, piece, progress):
     """The better of two pieces: the smaller arc-length gap to the AUV's progress (first wins ties)."""
-    s_near, s_far = piece[5], piece[6]
+    s_near, s_far = piece.s_near, piece.s_far
     gap = s_near - progress if progress < s_near else max(progress - s_far, 0.0)
-    if gap < best[0]:
-        return (gap, piece[1], piece[2], piece[3], piece[4], piece[5], piece[6])
+    if gap < best.gap:
+        return Piece(gap, piece.x1, piece.y1, piece.x2, piece.y_near, s_near, s_far)
     return best
 
 
