@@ -27,6 +27,10 @@ from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from pipefollow.learners.cacla_update import (
     ACTOR_REPEATS,
+    HEAD_A,
+    HEAD_G,
+    HEAD_K,
+    HEADS,
     K_EVERY,
     K_POSITIVE,
     REPEAT_ONCE,
@@ -96,8 +100,12 @@ def unpack(a):
 
 
 @njit(cache=True)
-def act(w, phi, sigma, z0, z1, a_sup, p):
+def act(w, phi, sigma, z0, z1, a_sup, p, heads=None):
     """Action for features ``phi``: returns ``(a, a_rl)``, executed and learner's action.
+
+    ``heads`` (an array of :data:`.cacla_update.HEADS` slots, or None) receives the heads' values on
+    φ(s) that were computed — A(s), and w_γ·φ(s), w_K·φ(s) before clipping, NaN where not — for the
+    update of the transition from s (:func:`.cacla_update.update`), which reuses them.
 
     ``a_rl = clip(A(s) + σ z)`` with z Gaussian (eq. 8) or skew-normal with skew γ(s) (eq. 14),
     built from the standard normals ``z0, z1``; σ = 0 gives the deterministic policy. The skew
@@ -106,9 +114,15 @@ def act(w, phi, sigma, z0, z1, a_sup, p):
     Supervised agents execute ``a = k(s) a_rl + (1 − k(s)) a_sup`` (eq. 10).
     """
     mu = dot(w[A], phi)
+    if heads is not None:
+        heads[:] = np.nan
+        heads[HEAD_A] = mu
     if sigma > 0.0:
         if p.skew > 0.0:
-            g = min(p.gamma_max, max(-p.gamma_max, dot(w[G], phi)))
+            g_raw = dot(w[G], phi)
+            if heads is not None:
+                heads[HEAD_G] = g_raw
+            g = min(p.gamma_max, max(-p.gamma_max, g_raw))
             z = skew_normal_from_normals(g, z0, z1)
             if p.skew_sample != SAMPLE_LOCATION:  # readings that keep the exploration's mean on A(s)
                 d = g / math.sqrt(1.0 + g * g)
@@ -121,7 +135,10 @@ def act(w, phi, sigma, z0, z1, a_sup, p):
     else:
         a_rl = clip1(mu)
     if p.supervised:
-        k = min(p.k_max, max(0.0, dot(w[K], phi)))
+        k_raw = dot(w[K], phi)
+        if heads is not None:
+            heads[HEAD_K] = k_raw
+        k = min(p.k_max, max(0.0, k_raw))
         return k * a_rl + (1.0 - k) * a_sup, a_rl
     return a_rl, a_rl
 
@@ -362,6 +379,9 @@ def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats
     nf = w.shape[1]
     s = np.empty(sim.STATE_SIZE)
     phi, phi_pend, phi_next = np.empty(nf), np.empty(nf), np.empty(nf)
+    # the heads' values on φ(s) from acting, reused by the update of the transition from s: no
+    # weight moves in between (the one pending transition is updated before the next action)
+    heads, heads_pend = np.empty(HEADS), np.empty(HEADS)
     book = np.empty(ep.BOOK_SIZE)
     skewed = p.skew > 0.0
     n = run.n_decisions
@@ -383,7 +403,7 @@ def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats
                     z0 = rng.standard_normal()
                     z1 = rng.standard_normal() if skewed else z0
                 a_sup = heuristic_action(s[sim.X1], s[sim.Y1]) if p.supervised else 0.0
-                a, a_rl = act(w, phi, sigma, z0, z1, a_sup, p)
+                a, a_rl = act(w, phi, sigma, z0, z1, a_sup, p, heads)
             have_phi = False
             r = ep.draw_and_decide(s, a, points, cum, ps, env_rng, dz, book, poses, e)
             if not run.learn:
@@ -391,11 +411,12 @@ def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats
             ep.carry(book, visible, r, p.discount)
             if visible:
                 phi, phi_pend = phi_pend, phi  # keep φ(s) for the update; no copy
+                heads, heads_pend = heads_pend, heads
                 a_rl_p, a_sup_p = a_rl, a_sup
             if ep.due(book, s[sim.IN_VIEW] != 0.0, ep.ended(book, n)):
                 grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
                 update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p, rule, var,
-                       trace)  # fmt: skip
+                       trace, heads_pend)  # fmt: skip
                 book[ep.PENDING] = 0.0
                 phi, phi_next = phi_next, phi  # φ(s') is the next decision's φ(s)
                 have_phi = True

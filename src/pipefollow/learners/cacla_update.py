@@ -32,6 +32,9 @@ K_EVERY, K_POSITIVE = 0, 1  # eq. 13: k(s) grows at every visit, or only when δ
 # Beyond the paper: one actor update per δ > 0 (eq. 7), or ⌈δ/√var⌉ of them (CACLA+Var, Van Hasselt &
 # Wiering 2007), var a running variance of δ; at most MAX_REPEATS (a guard against var → 0).
 REPEAT_ONCE, REPEAT_VAR = 0, 1
+# Slots of the heads' values on φ(s) that acting computed and the update reuses (NaN: not computed).
+HEAD_A, HEAD_G, HEAD_K = 0, 1, 2
+HEADS = 3
 ACTOR_REPEATS = {"once": REPEAT_ONCE, "var": REPEAT_VAR}
 MAX_REPEATS = 100
 
@@ -84,7 +87,8 @@ def repeats(delta, var, p):
 
 
 @njit(cache=True)
-def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX, var=None, trace=None):
+def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX, var=None, trace=None,
+           heads=None):
     """One CACLA update for the transition from φ(s) with reward and bootstrap ``discount``·V(s').
 
     ``discount`` is γ_d^n for a transition of n decisions (semi-Markov, docs/design.md). Returns δ.
@@ -98,12 +102,15 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX
     Eq. 15 (``skew > 0``) moves γ(s) by ``Δγ·sgn(δ)·sgn(a_rl − A(s))``: with the default step
     reading the weights move along ``φ(s)/‖φ(s)‖²``, which changes γ(s) = w_γ·φ(s) by exactly that
     amount; the ``weights`` reading moves them by ``Δγ·…·φ(s)``, which changes γ(s) by ``Δγ‖φ‖²``.
+
+    ``heads`` holds A(s), w_γ·φ(s) and w_K·φ(s) as acting computed them with these weights
+    (:data:`HEADS` slots, NaN where not computed), or None: each is then computed here.
     """
     # each head's value on φ(s) is computed once and reused while its weights are unchanged
     v = dot(w[V], phi)
     delta = reward + discount * dot(w[V], phi_next) - v  # eq. 4, pre-update critic
-    mu = dot(w[A], phi)
-    k_raw = dot(w[K], phi) if p.supervised else 0.0  # w_K moves only in trust_step, at the end
+    mu = _head(w, phi, heads, A, HEAD_A)
+    k_raw = _head(w, phi, heads, K, HEAD_K) if p.supervised else 0.0  # w_K moves only in trust_step
     norm2 = -1.0  # ‖φ(s)‖², computed when first needed
     f = step_factor(delta, rule)
     moves = rule != SIGN_AND_MAX or delta > 0.0  # eq. 7's max term: no step at all when δ ≤ 0
@@ -127,7 +134,7 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX
     if p.skew > 0.0:  # eq. 15
         # the side of the executed sample: compared with the clipped mean, as a_rl is clipped too
         inc = p.skew * np.sign(delta) * np.sign(a_rl - clip1(mu))
-        g = dot(w[G], phi)
+        g = _head(w, phi, heads, G, HEAD_G)  # w_γ has not moved in this update
         if (inc > 0.0 and g < p.gamma_max) or (inc < 0.0 and g > -p.gamma_max):
             if p.skew_step == STEP_GAMMA:
                 norm2 = dot(phi, phi)
@@ -137,6 +144,14 @@ def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX
     if p.supervised:
         trust_step(w, phi, delta, k_raw, norm2, p)
     return delta
+
+
+@njit(cache=True)
+def _head(w, phi, heads, row, slot):
+    """Row ``row``'s value on φ(s): from ``heads`` if acting computed it, else computed now."""
+    if heads is not None and not math.isnan(heads[slot]):
+        return heads[slot]
+    return dot(w[row], phi)
 
 
 @njit(cache=True)

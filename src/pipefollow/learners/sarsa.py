@@ -75,12 +75,18 @@ def greedy(W, phi, search_actions, search_psi):
 
 
 @njit(cache=True)
-def choose(W, phi, search_actions, search_psi, sigma, z):
-    """Exploring action ``clip(greedy + σ z)`` (σ = 0: greedy)."""
-    a, _ = greedy(W, phi, search_actions, search_psi)
+def choose_with_q(W, phi, search_actions, search_psi, sigma, z):
+    """Exploring action ``clip(greedy + σ z)`` (σ = 0: greedy), and ``q = Wφ`` it was chosen on."""
+    a, q = greedy(W, phi, search_actions, search_psi)
     if sigma > 0.0:
         a = min(1.0, max(-1.0, a + sigma * z))
-    return a
+    return a, q
+
+
+@njit(cache=True)
+def choose(W, phi, search_actions, search_psi, sigma, z):
+    """Exploring action ``clip(greedy + σ z)`` (σ = 0: greedy)."""
+    return choose_with_q(W, phi, search_actions, search_psi, sigma, z)[0]
 
 
 @njit(cache=True)
@@ -89,8 +95,14 @@ def update(W, phi, psi, reward, discount, phi_next, psi_next, alpha):
 
     ``W`` is (action features × state features): row j holds the weights of action centre j.
     """
+    return update_on(W, phi, psi, reward, discount, matvec(W, phi_next), psi_next, alpha)
+
+
+@njit(cache=True)
+def update_on(W, phi, psi, reward, discount, q_next, psi_next, alpha):
+    """:func:`update` with ``q_next = W φ(s')`` given (the compiled loop has it from choosing a')."""
     q_sa = dot(psi, matvec(W, phi))
-    q_next = dot(psi_next, matvec(W, phi_next)) if discount != 0.0 else 0.0
+    q_next = dot(psi_next, q_next) if discount != 0.0 else 0.0
     delta = reward + discount * q_next - q_sa
     c = alpha * delta
     for j in range(psi.shape[0]):
@@ -230,11 +242,12 @@ def episodes(W, alpha, discount, search, tracks, run, grid, rng, env_rng, dz, st
             if ep.due(book, s[sim.IN_VIEW] != 0.0, ep.ended(book, n)):
                 grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
                 z = rng.standard_normal() if sigma > 0.0 else 0.0
-                a_next = choose(W, phi_next, search.actions, search.psi, sigma, z)
+                # W φ(s') of choosing a' is the one the update needs: W has not moved in between
+                a_next, q_next = choose_with_q(W, phi_next, search.actions, search.psi, sigma, z)
                 has_next = True
                 dim_activations(a_p, search.centres, search.width, search.normalized, psi)
                 dim_activations(a_next, search.centres, search.width, search.normalized, psi_next)
-                update(W, phi_pend, psi, book[ep.ACC], book[ep.DISC], phi_next, psi_next, alpha)
+                update_on(W, phi_pend, psi, book[ep.ACC], book[ep.DISC], q_next, psi_next, alpha)
                 book[ep.PENDING] = 0.0
         ep.close_episode(stats, e, book, s[sim.PROGRESS_MAX], decision_s)
 
