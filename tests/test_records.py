@@ -31,7 +31,12 @@ def test_offsets_and_sizes_follow_the_fields_by_hand():
 
 
 def test_cacla_parameters_unpack_field_by_field():
-    p = cacla.CaclaParams(0.3, 0.1, 0.7, 0.25, 1.5, True, 0.02, 0.9, 0.01, 2, 1, 1, 0)
+    values = dict(
+        alpha_v=0.3, alpha_pi=0.1, discount=0.7, skew=0.25, gamma_max=1.5, supervised=True, delta_k=0.02,
+        k_max=0.9, forgetting=0.01, skew_sample=2, skew_step=1, k_update=1, k_step=0,
+    )  # fmt: skip
+    p = cacla.CaclaParams(**values)
+    assert all(getattr(p, k) == v for k, v in values.items())
     back = cacla.unpack(cacla.pack(p))
     assert back._fields == p._fields
     for name in p._fields:  # by name: a shifted slot would show

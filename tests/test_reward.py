@@ -23,8 +23,8 @@ def test_eq19_at_hand_values(v_x, e_dist, e_angl, action, previous, expected):
 
 
 def test_worst_in_view_reward_is_above_the_lost_penalty():
+    # the paper's −10 per decision with the pipe out of view is what the environment pays (test_env)
     worst = reward(-0.25, 1.0, -3.141592653589793 / 2, -1.0, 1.0)
-    assert LOST_REWARD == -10.0
     assert worst > LOST_REWARD
 
 
