@@ -371,3 +371,20 @@ def test_bad_camera_or_water_is_a_one_line_error_naming_the_key(tmp_path, lines,
     with pytest.raises(ConfigError, match=pattern) as err:
         load_experiment(write_toml(tmp_path, MINIMAL + lines))
     assert "\n" not in str(err.value)
+
+
+def test_the_repeats_experiment_is_the_papers_trials_with_the_papers_first_seeds():
+    paper, more = load_experiment("paper"), load_experiment("repeats")
+    assert more.trials == paper.trials and more.repeats >= 20
+    assert more.seeds()[: paper.repeats] == paper.seeds()  # its first five are the default run's
+
+
+def test_reproduce_help_names_every_shipped_experiment():
+    from click.testing import CliRunner
+
+    from pipefollow.cli import main
+    from pipefollow.experiments.config import shipped_experiments
+
+    for command in (["reproduce", "--help"], ["trials", "--help"]):
+        text = " ".join(CliRunner().invoke(main, command).output.split())
+        assert all(f"'{name}'" in text for name in shipped_experiments()), command

@@ -61,8 +61,9 @@ from pipefollow.cli.options import (
     "--experiment",
     default="paper",
     show_default=True,
-    help="A shipped experiment ('paper'; 'readings': the claims under each reading of the paper's open "
-    "points; 'reference-learners': CACLA beside the actor-critic of eq. 9) or an experiment TOML file.",
+    help="A shipped experiment ('paper'; 'repeats': the paper's trials over 30 repeats beside the first 5; "
+    "'readings': the claims under each reading of the paper's open points; 'reference-learners': CACLA "
+    "beside the actor-critic of eq. 9) or an experiment TOML file.",
 )
 @click.option(
     "--trial",
@@ -150,7 +151,8 @@ def plot(run_dir, as_json):
     "--experiment",
     default="paper",
     show_default=True,
-    help="A shipped experiment ('paper', 'readings', 'reference-learners') or an experiment TOML file.",
+    help="A shipped experiment ('paper', 'repeats', 'readings', 'reference-learners') or an experiment "
+    "TOML file.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON list instead of a table.")
 @guard

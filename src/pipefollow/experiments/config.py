@@ -197,7 +197,7 @@ def parse_experiment(data: dict, source: str) -> ExperimentConfig:
 
 
 def shipped_experiments() -> list[str]:
-    """Names of the experiments shipped with the package (``paper``, ``readings``, ``reference-learners``)."""
+    """Names of the experiments shipped with the package (``paper``, ``repeats``, ``readings`` …)."""
     folder = resources.files("pipefollow.experiments")
     return sorted(p.name[: -len(".toml")] for p in folder.iterdir() if p.name.endswith(".toml"))
 
