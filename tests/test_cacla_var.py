@@ -5,7 +5,7 @@ import pytest
 
 from pipefollow.learners import cacla
 from pipefollow.learners.cacla import A, CaclaParams, V
-from pipefollow.learners.cacla_update import MAX_REPEATS
+from pipefollow.learners.cacla_update import MAX_ACTOR_REPEATS
 from pipefollow.sim.pipeline import builtin
 from pipefollow.training.agents import make_agent
 from pipefollow.training.compiled import train_compiled
@@ -60,9 +60,9 @@ def test_supervised_var_repeats_eq_12():
 
 
 def test_the_number_of_updates_is_capped():
-    w, var = weights(), np.array([1e-12])  # ⌈0.55 / 1e-6⌉ = 550,000 → MAX_REPEATS = 100
+    w, var = weights(), np.array([1e-12])  # ⌈0.55 / 1e-6⌉ = 550,000 → MAX_ACTOR_REPEATS = 100
     cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, VAR, var=var)
-    assert MAX_REPEATS == 100
+    assert MAX_ACTOR_REPEATS == 100
     assert w[A] @ PHI == pytest.approx(0.6 - 0.51 * SHRINK**100)
 
 

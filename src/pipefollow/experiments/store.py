@@ -29,7 +29,7 @@ from pipefollow.experiments.trial import TrialResult, build_agent
 from pipefollow.files.atomic import TMP_SUFFIX, atomic_file, read_npz_file, write_text_atomic
 from pipefollow.files.machine import machine_stamp
 from pipefollow.files.sources import imported_modules, source_hash
-from pipefollow.training.compiled import STAT_NAMES
+from pipefollow.sim.episode import TRAINING_STAT_NAMES
 from pipefollow.training.outputs import csv_text
 
 FORMAT = "pipefollow-trial"
@@ -51,9 +51,9 @@ RESULTS_COLUMNS = (
     "pipeline",
     "episode",
     "sigma",
-    *STAT_NAMES,
+    *TRAINING_STAT_NAMES,
 )
-EVALUATION_COLUMNS = ("trial", "label", "repeat", "seed", "pipeline", "controller", *STAT_NAMES)
+EVALUATION_COLUMNS = ("trial", "label", "repeat", "seed", "pipeline", "controller", *TRAINING_STAT_NAMES)
 
 
 class StoreError(ValueError):

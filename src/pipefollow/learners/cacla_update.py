@@ -30,13 +30,13 @@ SAMPLE_LOCATION, SAMPLE_CENTRED, SAMPLE_MOMENTS = 0, 1, 2  # skew sample: locati
 STEP_GAMMA, STEP_WEIGHTS = 0, 1  # eqs. 13, 15: the head's value moves by the step, or its weights by step·φ
 K_EVERY, K_POSITIVE = 0, 1  # eq. 13: k(s) grows at every visit, or only when δ > 0
 # Beyond the paper: one actor update per δ > 0 (eq. 7), or ⌈δ/√var⌉ of them (CACLA+Var, Van Hasselt &
-# Wiering 2007), var a running variance of δ; at most MAX_REPEATS (a guard against var → 0).
+# Wiering 2007), var a running variance of δ; at most MAX_ACTOR_REPEATS (a guard against var → 0).
 REPEAT_ONCE, REPEAT_VAR = 0, 1
 # Slots of the heads' values on φ(s) that acting computed and the update reuses (NaN: not computed).
 HEAD_A, HEAD_G, HEAD_K = 0, 1, 2
 HEADS = 3
 ACTOR_REPEATS = {"once": REPEAT_ONCE, "var": REPEAT_VAR}
-MAX_REPEATS = 100
+MAX_ACTOR_REPEATS = 100
 
 
 @njit(cache=True)
@@ -81,7 +81,7 @@ def repeats(delta, var, p):
         return 1
     n = 1
     if delta > 0.0:
-        n = min(MAX_REPEATS, max(1, math.ceil(delta / math.sqrt(var[0]))))
+        n = min(MAX_ACTOR_REPEATS, max(1, math.ceil(delta / math.sqrt(var[0]))))
     var[0] = (1.0 - p.var_rate) * var[0] + p.var_rate * delta * delta
     return n
 

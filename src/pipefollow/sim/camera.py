@@ -19,6 +19,8 @@ from typing import NamedTuple
 
 from numba import njit
 
+from pipefollow.sim.disturbance import NO_BURIAL
+
 
 class CameraParams(NamedTuple):
     """Camera footprint in the body frame (docs/design.md; matches the paper's state ranges)."""
@@ -54,7 +56,6 @@ class Piece(NamedTuple):
     s_far: float  # ... and of the far end
 
 
-_NONE4 = (math.inf, math.inf, math.inf, math.inf)  # no buried stretch
 
 
 @njit(cache=True)
@@ -110,7 +111,7 @@ def observe(points, cum, x, y, psi, progress, cam, buried_from=None, buried_to=N
     so a buried stretch splits a piece in two.
     """
     if buried_from is None:
-        return _observe(points, cum, x, y, psi, progress, cam, _NONE4, _NONE4)
+        return _observe(points, cum, x, y, psi, progress, cam, NO_BURIAL, NO_BURIAL)
     return _observe(points, cum, x, y, psi, progress, cam, buried_from, buried_to)
 
 

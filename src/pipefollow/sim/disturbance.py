@@ -37,7 +37,7 @@ from numba.np.unsafe.ndarray import to_fixed_tuple
 from pipefollow.sim import records
 
 MAX_BURIED = 4  # buried stretches a scenario can hold
-_NONE4 = (math.inf, math.inf, math.inf, math.inf)
+NO_BURIAL = (math.inf, math.inf, math.inf, math.inf)  # the buried-stretch slots when none is buried
 
 
 class DisturbanceError(ValueError):
@@ -58,8 +58,8 @@ class Disturbance(NamedTuple):
     current_direction_sd: float = 0.0  # stationary standard deviation of β_c (rad)
     camera_noise: float = 0.0  # standard deviation of the end-point noise (m)
     miss_prob: float = 0.0  # probability of a missed detection per camera reading
-    buried_from: tuple[float, float, float, float] = _NONE4  # starts of buried stretches (m)
-    buried_to: tuple[float, float, float, float] = _NONE4  # their ends (m)
+    buried_from: tuple[float, float, float, float] = NO_BURIAL  # starts of buried stretches (m)
+    buried_to: tuple[float, float, float, float] = NO_BURIAL  # their ends (m)
 
 
 NO_DISTURBANCE = Disturbance()
@@ -153,7 +153,7 @@ def probability(value: Any, name: str, source: str = "") -> float:
 def _buried(value: Any, name: str, source: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
     if not isinstance(value, list | tuple) or len(value) > MAX_BURIED:
         raise DisturbanceError(f"{source}{name} must be a list of at most {MAX_BURIED} [from, to] pairs (m)")
-    starts, ends = list(_NONE4), list(_NONE4)
+    starts, ends = list(NO_BURIAL), list(NO_BURIAL)
     last = -math.inf
     for k, pair in enumerate(value):
         if not isinstance(pair, list | tuple) or len(pair) != 2:

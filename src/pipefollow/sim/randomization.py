@@ -36,11 +36,10 @@ from typing import Any
 
 import numpy as np
 
-from pipefollow.sim.disturbance import MAX_BURIED, NO_DISTURBANCE, Disturbance, DisturbanceError
+from pipefollow.sim.disturbance import MAX_BURIED, NO_BURIAL, NO_DISTURBANCE, Disturbance, DisturbanceError
 
 DRAWS = 4 + 3 * MAX_BURIED  # uniforms consumed by one draw (module docstring)
 MAX_NOISE = 2 + 4 + 1  # the most standard normals a camera reading consumes (current, noise, miss)
-_NONE4 = (math.inf, math.inf, math.inf, math.inf)
 
 Range = tuple[float, float]
 
@@ -124,7 +123,7 @@ def from_uniforms(r: Randomization, u) -> Disturbance:
     def pick(rng_: Range, x: float) -> float:
         return rng_[0] + float(x) * (rng_[1] - rng_[0])
 
-    starts, ends = list(_NONE4), list(_NONE4)
+    starts, ends = list(NO_BURIAL), list(NO_BURIAL)
     used = 0
     if r.buried_prob > 0.0:
         lo, hi = r.buried_region_m

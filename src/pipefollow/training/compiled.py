@@ -35,7 +35,6 @@ from pipefollow.sim.episode import TRAINING_STAT_NAMES, Run, Tracks, no_poses, t
 from pipefollow.sim.pipeline import Pipeline
 
 # The columns of a training run's statistics, under the name the command line and the experiments read.
-STAT_NAMES = TRAINING_STAT_NAMES
 EPISODE_SECONDS = 20.0  # the training episode's length when none is given (the paper's, §4)
 
 
@@ -77,8 +76,8 @@ class EpisodeStats:
         return tuple(row)
 
     def as_row(self) -> tuple[float, ...]:
-        """A training run's columns (:data:`STAT_NAMES`): return, pipe_in_view, progress_m, time_lost_s."""
-        return self.as_full_row()[: len(STAT_NAMES)]
+        """A training run's columns (``sim.episode.TRAINING_STAT_NAMES``): return to time lost."""
+        return self.as_full_row()[: len(TRAINING_STAT_NAMES)]
 
 
 def run_episode(
@@ -134,7 +133,7 @@ def train(
     callback: Callable[[int, EpisodeStats], None] | None = None,
 ) -> np.ndarray:
     """Train ``agent`` for ``episodes`` episodes in ``env``; returns (episodes, 4) statistics."""
-    stats = np.empty((episodes, len(STAT_NAMES)))
+    stats = np.empty((episodes, len(TRAINING_STAT_NAMES)))
     for e in range(episodes):
         sigma = linear_sigma(e, episodes, sigma_start, sigma_end)
         stats_e = run_episode(env, agent, learn=True, explore=True, sigma=sigma)

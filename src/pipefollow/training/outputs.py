@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from pipefollow.files.atomic import write_text_atomic
-from pipefollow.training.compiled import STAT_NAMES
+from pipefollow.sim.episode import TRAINING_STAT_NAMES
 
 
 def csv_text(header: Sequence[str], rows: Iterable[Sequence]) -> str:
@@ -30,7 +30,7 @@ def write_learning_curve(path: str | Path, stats: np.ndarray, sigmas: np.ndarray
     """
     path = Path(path)
     rows = ([e, sigmas[e], *stats[e]] for e in range(len(stats)))
-    write_text_atomic(path, csv_text(["episode", "sigma", *STAT_NAMES], rows))
+    write_text_atomic(path, csv_text(["episode", "sigma", *TRAINING_STAT_NAMES], rows))
     return path
 
 

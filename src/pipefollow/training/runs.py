@@ -18,7 +18,7 @@ import numpy as np
 from pipefollow import readings as rd
 from pipefollow.learners.registry import learner
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
-from pipefollow.training.compiled import STAT_NAMES
+from pipefollow.sim.episode import TRAINING_STAT_NAMES
 from pipefollow.training.phases import phase_sigmas, train_phases
 
 EPISODES = 500  # training episodes of a run (paper §4.1)
@@ -70,7 +70,7 @@ def write_tensorboard(folder, stats: np.ndarray, sigmas: np.ndarray) -> None:
     """Per-episode return, pipe in view, progress, time lost and σ (``sigmas``: the schedule trained with)."""
     from pipefollow.files.tensorboard import write_scalars
 
-    series = {name: stats[:, i] for i, name in enumerate(STAT_NAMES)}
+    series = {name: stats[:, i] for i, name in enumerate(TRAINING_STAT_NAMES)}
     series["sigma"] = list(sigmas)
     write_scalars(folder, series)
 
@@ -82,7 +82,7 @@ class LearnerRun:
     Attributes:
         agent: the trained agent.
         readings: the readings it trained under.
-        stats: one row of :data:`~pipefollow.training.compiled.STAT_NAMES` per episode.
+        stats: one row of :data:`~pipefollow.sim.episode.TRAINING_STAT_NAMES` per episode.
         policy: the policy file written.
         learning_curve: the learning curve written.
     """
@@ -102,7 +102,7 @@ class LearnerRun:
             "policy": str(self.policy),
             "learning_curve": str(self.learning_curve),
             "returns": stats[:, 0].tolist(),
-            **{f"final_mean_{n}": float(stats[-last:, i].mean()) for i, n in enumerate(STAT_NAMES)},
+            **{f"final_mean_{n}": float(stats[-last:, i].mean()) for i, n in enumerate(TRAINING_STAT_NAMES)},
         }
 
     def text(self) -> str:
