@@ -40,7 +40,7 @@ from pipefollow.learners.cacla_update import (
     STEP_WEIGHTS,
 )
 from pipefollow.learners.protocol import LearnerKind
-from pipefollow.learners.rbf import STATE_GRID, RBFGrid, state_grid
+from pipefollow.learners.rbf import STATE_GRID, RBFGrid
 
 # The actor's step factor on (a − A(s)) (cacla_update.step_factor): eq. 9's δ, or one of eq. 7's terms.
 ACTOR_UPDATES = {"delta": DELTA, "positive": POSITIVE, "sign": SIGN}
@@ -119,27 +119,11 @@ def from_policy(data: dict, seed: int | None = None):
     return cacla.from_policy(data, seed, agent_class=ActorCritic, params_class=ActorCriticParams)
 
 
-def make(
-    r,
-    rng: np.random.Generator | None = None,
-    *,
-    supervised: bool = False,
-    actor_update: str = "delta",
-    **fields,
-) -> ActorCritic:
-    """A fresh actor-critic under the readings ``r`` (fields: those of ``CaclaParams`` but the skew's).
-
-    ``actor_update``: ``delta`` (eq. 9), ``positive`` or ``sign`` (:func:`.cacla_update.step_factor`).
-
-    Raises:
-        ValueError: an unknown ``actor_update``.
-    """
-    if actor_update not in ACTOR_UPDATES:
-        raise ValueError(f"actor_update must be one of {', '.join(ACTOR_UPDATES)}, got {actor_update!r}")
-    base = cacla.params_under(r, 0.0, supervised=supervised, **fields)
-    params = ActorCriticParams(*base, actor_update=ACTOR_UPDATES[actor_update])
-    agent = ActorCritic(params, grid=state_grid(r.rbf, r.rbf_width), rng=rng)
-    agent.readings = r.id
+def make(params: ActorCriticParams, grid: RBFGrid, rng: np.random.Generator | None = None, *,
+         readings: str = "default") -> ActorCritic:  # fmt: skip
+    """A fresh actor-critic with ``params`` on ``grid``, built under the readings with id ``readings``."""
+    agent = ActorCritic(params, grid=grid, rng=rng)
+    agent.readings = readings
     return agent
 
 
