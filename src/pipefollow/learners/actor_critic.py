@@ -28,7 +28,7 @@ from typing import NamedTuple
 import numpy as np
 
 from pipefollow.learners import cacla
-from pipefollow.learners.cacla import Cacla
+from pipefollow.learners.cacla import PAPER_CACLA, Cacla
 from pipefollow.learners.cacla_update import (
     DELTA,
     K_EVERY,
@@ -54,13 +54,13 @@ class ActorCriticParams(NamedTuple):
     (``cacla.unpack`` reads the fields it starts with) and the record itself by the same names.
     """
 
-    alpha_v: float = 0.4  # critic step size α_V (paper §4)
-    alpha_pi: float = 0.2  # actor step size α_π (paper §4)
-    discount: float = 0.8  # discount factor γ_d (paper §4)
+    alpha_v: float = PAPER_CACLA.alpha_v  # critic step size α_V (paper §4)
+    alpha_pi: float = PAPER_CACLA.alpha_pi  # actor step size α_π (paper §4)
+    discount: float = PAPER_CACLA.discount  # discount factor γ_d (paper §4)
     skew: float = 0.0  # always 0: this learner explores with eq. 8 only
     gamma_max: float = 1.0  # cap |γ(s)| ≤ γ_max, unused without skew
     supervised: bool = False  # supervised actor-critic (eqs. 10, 11, 13)
-    delta_k: float = 0.05  # Δk per visit (paper §4.1)
+    delta_k: float = PAPER_CACLA.delta_k  # Δk per visit (paper §4.1)
     k_max: float = 1.0  # cap on k(s) (eq. 13)
     forgetting: float = 0.0  # per-update decay of w_k (Rosenstein & Barto); the paper uses none
     skew_sample: int = SAMPLE_LOCATION  # unused without skew
@@ -73,7 +73,7 @@ class ActorCriticParams(NamedTuple):
     actor_update: int = DELTA  # the actor's step factor: eq. 9's δ (default), max(δ, 0) or sgn(δ)
 
 
-PAPER_AC = ActorCriticParams()  # the paper's α_V = 0.4, α_π = 0.2, γ_d = 0.8, Δk = 0.05; eq. 9's δ
+PAPER_AC = ActorCriticParams()  # the paper's step sizes (CACLA's); eq. 9's δ
 
 
 class ActorCritic(Cacla):
