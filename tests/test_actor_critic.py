@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 
-from pipefollow import readings as rd
 from pipefollow.learners import actor_critic as ac
 from pipefollow.learners import cacla
 from pipefollow.learners.cacla_update import A, K, V
@@ -63,7 +62,7 @@ def test_the_actor_critic_takes_no_skew_and_names_its_update():
     with pytest.raises(ValueError, match="skew must be 0"):
         ac.ActorCritic(ac.PAPER_AC._replace(skew=0.5))
     with pytest.raises(ValueError, match="actor_update must be one of delta, positive, sign"):
-        ac.make(rd.DEFAULT, actor_update="max")
+        make_agent("ac", actor_update="max")
     assert make_agent("ac").name == "actor-critic"
     assert make_agent("ac", supervised=True, actor_update="sign").name == "supervised actor-critic, sgn(δ)"
     with pytest.raises(ValueError, match="actor_update applies to algorithm ac only"):

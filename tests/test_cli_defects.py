@@ -127,7 +127,6 @@ def test_a_reading_that_cannot_change_an_evaluation_is_warned_about(runner):
 
 def test_the_readings_said_to_act_in_an_evaluation_are_those_the_simulation_reads():
     from pipefollow import readings as rd
-    from pipefollow.cli.common import EVALUATION_READINGS
 
     acting = set()
     for point in rd.OPEN_POINTS:
@@ -135,7 +134,7 @@ def test_the_readings_said_to_act_in_an_evaluation_are_those_the_simulation_read
         changed = rd.parse(f"{point.key}={other[0]}")
         if rd.sim_params(changed) != rd.sim_params(rd.DEFAULT):
             acting.add(point.key)
-    assert acting == set(EVALUATION_READINGS)
+    assert acting == set(rd.SIM_READINGS)
 
 
 def test_the_text_report_names_the_disturbances(runner):

@@ -55,6 +55,20 @@ name = "a"
 """
 
 
+def test_trial_defaults_are_the_learners_records():
+    # one definition of the paper's step sizes: the learners' records; SARSA's γ_d is CACLA's
+    from pipefollow.learners.actor_critic import PAPER_AC
+    from pipefollow.learners.cacla import PAPER_CACLA
+    from pipefollow.learners.sarsa import PAPER_SARSA
+
+    t = TrialConfig()
+    assert (t.alpha_v, t.alpha_pi, t.discount, t.delta_k) == (
+        PAPER_CACLA.alpha_v, PAPER_CACLA.alpha_pi, PAPER_CACLA.discount, PAPER_CACLA.delta_k
+    )
+    assert (t.alpha_q, t.discount) == (PAPER_SARSA.alpha, PAPER_SARSA.discount)
+    assert tuple(PAPER_AC)[: len(PAPER_CACLA)] == tuple(PAPER_CACLA)
+
+
 def test_paper_grid(paper):
     assert paper.name == "paper"
     assert len(paper.trials) == 8

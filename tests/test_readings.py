@@ -32,8 +32,8 @@ def test_ids_parse_join_and_canonicalize():
     assert rd.parse(r.id) == r
     assert rd.parse(["skew_step=weights", "skew_step=gamma"]) == rd.DEFAULT  # later ones win
     assert rd.parse("default") == rd.parse([]) == rd.parse(" ") == rd.DEFAULT
-    assert rd.parse("converge_in_view=0.99").trains_like_default
-    assert not rd.parse("rbf=literal,converge_in_view=0.99").trains_like_default
+    assert rd.parse("converge_in_view=0.99").training == rd.DEFAULT
+    assert rd.parse("rbf=literal,converge_in_view=0.99").training == rd.parse("rbf=literal")
 
 
 @pytest.mark.parametrize(
@@ -70,6 +70,20 @@ def test_cacla_params_under_each_reading():
     assert (q.skew_step, q.skew_sample, q.gamma_max) == (cacla.STEP_WEIGHTS, cacla.SAMPLE_MOMENTS, 0.5)
     assert (q.k_update, q.k_step) == (cacla.K_POSITIVE, cacla.STEP_GAMMA)
     np.testing.assert_array_equal(cacla.unpack(cacla.pack(q)), q)  # the packed form keeps them
+
+
+def test_every_learner_has_its_inputs_under_the_readings():
+    from pipefollow.learners import registry
+
+    assert set(rd.LEARNER_INPUTS) == set(registry.NAMES)
+    r = rd.parse("rbf=literal,skew_unit=rad")
+    for name in registry.NAMES:
+        inputs = rd.learner_inputs(name, r)
+        assert inputs["grid"] == rd.state_grid(r)
+        agent = registry.learner(name).make(**inputs, readings=r.id)
+        assert agent.params == inputs["params"] and agent.readings == r.id
+    assert rd.learner_inputs("sarsa", r)["action_grid"] == rd.action_grid(r)
+    assert rd.learner_inputs("ac", r)["params"] == rd.actor_critic_params(r)
 
 
 def test_rbf_readings_reach_both_learners():

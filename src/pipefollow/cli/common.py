@@ -155,18 +155,19 @@ def check_plot_path(plot_path: str | None) -> None:
         check_output_file(plot_path, "--plot", tuple(image_formats()))
 
 
-# Readings that act in a deterministic evaluation of a saved policy: those of the simulation
-# (readings.sim_params); the others act in training only, and a policy file keeps its features.
-EVALUATION_READINGS = ("start_speed",)
-
-
 def inert_readings(ids) -> list[str]:
-    """Warnings for the ``--reading`` ids that cannot change an evaluation (the others act in training)."""
+    """Warnings for the ``--reading`` ids that cannot change an evaluation (the others act in training).
+
+    A deterministic evaluation of a saved policy reads only the simulation's readings
+    (:data:`pipefollow.readings.SIM_READINGS`); a policy file keeps its features.
+    """
+    from pipefollow.readings import SIM_READINGS
+
     keys = [part.split("=", 1)[0].strip() for i in ids for part in str(i).split(",") if "=" in part]
-    inert = [k for k in dict.fromkeys(keys) if k not in EVALUATION_READINGS]
+    inert = [k for k in dict.fromkeys(keys) if k not in SIM_READINGS]
     return [
         f"--reading {k}: acts in training only; it cannot change the evaluation of a saved policy or "
-        f"a fixed controller (evaluation readings: {', '.join(EVALUATION_READINGS)})"
+        f"a fixed controller (evaluation readings: {', '.join(SIM_READINGS)})"
         for k in inert
     ]
 

@@ -28,6 +28,7 @@ from pipefollow.cli.options import (
     seconds_option,
     seed_option,
 )
+from pipefollow.files.paper_training import EPISODE_SECONDS
 from pipefollow.sim import disturbance as _disturbance
 
 
@@ -40,7 +41,8 @@ from pipefollow.sim import disturbance as _disturbance
 @episodes_option(
     1, "Number of episodes; they differ only with start noise, random disturbances or a random pipeline."
 )
-@seconds_option("Episode length in seconds [default: 60 on paper-validation, else 20].", default=None)
+@seconds_option(f"Episode length in seconds [default: 60 on paper-validation, else {EPISODE_SECONDS:g}].",
+                default=None)  # fmt: skip
 @seed_option("Seed of the start perturbation.")
 @offset_option("--start-noise", "Uniform random lateral start offset up to this many metres.")
 @offset_option("--heading-noise", "Uniform random start heading offset up to this many degrees.")

@@ -15,6 +15,7 @@ from pipefollow.cli.common import (
 from pipefollow.cli.options import (
     reading_option,
 )
+from pipefollow.files.paper_training import TRAINING_EPISODES
 
 
 @click.command()
@@ -52,7 +53,7 @@ from pipefollow.cli.options import (
     "--episodes",
     type=click.IntRange(min=1),
     default=None,
-    help="Episodes of every training phase [default: the experiment's, 500 for the paper].",
+    help=f"Episodes of every training phase [default: the experiment's, {TRAINING_EPISODES} for the paper].",
 )
 @click.option(
     "--seed", type=SEED, default=None, help="Seed of the first repeat [default: 2010 for the paper]."

@@ -26,10 +26,11 @@ from pipefollow.cli.options import (
     seconds_option,
     seed_option,
 )
+from pipefollow.files.paper_training import TRAINING_EPISODES
 from pipefollow.files.progress import progress as progress_report
 from pipefollow.learners.registry import NAMES as LEARNER_NAMES
 from pipefollow.sim import disturbance as _disturbance
-from pipefollow.training.runs import EPISODES, SECONDS
+from pipefollow.training.runs import SECONDS
 
 DEEP = ("ppo", "sac")  # the learners of Stable-Baselines3 (pipefollow.training.deep)
 
@@ -59,7 +60,9 @@ DEEP = ("ppo", "sac")  # the learners of Stable-Baselines3 (pipefollow.training.
     "Built-in name or JSON file to train on, or random[:FAMILY] for a new pipe every episode "
     "(families: see 'pipefollow suites'; random = random:mixed)."
 )
-@episodes_option(EPISODES, "Training episodes (σ falls linearly from 1 to 0.01 over them); SARSA and CACLA.")
+@episodes_option(
+    TRAINING_EPISODES, "Training episodes (σ falls linearly from 1 to 0.01 over them); SARSA and CACLA."
+)
 @seconds_option(default=SECONDS)
 @click.option(
     "--steps",

@@ -23,6 +23,7 @@ from pipefollow.envs.shell import (
     start_episode,
     state_infos,
 )
+from pipefollow.files.paper_training import EPISODE_SECONDS
 from pipefollow.perception.camera import VisionCamera, camera_settings
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
@@ -148,7 +149,7 @@ class PipelineFollowingEnv(gym.Env):
     def __init__(
         self,
         pipeline: str | os.PathLike | Pipeline | Sequence[Sequence[float]] = "paper-left",
-        episode_seconds: float = 20.0,
+        episode_seconds: float = EPISODE_SECONDS,
         start_lateral_noise: float = 0.0,
         start_heading_noise_deg: float = 0.0,
         render_mode: str | None = None,

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
+from pipefollow.files.paper_training import EPISODE_SECONDS
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
 from pipefollow.sim.disturbance import Disturbance, check, disturbance_from_dict, noise_count
@@ -94,7 +95,7 @@ class Setup:
 
 
 def make_setup(
-    episode_seconds: float = 20.0,
+    episode_seconds: float = EPISODE_SECONDS,
     start_lateral_noise: float = 0.0,
     start_heading_noise_deg: float = 0.0,
     params: sim.SimParams = sim.PAPER_SIM,

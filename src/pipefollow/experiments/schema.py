@@ -13,8 +13,12 @@ import dataclasses
 from dataclasses import dataclass, field
 
 from pipefollow import readings as rd
+from pipefollow.files.paper_training import EPISODE_SECONDS, TRAINING_EPISODES
+from pipefollow.learners.cacla import PAPER_CACLA
+from pipefollow.learners.exploration import SIGMA_END, SIGMA_START
 from pipefollow.learners.registry import NAMES as ALGORITHMS
 from pipefollow.learners.registry import check_options
+from pipefollow.learners.sarsa import PAPER_SARSA
 
 # Bounds that keep a run finite (a day of simulated time per episode is far beyond any use).
 MAX_EPISODES = 10_000_000
@@ -44,7 +48,9 @@ class Phase:
         "paper-left",
         "pipeline to train on: built-in name, JSON file, or random:FAMILY (a new pipe every episode)",
     )
-    episodes: int = _f(500, "episodes of this phase; σ runs from sigma_start to sigma_end over them")
+    episodes: int = _f(
+        TRAINING_EPISODES, "episodes of this phase; σ runs from sigma_start to sigma_end over them"
+    )
 
 
 @dataclass(frozen=True)
@@ -78,14 +84,18 @@ class TrialConfig:
         0.0, "CACLA and actor-critic, beyond the paper: λ of the critic's TD(λ) trace; 0 = TD(0) (eqs. 5-6)"
     )
     phases: tuple[Phase, ...] = _f((Phase(),), "training phases in order (paper §4.2: left, then right)")
-    episode_seconds: float = _f(20.0, "episode length (s); one decision per second (paper §4.1)")
-    sigma_start: float = _f(1.0, "exploration σ of the first episode, normalized action units (paper §4)")
-    sigma_end: float = _f(0.01, "exploration σ of the last episode of each phase (paper §4)")
-    alpha_v: float = _f(0.4, "CACLA and actor-critic: critic step size α_V (paper §4)")
-    alpha_pi: float = _f(0.2, "CACLA and actor-critic: actor step size α_π (paper §4)")
-    alpha_q: float = _f(0.4, "SARSA step size α (paper §4)")
-    discount: float = _f(0.8, "discount factor γ_d (paper §4)")
-    delta_k: float = _f(0.05, "supervised learners: increment Δk of k(s) per visit (paper §4.1)")
+    episode_seconds: float = _f(EPISODE_SECONDS, "episode length (s); one decision per second (paper §4.1)")
+    sigma_start: float = _f(
+        SIGMA_START, "exploration σ of the first episode, normalized action units (paper §4)"
+    )
+    sigma_end: float = _f(SIGMA_END, "exploration σ of the last episode of each phase (paper §4)")
+    alpha_v: float = _f(PAPER_CACLA.alpha_v, "CACLA and actor-critic: critic step size α_V (paper §4)")
+    alpha_pi: float = _f(PAPER_CACLA.alpha_pi, "CACLA and actor-critic: actor step size α_π (paper §4)")
+    alpha_q: float = _f(PAPER_SARSA.alpha, "SARSA step size α (paper §4)")
+    discount: float = _f(PAPER_CACLA.discount, "discount factor γ_d (paper §4)")
+    delta_k: float = _f(
+        PAPER_CACLA.delta_k, "supervised learners: increment Δk of k(s) per visit (paper §4.1)"
+    )
     forgetting: float = _f(0.0, "supervised learners: per-update decay of k's weights; the paper uses none")
     readings: tuple[str, ...] = _f(
         (), "readings of the paper's open points, as key=value ids (docs/design.md); later ones win"

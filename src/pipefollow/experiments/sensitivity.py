@@ -43,8 +43,7 @@ def canonical(rid: str) -> str:
 
 def training_id(rid: str) -> str:
     """The reading a reading trains under: ``rid`` without its report-only (threshold) readings."""
-    r = rd.parse(rid)
-    return dataclasses.replace(r, **{k: getattr(rd.DEFAULT, k) for k in rd.REPORT_ONLY}).id
+    return rd.parse(rid).training.id
 
 
 def compared(exp: ExperimentConfig) -> list[str]:

@@ -13,6 +13,7 @@ from pipefollow.learners.heuristic import Heuristic
 from pipefollow.learners.registry import learner
 from pipefollow.sim.disturbance import NO_DISTURBANCE, disturbance_from_dict
 from pipefollow.sim.suites import Suite, min_length_for, resolve_training
+from pipefollow.training.agents import make_agent
 from pipefollow.training.compiled import run_episode
 from pipefollow.training.phases import agent_rng, phase_sigmas, sim_under, train_phases
 
@@ -53,7 +54,7 @@ def build_agent(config: TrialConfig, rng: np.random.Generator | None = None):
     kind = learner(config.algorithm)
     options = {name: getattr(config, name) for name in kind.options}
     steps = {param: getattr(config, field) for field, param in kind.step_sizes.items()}
-    return kind.make(config.reading, rng, **options, **steps)
+    return make_agent(config.algorithm, rng=rng, readings=config.reading, **options, **steps)
 
 
 class ActorOnly:

@@ -28,7 +28,7 @@ from typing import NamedTuple
 import numpy as np
 
 from pipefollow.learners import cacla
-from pipefollow.learners.cacla import Cacla
+from pipefollow.learners.cacla import PAPER_CACLA, Cacla
 from pipefollow.learners.cacla_update import (
     DELTA,
     K_EVERY,
@@ -40,7 +40,7 @@ from pipefollow.learners.cacla_update import (
     STEP_WEIGHTS,
 )
 from pipefollow.learners.protocol import LearnerKind
-from pipefollow.learners.rbf import STATE_GRID, RBFGrid, state_grid
+from pipefollow.learners.rbf import STATE_GRID, RBFGrid
 
 # The actor's step factor on (a − A(s)) (cacla_update.step_factor): eq. 9's δ, or one of eq. 7's terms.
 ACTOR_UPDATES = {"delta": DELTA, "positive": POSITIVE, "sign": SIGN}
@@ -54,13 +54,13 @@ class ActorCriticParams(NamedTuple):
     (``cacla.unpack`` reads the fields it starts with) and the record itself by the same names.
     """
 
-    alpha_v: float = 0.4  # critic step size α_V (paper §4)
-    alpha_pi: float = 0.2  # actor step size α_π (paper §4)
-    discount: float = 0.8  # discount factor γ_d (paper §4)
+    alpha_v: float = PAPER_CACLA.alpha_v  # critic step size α_V (paper §4)
+    alpha_pi: float = PAPER_CACLA.alpha_pi  # actor step size α_π (paper §4)
+    discount: float = PAPER_CACLA.discount  # discount factor γ_d (paper §4)
     skew: float = 0.0  # always 0: this learner explores with eq. 8 only
     gamma_max: float = 1.0  # cap |γ(s)| ≤ γ_max, unused without skew
     supervised: bool = False  # supervised actor-critic (eqs. 10, 11, 13)
-    delta_k: float = 0.05  # Δk per visit (paper §4.1)
+    delta_k: float = PAPER_CACLA.delta_k  # Δk per visit (paper §4.1)
     k_max: float = 1.0  # cap on k(s) (eq. 13)
     forgetting: float = 0.0  # per-update decay of w_k (Rosenstein & Barto); the paper uses none
     skew_sample: int = SAMPLE_LOCATION  # unused without skew
@@ -73,7 +73,7 @@ class ActorCriticParams(NamedTuple):
     actor_update: int = DELTA  # the actor's step factor: eq. 9's δ (default), max(δ, 0) or sgn(δ)
 
 
-PAPER_AC = ActorCriticParams()  # the paper's α_V = 0.4, α_π = 0.2, γ_d = 0.8, Δk = 0.05; eq. 9's δ
+PAPER_AC = ActorCriticParams()  # the paper's step sizes (CACLA's); eq. 9's δ
 
 
 class ActorCritic(Cacla):
@@ -119,27 +119,11 @@ def from_policy(data: dict, seed: int | None = None):
     return cacla.from_policy(data, seed, agent_class=ActorCritic, params_class=ActorCriticParams)
 
 
-def make(
-    r,
-    rng: np.random.Generator | None = None,
-    *,
-    supervised: bool = False,
-    actor_update: str = "delta",
-    **fields,
-) -> ActorCritic:
-    """A fresh actor-critic under the readings ``r`` (fields: those of ``CaclaParams`` but the skew's).
-
-    ``actor_update``: ``delta`` (eq. 9), ``positive`` or ``sign`` (:func:`.cacla_update.step_factor`).
-
-    Raises:
-        ValueError: an unknown ``actor_update``.
-    """
-    if actor_update not in ACTOR_UPDATES:
-        raise ValueError(f"actor_update must be one of {', '.join(ACTOR_UPDATES)}, got {actor_update!r}")
-    base = cacla.params_under(r, 0.0, supervised=supervised, **fields)
-    params = ActorCriticParams(*base, actor_update=ACTOR_UPDATES[actor_update])
-    agent = ActorCritic(params, grid=state_grid(r.rbf, r.rbf_width), rng=rng)
-    agent.readings = r.id
+def make(params: ActorCriticParams, grid: RBFGrid, rng: np.random.Generator | None = None, *,
+         readings: str = "default") -> ActorCritic:  # fmt: skip
+    """A fresh actor-critic with ``params`` on ``grid``, built under the readings with id ``readings``."""
+    agent = ActorCritic(params, grid=grid, rng=rng)
+    agent.readings = readings
     return agent
 
 

@@ -26,13 +26,11 @@ from numba import njit
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from pipefollow.learners.cacla_update import (
-    ACTOR_REPEATS,
     HEAD_A,
     HEAD_G,
     HEAD_K,
     HEADS,
     K_EVERY,
-    K_POSITIVE,
     REPEAT_ONCE,
     REPEAT_VAR,
     SAMPLE_CENTRED,
@@ -47,12 +45,13 @@ from pipefollow.learners.cacla_update import (
     clip1,
     update,
 )
+from pipefollow.learners.cacla_update import K_POSITIVE as K_POSITIVE  # k_update's codes, beside K_EVERY
 from pipefollow.learners.cacla_update import V as V  # the critic's row, beside A, G, K
 from pipefollow.learners.episodes import features_of
-from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals, skew_step_to_gamma
+from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals
 from pipefollow.learners.heuristic import heuristic_action
 from pipefollow.learners.protocol import Agent, LearnerKind
-from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite, grid_features, state_grid
+from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite, grid_features
 from pipefollow.learners.sums import dot
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
@@ -325,41 +324,6 @@ def cacla_label(p: CaclaParams) -> str:
     return name
 
 
-def skew_in_gamma_units(skew_deg: float, unit: str = "deg45") -> float:
-    """Δγ of eq. 15 from degrees to units of γ under the ``skew_unit`` reading (``deg45`` or ``rad``).
-
-    Raises:
-        ValueError: ``skew_deg`` negative or not finite.
-    """
-    gamma = skew_step_to_gamma(skew_deg)  # 45° is one unit of γ; checks the value
-    return math.radians(skew_deg) if unit == "rad" else gamma
-
-
-def params_under(r, skew_deg: float = 0.0, **fields) -> CaclaParams:
-    """CACLA's parameter record under the readings ``r``, with Δγ from degrees and other ``fields``.
-
-    ``r`` is a :class:`pipefollow.readings.Readings` (its ``skew_unit``, ``gamma_max``,
-    ``skew_sample``, ``skew_step``, ``k_update`` and ``k_step``).
-
-    Raises:
-        ValueError: ``critic_lambda`` outside [0, 1].
-    """
-    lam = fields.get("critic_lambda", 0.0)
-    if not 0.0 <= lam <= 1.0:
-        raise ValueError(f"critic_lambda must be in [0, 1], got {lam!r}")
-    return CaclaParams(
-        skew=skew_in_gamma_units(skew_deg, r.skew_unit),
-        gamma_max=r.gamma_max,
-        skew_sample={"location": SAMPLE_LOCATION, "centred": SAMPLE_CENTRED, "moments": SAMPLE_MOMENTS}[
-            r.skew_sample
-        ],
-        skew_step=STEP_GAMMA if r.skew_step == "gamma" else STEP_WEIGHTS,
-        k_update=K_EVERY if r.k_update == "every" else K_POSITIVE,
-        k_step=STEP_GAMMA if r.k_step == "k" else STEP_WEIGHTS,
-        **fields,
-    )
-
-
 # ---------------------------------------------------------------------------------------------
 # The compiled episodes (the protocol of pipefollow.sim.episode) and what the layers above need
 
@@ -474,21 +438,11 @@ def from_policy(
     return agent, weights
 
 
-def make(r, rng: np.random.Generator | None = None, *, skew_deg: float = 0.0, supervised: bool = False,
-         actor_repeats: str = "once", **fields) -> Cacla:  # fmt: skip
-    """A fresh CACLA agent under the readings ``r`` (fields: those of :class:`CaclaParams`).
-
-    ``actor_repeats``: ``once`` (eq. 7) or ``var`` (CACLA+Var, beyond the paper; :func:`repeats`).
-
-    Raises:
-        ValueError: an unknown ``actor_repeats``.
-    """
-    if actor_repeats not in ACTOR_REPEATS:
-        raise ValueError(f"actor_repeats must be one of {', '.join(ACTOR_REPEATS)}, got {actor_repeats!r}")
-    params = params_under(r, skew_deg, supervised=supervised, actor_repeats=ACTOR_REPEATS[actor_repeats],
-                          **fields)  # fmt: skip
-    agent = Cacla(params, grid=state_grid(r.rbf, r.rbf_width), rng=rng)
-    agent.readings = r.id
+def make(params: CaclaParams, grid: RBFGrid, rng: np.random.Generator | None = None, *,
+         readings: str = "default") -> Cacla:  # fmt: skip
+    """A fresh CACLA agent with ``params`` on ``grid``, built under the readings with id ``readings``."""
+    agent = Cacla(params, grid=grid, rng=rng)
+    agent.readings = readings
     return agent
 
 

@@ -31,6 +31,17 @@ OPTIONS = {
 }
 
 
+def option_code(option: str, codes: Mapping[str, int], value: str) -> int:
+    """The code of an option given by name (``actor_repeats``: ``once`` → ``REPEAT_ONCE``).
+
+    Raises:
+        ValueError: a name that is not in ``codes`` (``actor_repeats must be one of once, var, got …``).
+    """
+    if value not in codes:
+        raise ValueError(f"{option} must be one of {', '.join(codes)}, got {value!r}")
+    return codes[value]
+
+
 @dataclass(frozen=True)
 class LearnerKind:
     """One learner, as the layers above see it.
@@ -42,8 +53,10 @@ class LearnerKind:
         agent_class: the class of its agents.
         options: which of :data:`OPTIONS` it takes.
         step_sizes: experiment-file field → keyword of ``make`` (its step sizes and discount).
-        make: ``make(readings, rng, **options_and_step_sizes) -> agent``, a fresh agent under the
-            readings (a :class:`pipefollow.readings.Readings`, read by attribute).
+        make: ``make(params, grid, rng, *, readings, ...) -> agent``, a fresh agent with its
+            parameter record, its RBF state grid (SARSA: and ``action_grid``) and the id of the
+            readings they were built under (kept for the policy file); the layers above build
+            them from the readings (:func:`pipefollow.readings.learner_inputs`).
         check: ``check(agent)`` raises ``TypeError`` if the compiled loop cannot run that agent.
         run: ``run(agent, tracks, run, env_rng, dz, stats, poses)`` runs the compiled episodes of
             the protocol of :mod:`pipefollow.sim.episode` (learning if ``run.learn``), writing ``stats`` rows

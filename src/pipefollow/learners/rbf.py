@@ -303,13 +303,3 @@ class RBFGrid:
 
 STATE_GRID = RBFGrid(STATE_CENTRES)  # 1,764 state features
 ACTION_GRID = RBFGrid((ACTION_CENTRES,))  # 13 action features
-
-
-def state_grid(form: str = "normalized", width: str = "half-spacing") -> RBFGrid:
-    """The 1,764-feature state grid in the given form and width (the ``rbf`` and ``rbf_width`` readings)."""
-    return RBFGrid(STATE_CENTRES, form=form, width=width)
-
-
-def action_grid(form: str = "normalized", width: str = "half-spacing") -> RBFGrid:
-    """SARSA's 13-centre action grid in the given form and width."""
-    return RBFGrid((ACTION_CENTRES,), form=form, width=width)

@@ -1,12 +1,11 @@
 """The learners by name: ``--algorithm NAME`` on the command line, ``algorithm = "NAME"`` in experiments.
 
 Each entry is the :class:`~pipefollow.learners.protocol.LearnerKind` of one learner module; a new
-learner is one module and one entry here.
+learner is one module, one entry here and one in ``pipefollow.readings.apply.LEARNER_INPUTS`` (its
+parameter record and grids under the readings).
 """
 
 from __future__ import annotations
-
-import numpy as np
 
 from pipefollow.learners import actor_critic, cacla, sarsa
 from pipefollow.learners.protocol import OPTIONS, LearnerKind
@@ -52,12 +51,14 @@ def check_options(name: str, **options) -> None:
             raise ValueError(f"{option} applies to algorithm {' and '.join(taking(option))} only")
 
 
-def make(name: str, readings, rng: np.random.Generator | None = None, **options):
-    """A fresh agent of learner ``name`` under ``readings``; ``options`` are shared options and step sizes.
+def options_for(name: str, **options) -> dict:
+    """``options`` (shared options and step sizes) as learner ``name`` takes them.
 
     Options left at their off value (0, False, ``delta``) are dropped for learners that do not take them.
+
+    Raises:
+        ValueError: an unknown learner, or an option set for a learner that does not take it.
     """
     check_options(name, **options)
     kind = learner(name)
-    kw = {k: v for k, v in options.items() if k not in OPTIONS or k in kind.options}
-    return kind.make(readings, rng, **kw)
+    return {k: v for k, v in options.items() if k not in OPTIONS or k in kind.options}

@@ -21,10 +21,8 @@ from pipefollow.learners.rbf import (
     ACTION_GRID,
     STATE_GRID,
     RBFGrid,
-    action_grid,
     dim_activations,
     grid_features,
-    state_grid,
 )
 from pipefollow.learners.sums import dot, matvec
 from pipefollow.sim import decision as sim
@@ -286,11 +284,11 @@ def from_policy(data: dict, seed: int | None = None):
     return agent, weights
 
 
-def make(r, rng: np.random.Generator | None = None, **fields) -> Sarsa:
-    """A fresh SARSA agent under the readings ``r`` (fields: those of :class:`SarsaParams`)."""
-    agent = Sarsa(SarsaParams(**fields), grid=state_grid(r.rbf, r.rbf_width),
-                  action_grid=action_grid(r.rbf, r.rbf_width), rng=rng)  # fmt: skip
-    agent.readings = r.id
+def make(params: SarsaParams, grid: RBFGrid, action_grid: RBFGrid, rng: np.random.Generator | None = None, *,
+         readings: str = "default") -> Sarsa:  # fmt: skip
+    """A fresh SARSA agent with ``params`` on its state and action grids, under the readings ``readings``."""
+    agent = Sarsa(params, grid=grid, action_grid=action_grid, rng=rng)
+    agent.readings = readings
     return agent
 
 

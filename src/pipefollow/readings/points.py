@@ -176,9 +176,9 @@ class Readings:
         }
 
     @property
-    def trains_like_default(self) -> bool:
-        """True if only report-level readings (the convergence thresholds) differ from the defaults."""
-        return all(k in REPORT_ONLY for k in self.changes())
+    def training(self) -> Readings:
+        """The readings a run trains under: these with the report-only ones (:data:`REPORT_ONLY`) reset."""
+        return dataclasses.replace(self, **{k: getattr(DEFAULT, k) for k in REPORT_ONLY})
 
 
 DEFAULT = Readings()

@@ -33,7 +33,12 @@ def make_agent(
     ``skew_deg`` is Δγ in degrees (CACLA), ``supervised`` adds the heuristic as supervisor (CACLA,
     actor-critic); extra keyword arguments override fields of the learner's parameter record.
 
+    The readings become the learner's parameter record and grids (:func:`pipefollow.readings.learner_inputs`);
+    the learner's ``make`` receives those and the readings' id.
+
     Raises:
-        ValueError: an unknown algorithm, or an option it does not take.
+        ValueError: an unknown algorithm, an option it does not take, or an unknown option value.
     """
-    return registry.make(algorithm, readings, rng, skew_deg=skew_deg, supervised=supervised, **params)
+    options = registry.options_for(algorithm, skew_deg=skew_deg, supervised=supervised, **params)
+    inputs = rd.learner_inputs(algorithm, readings, **options)
+    return registry.learner(algorithm).make(**inputs, rng=rng, readings=readings.id)

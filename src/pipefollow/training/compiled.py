@@ -27,15 +27,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipefollow.files.paper_training import EPISODE_SECONDS
 from pipefollow.learners.exploration import SIGMA_END, SIGMA_START, linear_sigma, sigma_schedule
 from pipefollow.learners.registry import learner_of
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
 from pipefollow.sim.episode import TRAINING_STAT_NAMES, Run, Tracks, no_poses, tracks_of
 from pipefollow.sim.pipeline import Pipeline
-
-# The columns of a training run's statistics, under the name the command line and the experiments read.
-EPISODE_SECONDS = 20.0  # the training episode's length when none is given (the paper's, §4)
 
 
 @dataclass(frozen=True)

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from pipefollow.files.paper_training import EPISODE_SECONDS
 from pipefollow.sim.episode import tracks_of
-from pipefollow.training.compiled import EPISODE_SECONDS, train_chunks
+from pipefollow.training.compiled import train_chunks
 
 
 def train_random_compiled(

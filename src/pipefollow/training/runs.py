@@ -16,12 +16,12 @@ from pathlib import Path
 import numpy as np
 
 from pipefollow import readings as rd
+from pipefollow.files.paper_training import TRAINING_EPISODES
 from pipefollow.learners.registry import learner
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
 from pipefollow.sim.episode import TRAINING_STAT_NAMES
 from pipefollow.training.phases import phase_sigmas, train_phases
 
-EPISODES = 500  # training episodes of a run (paper §4.1)
 SECONDS: float = signature(train_phases).parameters["episode_seconds"].default  # episode length (s)
 
 
@@ -120,7 +120,7 @@ def train_into(
     out: Path,
     agent,
     pipeline: str,
-    episodes: int = EPISODES,
+    episodes: int = TRAINING_EPISODES,
     *,
     seed: int,
     readings: rd.Readings = rd.DEFAULT,
