@@ -379,20 +379,24 @@ def test_shell_completion_scripts_come_from_click(runner):
     assert res.stdout.split() == ["plain,pipelines"]
 
 
-def test_the_shared_seconds_and_episodes_options_have_the_experiments_limits():
-    from pipefollow.cli.options import MAX_EPISODE_SECONDS
-    from pipefollow.cli.options import MAX_EPISODES as CLI_MAX_EPISODES
-    from pipefollow.envs import shell
-    from pipefollow.experiments.schema import MAX_EPISODES, MAX_SECONDS
-
-    assert MAX_EPISODE_SECONDS == MAX_SECONDS == shell.MAX_EPISODE_SECONDS
-    assert CLI_MAX_EPISODES == MAX_EPISODES
+def test_an_episode_longer_than_the_limit_is_refused_by_the_options_the_files_and_the_environment(tmp_path):
     import gymnasium
 
-    import pipefollow
+    import pipefollow.envs  # noqa: F401 (registers the environment)
+    from pipefollow.cli import main
+    from pipefollow.files.limits import MAX_EPISODE_SECONDS
 
+    too_long = str(MAX_EPISODE_SECONDS * 1.5)
+    res = CliRunner().invoke(main, ["evaluate", "--seconds", too_long])
+    assert res.exit_code == 2 and "--seconds" in res.output
+    toml = tmp_path / "x.toml"
+    toml.write_text(f'[experiment]\nname = "x"\n[[trial]]\nname = "t"\nepisode_seconds = {too_long}\n')
+    res = CliRunner().invoke(main, ["reproduce", "--experiment", str(toml), "--out", str(tmp_path / "r")])
+    assert res.exit_code == 2 and "episode_seconds" in res.output
+    with pytest.raises(ValueError, match="episode_seconds"):
+        gymnasium.make("pipefollow/PipelineFollowing-v0", episode_seconds=MAX_EPISODE_SECONDS * 1.5)
     # the registered upper bound of gym.make's TimeLimit: one decision per second of the longest episode
-    assert gymnasium.spec(pipefollow.ENV_ID).max_episode_steps == int(MAX_SECONDS)
+    assert gymnasium.spec("pipefollow/PipelineFollowing-v0").max_episode_steps == int(MAX_EPISODE_SECONDS)
 
 
 @pytest.mark.parametrize("as_json", [True, False])

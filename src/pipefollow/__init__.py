@@ -24,6 +24,8 @@ def register_envs() -> None:
     """Register the Gymnasium environment and its batched vector version (idempotent)."""
     from gymnasium.envs.registration import register, registry
 
+    from pipefollow.files.limits import MAX_EPISODE_SECONDS
+
     if ENV_ID not in registry:
         # The episode length is the env's own (``episode_seconds``); the spec carries its upper
         # bound, one decision per second, so that gym.make's TimeLimit never truncates earlier.
@@ -31,7 +33,7 @@ def register_envs() -> None:
             id=ENV_ID,
             entry_point="pipefollow.envs.env:PipelineFollowingEnv",
             vector_entry_point="pipefollow.envs.vector_env:PipelineFollowingVectorEnv",
-            max_episode_steps=86_400,  # pipefollow.envs.env.MAX_EPISODE_SECONDS / 1-s decisions
+            max_episode_steps=int(MAX_EPISODE_SECONDS),  # at most one decision per second
         )
 
 

@@ -13,14 +13,7 @@ import click
 
 from pipefollow.cli import parsing
 from pipefollow.cli.common import SEED, UserError, finite
-
-# The longest episode an option takes: experiments.schema.MAX_SECONDS, kept here so that the
-# command line imports no experiment machinery to build its options (a test holds them equal)
-MAX_EPISODE_SECONDS = 86_400.0
-
-
-MAX_EPISODES = 10_000_000  # experiments.schema.MAX_EPISODES, likewise
-
+from pipefollow.files.limits import MAX_EPISODE_SECONDS, MAX_EPISODES
 
 SUITE_HELP = (
     "A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "

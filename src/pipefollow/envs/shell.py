@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
+from pipefollow.files.limits import MAX_EPISODE_SECONDS
 from pipefollow.files.paper_training import EPISODE_SECONDS
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
@@ -28,7 +29,6 @@ from pipefollow.sim.suites import Suite, min_length_for, parse_random_spec
 
 # The longest episode the environments run (a day of 1-s decisions): the registered
 # ``max_episode_steps``, which must not cut any episode shorter than its ``episode_seconds``.
-MAX_EPISODE_SECONDS = 86_400.0
 
 # The constructor arguments of the single environment that the vector environment shares.
 SHARED_ARGUMENTS = (

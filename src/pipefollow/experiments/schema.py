@@ -13,17 +13,14 @@ import dataclasses
 from dataclasses import dataclass, field
 
 from pipefollow import readings as rd
+from pipefollow.files.limits import MAX_EPISODE_SECONDS as MAX_SECONDS
+from pipefollow.files.limits import MAX_EPISODES, MAX_REPEATS
 from pipefollow.files.paper_training import EPISODE_SECONDS, TRAINING_EPISODES
 from pipefollow.learners.cacla import PAPER_CACLA
 from pipefollow.learners.exploration import SIGMA_END, SIGMA_START
 from pipefollow.learners.registry import NAMES as ALGORITHMS
 from pipefollow.learners.registry import check_options
 from pipefollow.learners.sarsa import PAPER_SARSA
-
-# Bounds that keep a run finite (a day of simulated time per episode is far beyond any use).
-MAX_EPISODES = 10_000_000
-MAX_SECONDS = 86_400.0
-MAX_REPEATS = 100_000
 
 # Figure and table keys of the report a trial can belong to (``figures = [...]`` in a trial).
 FIGURE_KEYS = ("fig5", "fig6", "fig7", "table1")

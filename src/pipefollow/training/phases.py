@@ -14,6 +14,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from pipefollow import readings as rd
+from pipefollow.files.paper_training import EPISODE_SECONDS
 from pipefollow.learners.exploration import SIGMA_END, SIGMA_START, sigma_schedule
 from pipefollow.sim import decision as sim
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
@@ -60,7 +61,7 @@ def train_phases(
     readings: rd.Readings = rd.DEFAULT,
     disturbance: Disturbance = NO_DISTURBANCE,
     randomization=None,
-    episode_seconds: float = 20.0,
+    episode_seconds: float = EPISODE_SECONDS,
     sigma_start: float = SIGMA_START,
     sigma_end: float = SIGMA_END,
     progress: Callable[[int], None] | None = None,
