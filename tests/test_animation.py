@@ -79,6 +79,7 @@ def test_suffixes_known():
     assert animation.ANIMATION_SUFFIXES == ("gif", "mp4")
 
 
+@pytest.mark.slow  # renders and detects every frame of an animation (≈ 20 s)
 def test_with_the_vision_camera_each_frame_shows_the_camera_panel_beside_the_view(tmp_path):
     pytest.importorskip("cv2")
     env = PipelineFollowingEnv("paper-left", episode_seconds=3, camera="vision")

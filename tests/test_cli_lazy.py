@@ -101,6 +101,7 @@ def test_the_environment_is_registered_by_the_package_after_gymnasium_or_by_its_
     loaded_after(f"{imports}\nassert pipefollow.ENV_ID in gymnasium.registry")
 
 
+@pytest.mark.slow  # fresh interpreters (≈ 3 s)
 def test_gymnasiums_module_form_of_the_id_registers_the_environment_whatever_came_first():
     # the package imported before Gymnasium registers nothing; the module form imports pipefollow.envs
     code = (

@@ -23,6 +23,7 @@ def _reproduce(out: Path, env: dict) -> bytes:
     return (out / "evaluation.csv").read_bytes()
 
 
+@pytest.mark.slow  # the whole reproduction in a fresh interpreter (≈ 9 s)
 def test_reproduction_on_the_host_target_equals_the_committed_evaluation(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CPU_NAME"}
     assert _reproduce(tmp_path / "run", env) == COMMITTED.read_bytes()

@@ -355,6 +355,7 @@ def test_summary(tmp_path):
     assert set(s["sup-skew"]["evaluation_mean_return"]) == {"learned", "heuristic", "actor"}
 
 
+@pytest.mark.slow  # a trial in a fresh interpreter (≈ 4 s)
 def test_the_code_stamp_covers_every_module_a_trial_imports():
     # A trial run in a fresh interpreter: every pipefollow module it loads must be in the stamp.
     import subprocess

@@ -90,6 +90,7 @@ TARGETS = {
 }
 
 
+@pytest.mark.slow  # a fresh interpreter compiling for each target (≈ 4 s each)
 @pytest.mark.parametrize("target", list(TARGETS))
 def test_dot_gives_the_same_bits_under_every_cpu_target(target, tmp_path):
     if not TARGETS[target] <= host_features():
