@@ -114,6 +114,6 @@ def trajectories_figure(
         The matplotlib figure.
     """
     from pipefollow.envs.render import plot_trajectories
-    from pipefollow.sim.pipeline import resolve
+    from pipefollow.sim.pipe_names import resolve_fixed
 
-    return plot_trajectories(resolve(pipeline), trajectories, path, title=title)
+    return plot_trajectories(resolve_fixed(pipeline), trajectories, path, title=title)
