@@ -9,7 +9,15 @@ import pytest
 from click.testing import CliRunner
 
 from pipefollow.cli import main
-from pipefollow.sim.pipe_names import FileSuite, did_you_mean, resolve_pipeline, resolve_suite
+from pipefollow.sim.pipe_names import (
+    FileSuite,
+    did_you_mean,
+    pipeline_source,
+    resolve_fixed,
+    resolve_pipeline,
+    resolve_suite,
+    resolve_training,
+)
 from pipefollow.sim.pipeline import PipelineError
 from pipefollow.sim.suites import SUITES, min_length_for
 
@@ -133,3 +141,19 @@ def test_gym_make_takes_a_pipeline_as_its_points():
     assert obs[0] == 0.0 and obs[1] == 3.0
     with pytest.raises(PipelineError, match="pipeline points: needs at least two distinct points"):
         gym.make(pipefollow.ENV_ID, pipeline=[[0, 0]])
+
+
+def test_each_entry_point_takes_its_forms_and_shares_the_fixed_ones():
+    points = [[0, 0], [3, 4]]
+    for pipe in (resolve_fixed(points), resolve_training(points), pipeline_source(points)[1]):
+        assert pipe.name == "pipeline points" and pipe.length == 5.0
+    with pytest.raises(PipelineError, match="pipeline points: points contain a number too large"):
+        pipeline_source([[0, 0], [10**400, 1]])
+    family, first = pipeline_source("random:hard")
+    assert family is SUITES["hard"] and first.name == "hard-000"
+    assert resolve_pipeline("heldout-003", 20.0).name == "heldout-003"  # suite pipes: evaluation only
+    for resolve in (resolve_fixed, resolve_training):
+        with pytest.raises(PipelineError, match="not a built-in .* and no such file"):
+            resolve("heldout-003")
+    with pytest.raises(PipelineError, match="no such file"):
+        resolve_fixed("random:hard")  # a family is no fixed pipeline

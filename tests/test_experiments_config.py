@@ -315,9 +315,9 @@ def test_relative_pipeline_paths_are_relative_to_the_experiment_file(tmp_path, m
     (trial,) = exp.trials
     assert Path(trial.phases[0].pipeline).resolve() == (folder / "pipes" / "mine.json").resolve()
     assert trial.evaluate_on == "paper-validation"  # built-in names stay names
-    from pipefollow.sim.pipeline import resolve
+    from pipefollow.sim.pipe_names import resolve_fixed
 
-    assert resolve(trial.phases[0].pipeline).length == 5.0
+    assert resolve_fixed(trial.phases[0].pipeline).length == 5.0
 
 
 def test_the_reference_learners_experiment_sets_the_actor_critics_beside_cacla():

@@ -77,7 +77,7 @@ def test_cli_trials_of_a_bad_file_is_a_one_line_error(tmp_path, content):
 
 
 def test_the_random_families_are_listed_by_the_name_train_accepts():
-    from pipefollow.sim.suites import resolve_training
+    from pipefollow.sim.pipe_names import resolve_training
 
     rows = [e for e in listings.pipelines() if e.group == "random family"]
     assert [e.name for e in rows] == ["random:easy", "random:medium", "random:hard", "random:mixed"]

@@ -8,6 +8,7 @@ import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
 from pipefollow.sim import pipeline as pl
+from pipefollow.sim.pipe_names import resolve_fixed
 from pipefollow.sim.pipeline import Pipeline, PipelineError, builtin, load, random_pipeline
 
 
@@ -158,12 +159,12 @@ def test_save_load_round_trip_random(tmp_path):
 
 
 def test_resolve(tmp_path, bent):
-    assert pl.resolve(bent) is bent
-    assert_array_equal(pl.resolve("paper-left").points, builtin("paper-left").points)
+    assert resolve_fixed(bent) is bent
+    assert_array_equal(resolve_fixed("paper-left").points, builtin("paper-left").points)
     bent.save(tmp_path / "b.json")
-    assert_array_equal(pl.resolve(str(tmp_path / "b.json")).points, bent.points)
+    assert_array_equal(resolve_fixed(str(tmp_path / "b.json")).points, bent.points)
     with pytest.raises(PipelineError, match="nope"):
-        pl.resolve("nope")
+        resolve_fixed("nope")
 
 
 def test_random_pipeline_is_reproducible():

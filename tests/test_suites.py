@@ -8,6 +8,7 @@ import pytest
 from click.testing import CliRunner
 
 from pipefollow.cli import main
+from pipefollow.sim.pipe_names import parse_random_spec
 from pipefollow.sim.pipeline import BUILTIN_NAMES, load
 from pipefollow.sim.suites import (
     HELDOUT_STREAM,
@@ -20,7 +21,6 @@ from pipefollow.sim.suites import (
     draw_index,
     get_suite,
     min_length_for,
-    parse_random_spec,
     seed_sequence,
 )
 

@@ -211,7 +211,7 @@ def _check_tensorboard(algorithm: str) -> None:
 def _learner(algorithm, pipeline, seed, init_policy, readings, skew, supervised):
     """The agent to train and its readings: a new one, or the policy of --init with its options."""
     from pipefollow.learners.registry import learner, taking
-    from pipefollow.sim.suites import resolve_training
+    from pipefollow.sim.pipe_names import resolve_training
     from pipefollow.training.runs import new_agent
 
     for option, flag, value in (("skew_deg", "--skew", skew), ("supervised", "--supervised", supervised)):
@@ -271,7 +271,7 @@ def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, dis
         if type(e).__name__ != "DeepExtraMissing":
             raise
         raise UserError(str(e).split(" (")[0]) from None
-    from pipefollow.sim.suites import resolve_training
+    from pipefollow.sim.pipe_names import resolve_training
 
     resolve_training(pipeline)  # a bad pipeline fails before any work
     out = writable_folder(out_dir, "--out")

@@ -18,7 +18,6 @@ from pipefollow.envs.shell import (
     make_setup,
     observation,
     parse_reset_options,
-    pipeline_source,
     randomized_setup,
     start_episode,
     state_infos,
@@ -28,6 +27,7 @@ from pipefollow.perception.camera import VisionCamera, camera_settings
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
+from pipefollow.sim.pipe_names import pipeline_source
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.randomization import Randomization
 from pipefollow.sim.randomization import resolve as resolve_randomization

@@ -2,12 +2,12 @@
 
 Both environments are shells around the same compiled decision (:mod:`pipefollow.sim.decision`);
 this module holds everything else they have in common: the checks of their arguments and the
-spaces (:func:`make_setup`), the pipeline argument (:func:`pipeline_source`), the reset options
-(:func:`parse_reset_options`), the start of an episode with its draws in a fixed order
-(:func:`start_episode`), the info keys (:func:`state_infos`) and the episode summary
-(:func:`episode_summary`). The functions take one state of shape ``(STATE_SIZE,)`` or a batch of
-shape ``(N, STATE_SIZE)`` and return arrays of the matching shape, so the two environments cannot
-drift apart.
+spaces (:func:`make_setup`), the reset options (:func:`parse_reset_options`), the start of an
+episode with its draws in a fixed order (:func:`start_episode`), the info keys
+(:func:`state_infos`) and the episode summary (:func:`episode_summary`). (Their pipeline argument
+is read by :func:`pipefollow.sim.pipe_names.pipeline_source`.) The functions take one state of
+shape ``(STATE_SIZE,)`` or a batch of shape ``(N, STATE_SIZE)`` and return arrays of the matching
+shape, so the two environments cannot drift apart.
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ from pipefollow.files.paper_training import EPISODE_SECONDS
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
 from pipefollow.sim.disturbance import Disturbance, check, disturbance_from_dict, noise_count
-from pipefollow.sim.pipeline import Pipeline, resolve
-from pipefollow.sim.suites import Suite, min_length_for, parse_random_spec
+from pipefollow.sim.pipeline import Pipeline
+from pipefollow.sim.suites import Suite, min_length_for
 
 # The longest episode the environments run (a day of 1-s decisions): the registered
 # ``max_episode_steps``, which must not cut any episode shorter than its ``episode_seconds``.
@@ -163,30 +163,6 @@ def randomized_setup(setup: Setup, randomization, rng: np.random.Generator) -> S
     d = draw(randomization, rng)
     params = setup.params._replace(disturbance=d)
     return replace(setup, params=params, packed=sim.pack_params(params), noise_count=noise_count(d))
-
-
-def is_points(spec) -> bool:
-    """Whether ``spec`` is a polyline given as numbers, shape (n, 2) (``[[0, 0], [5, 0], [5, 5]]``)."""
-    if not isinstance(spec, list | tuple | np.ndarray):
-        return False
-    try:
-        arr = np.asarray(spec, dtype=np.float64)
-    except (TypeError, ValueError):
-        return False
-    return arr.ndim == 2 and arr.shape[1] == 2
-
-
-def pipeline_source(spec) -> tuple[Suite | None, Pipeline]:
-    """The training family of ``spec`` (or None) and the pipeline to show before the first reset.
-
-    ``spec`` is a built-in name, a JSON file, a :class:`Pipeline`, a list of points ``[[x, y],
-    ...]`` (m), or ``random[:FAMILY]`` (a new pipe from the family at every reset).
-    """
-    if is_points(spec):
-        return None, Pipeline(np.asarray(spec, dtype=np.float64), name="pipeline points")
-    suite = parse_random_spec(spec)
-    # until the first reset, a family shows its first pipe
-    return suite, (resolve(spec) if suite is None else suite.pipe(0))
 
 
 _KEEP = object()  # the reset options do not switch the pipeline

@@ -61,11 +61,9 @@ from pipefollow.envs.shell import (
     SHARED_ARGUMENTS,
     episode_summary,
     image_space,
-    is_points,
     make_setup,
     observation,
     parse_reset_options,
-    pipeline_source,
     randomized_setup,
     start_episode,
     state_infos,
@@ -74,6 +72,7 @@ from pipefollow.perception.camera import VisionCamera, camera_settings
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
 from pipefollow.sim.disturbance import NO_DISTURBANCE
+from pipefollow.sim.pipe_names import is_points, pipeline_source
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.randomization import MAX_NOISE
 from pipefollow.sim.randomization import resolve as resolve_randomization

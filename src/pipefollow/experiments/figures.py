@@ -14,9 +14,10 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from pipefollow.envs.render import save_figure
+from pipefollow.envs.render import new_figure, save_figure
 
 SMOOTHING_EPISODES = 10  # sliding-average window (paper §5)
+CURVE_FIGURE_SIZE = (7.0, 4.5)  # inches, at 100 dpi
 
 
 def sliding_average(x, window: int = SMOOTHING_EPISODES) -> np.ndarray:
@@ -47,15 +48,6 @@ def sliding_average(x, window: int = SMOOTHING_EPISODES) -> np.ndarray:
     return (cum[..., hi] - cum[..., lo]) / (hi - lo)
 
 
-def _new_figure(size=(7.0, 4.5)):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=size, dpi=100)
-    FigureCanvasAgg(fig)
-    return fig
-
-
 def learning_curve_figure(
     curves: Mapping[str, np.ndarray],
     path: str | os.PathLike | None,
@@ -75,7 +67,7 @@ def learning_curve_figure(
     Returns:
         The matplotlib figure.
     """
-    fig = _new_figure()
+    fig = new_figure(CURVE_FIGURE_SIZE)
     ax = fig.add_subplot()
     for i, (label, returns) in enumerate(curves.items()):
         returns = np.atleast_2d(np.asarray(returns, dtype=np.float64))
@@ -114,6 +106,6 @@ def trajectories_figure(
         The matplotlib figure.
     """
     from pipefollow.envs.render import plot_trajectories
-    from pipefollow.sim.pipeline import resolve
+    from pipefollow.sim.pipe_names import resolve_fixed
 
-    return plot_trajectories(resolve(pipeline), trajectories, path, title=title)
+    return plot_trajectories(resolve_fixed(pipeline), trajectories, path, title=title)

@@ -97,14 +97,13 @@ def import_ray():
 
 def check_inputs(exp: ExperimentConfig) -> None:
     """Fail before any work on what the trials would fail on late: unreadable pipelines."""
-    from pipefollow.sim.pipeline import resolve
-    from pipefollow.sim.suites import resolve_training
+    from pipefollow.sim.pipe_names import resolve_fixed, resolve_training
 
     for name in dict.fromkeys(p.pipeline for t in exp.trials for p in t.phases):
         resolve_training(name)
     for t in exp.trials:
         if t.evaluate_on:
-            resolve(t.evaluate_on)
+            resolve_fixed(t.evaluate_on)
 
 
 @contextlib.contextmanager

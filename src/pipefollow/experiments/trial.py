@@ -12,7 +12,8 @@ from pipefollow.experiments.config import TrialConfig
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.learners.registry import learner
 from pipefollow.sim.disturbance import NO_DISTURBANCE, disturbance_from_dict
-from pipefollow.sim.suites import Suite, min_length_for, resolve_training
+from pipefollow.sim.pipe_names import resolve_training
+from pipefollow.sim.suites import Suite, min_length_for
 from pipefollow.training.agents import make_agent
 from pipefollow.training.compiled import run_episode
 from pipefollow.training.phases import agent_rng, phase_sigmas, sim_under, train_phases

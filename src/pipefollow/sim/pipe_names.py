@@ -1,13 +1,31 @@
-"""The names a user gives for pipes: one pipeline, or a set of pipes to benchmark on.
+"""The pipes a user names: one pipeline, a pipeline or a family of random pipes, a set of pipes.
 
-One pipeline (``evaluate --pipeline``, ``train --pipeline``): a built-in name, a JSON file,
-``random[:FAMILY]`` (a new pipe of a training family every episode), or one pipe of a suite by
-the name ``suites export`` gives its file, ``SUITE-KKK`` (``heldout-003``).
+This module is the one place where what a user gives for a pipe becomes pipes. The forms:
 
-A set of pipes (``benchmark --suite``, ``compare --suite``): a suite name, or any number of
-folders (every ``*.json`` in them), pipeline files and glob patterns — what ``pipefollow suites
-export`` writes reads back as the same pipes, in the same order. Unknown names get a "did you
-mean" from the names that exist.
+* a :class:`~pipefollow.sim.pipeline.Pipeline`, or its points: ``[[x, y], ...]`` (m, north and
+  east) or an (n, 2) array, as in a pipeline file's ``"points"``;
+* a built-in name (:data:`~pipefollow.sim.pipeline.BUILTIN_NAMES`);
+* a pipeline file (JSON);
+* ``random[:FAMILY]``: a new pipe of a training family every episode (``random`` alone is
+  ``mixed``; a held-out suite is refused, training on it would spoil the test);
+* one pipe of a suite by the name ``suites export`` gives its file, ``SUITE-KKK`` (``heldout-003``);
+* for a set of pipes: a suite name, or any number of folders (every ``*.json`` in them), pipeline
+  files and glob patterns — what ``pipefollow suites export`` writes reads back as the same
+  pipes, in the same order.
+
+The entry points, one for each need, share :func:`parse_random_spec` and the fixed forms
+(a pipeline, its points, a built-in name):
+
+* :func:`resolve_fixed`: one fixed pipeline (a pipeline, its points, a built-in name, a file);
+* :func:`resolve_training`: that, or a training family (``random[:FAMILY]``) — what training and
+  the experiments' trials take; :func:`pipeline_source` adds the pipe an environment shows
+  before its first reset;
+* :func:`resolve_pipeline`: the command line's one pipeline (``evaluate --pipeline``): a built-in
+  name, ``random[:FAMILY]``, a suite pipe or a file;
+* :func:`resolve_suite`: the command line's set of pipes (``benchmark --suite``, ``compare
+  --suite``).
+
+Unknown names on the command line get a "did you mean" from the names that exist.
 """
 
 from __future__ import annotations
@@ -19,10 +37,83 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from pipefollow.sim.pipeline import BUILTIN_NAMES, Pipeline, PipelineError, load, resolve
-from pipefollow.sim.suites import RANDOM_PREFIX, SUITES, Suite, SuiteError, min_length_for, parse_random_spec
+import numpy as np
 
+from pipefollow.sim.pipeline import BUILTIN_NAMES, Pipeline, PipelineError, _validated_points, builtin, load
+from pipefollow.sim.suites import SUITES, Suite, SuiteError, get_suite, min_length_for
+
+RANDOM_PREFIX = "random"
+DEFAULT_TRAIN_FAMILY = "mixed"
 _SUITE_PIPE = re.compile(r"(?P<suite>[a-z-]+)-(?P<k>\d+)")
+
+
+def is_points(spec) -> bool:
+    """Whether ``spec`` is a polyline given as numbers, shape (n, 2) (``[[0, 0], [5, 0], [5, 5]]``)."""
+    if not isinstance(spec, list | tuple | np.ndarray):
+        return False
+    try:
+        arr = np.asarray(spec, dtype=np.float64)
+    except (TypeError, ValueError):
+        return False
+    return arr.ndim == 2 and arr.shape[1] == 2
+
+
+def parse_random_spec(spec) -> Suite | None:
+    """The training family of ``random`` / ``random:NAME``, or ``None`` if ``spec`` is something else.
+
+    ``random`` alone means the ``mixed`` family. A held-out suite is refused: training on it would
+    spoil the test.
+    """
+    if not isinstance(spec, str) or not (spec == RANDOM_PREFIX or spec.startswith(RANDOM_PREFIX + ":")):
+        return None
+    name = spec.partition(":")[2] or DEFAULT_TRAIN_FAMILY
+    suite = get_suite(name)
+    if not suite.is_training:
+        families = ", ".join(n for n, s in SUITES.items() if s.is_training)
+        raise SuiteError(f"pipeline '{spec}': '{name}' is a held-out suite; train on one of {families}")
+    return suite
+
+
+def _fixed(spec) -> Pipeline | None:
+    """The pipeline ``spec`` is without files: a pipeline, its points or a built-in name; else None."""
+    if isinstance(spec, Pipeline):
+        return spec
+    if isinstance(spec, list | tuple | np.ndarray):
+        return Pipeline(_validated_points(spec, "pipeline points"), "pipeline points")
+    if isinstance(spec, str) and spec in BUILTIN_NAMES:
+        return builtin(spec)
+    return None
+
+
+def resolve_fixed(spec) -> Pipeline:
+    """One fixed pipeline: a :class:`Pipeline`, its points, a built-in name or a pipeline file."""
+    pipe = _fixed(spec)
+    if pipe is not None:
+        return pipe
+    path = Path(spec)
+    if path.suffix.lower() != ".json" and not path.exists():
+        raise PipelineError(
+            f"pipeline '{spec}': not a built-in ({', '.join(BUILTIN_NAMES)}) and no such file"
+        )
+    return load(path)
+
+
+def resolve_training(spec) -> Pipeline | Suite:
+    """A fixed pipeline (:func:`resolve_fixed`) or a training family (``random[:NAME]``)."""
+    family = parse_random_spec(spec)
+    return family if family is not None else resolve_fixed(spec)
+
+
+def pipeline_source(spec) -> tuple[Suite | None, Pipeline]:
+    """The training family of ``spec`` (or None) and the pipeline to show before the first reset.
+
+    ``spec`` is what :func:`resolve_training` takes; until the first reset, a family shows its
+    first pipe.
+    """
+    resolved = resolve_training(spec)
+    if isinstance(resolved, Suite):
+        return resolved, resolved.pipe(0)
+    return None, resolved
 
 
 def did_you_mean(name: str, choices: Sequence[str]) -> str:
@@ -52,14 +143,18 @@ def suite_pipe_by_name(spec: str, seconds: float) -> Pipeline | None:
     return suite.pipe(k, min_length_for(seconds))
 
 
-def resolve_pipeline(spec: str, seconds: float) -> Pipeline | Suite:
-    """One pipeline (module docstring): a :class:`Pipeline`, or a training :class:`Suite` for ``random``."""
+def resolve_pipeline(spec, seconds: float) -> Pipeline | Suite:
+    """The command line's one pipeline: a :class:`Pipeline`, or a training :class:`Suite` for ``random``.
+
+    Besides what :func:`resolve_training` takes, a suite pipe ``SUITE-KKK`` (as long as an episode
+    of ``seconds`` needs); a folder or an unknown name is refused with a hint.
+    """
     family = parse_random_spec(spec)
     if family is not None:
         return family
-    if spec in BUILTIN_NAMES:
-        return resolve(spec)
-    pipe = suite_pipe_by_name(spec, seconds)
+    pipe = _fixed(spec)
+    if pipe is None:
+        pipe = suite_pipe_by_name(spec, seconds)
     if pipe is not None:
         return pipe
     path = Path(spec)

@@ -157,26 +157,6 @@ def builtin(name: str) -> Pipeline:
     raise PipelineError(f"pipeline '{name}': unknown built-in (choose from {', '.join(BUILTIN_NAMES)})")
 
 
-def resolve(spec) -> Pipeline:
-    """A pipeline from a built-in name, a JSON file path, a :class:`Pipeline` or its points.
-
-    Points are a sequence of ``[x, y]`` pairs (metres, north and east) or an (n, 2) array, as in a
-    pipeline file's ``"points"``.
-    """
-    if isinstance(spec, Pipeline):
-        return spec
-    if isinstance(spec, np.ndarray) or (isinstance(spec, list | tuple) and not isinstance(spec, str)):
-        return Pipeline(_validated_points(spec, "pipeline points"), "points")
-    if isinstance(spec, str) and spec in BUILTIN_NAMES:
-        return builtin(spec)
-    path = Path(spec)
-    if path.suffix.lower() != ".json" and not path.exists():
-        raise PipelineError(
-            f"pipeline '{spec}': not a built-in ({', '.join(BUILTIN_NAMES)}) and no such file"
-        )
-    return load(path)
-
-
 def random_pipeline(
     rng: np.random.Generator,
     n_segments: int = 5,

@@ -41,7 +41,6 @@ ARC_STEP_DEG = 10.0  # largest turn of one piece of a discretized arc
 MAX_HEADING_DEG = 100.0  # bends keep the heading within ± this of the start heading
 MIN_LENGTH_M = 46.0  # default pipe length: 60 s at 0.6 m/s (cruise is 0.48 m/s) plus 10 m
 CRUISE_MARGIN = 0.6  # m/s used to size pipes for long episodes (above the 0.48 m/s cruise speed)
-RANDOM_PREFIX = "random"
 
 
 class SuiteError(PipelineError):
@@ -149,7 +148,6 @@ SUITES = {
         Suite("heldout-hard", "hard", HELDOUT_STREAM, HELDOUT_COUNT, "held-out test, hard pipes"),
     )
 }
-DEFAULT_TRAIN_FAMILY = "mixed"
 
 
 def get_suite(name: str) -> Suite:
@@ -224,28 +222,11 @@ def suite_pipe(
     return Pipeline(np.array(pts), name or f"{family}-{stream}-{k}")
 
 
-def parse_random_spec(spec) -> Suite | None:
-    """The training family of ``random`` / ``random:NAME``, or ``None`` if ``spec`` is something else.
-
-    ``random`` alone means the ``mixed`` family. A held-out suite is refused: training on it would
-    spoil the test.
-    """
-    if not isinstance(spec, str) or not (spec == RANDOM_PREFIX or spec.startswith(RANDOM_PREFIX + ":")):
-        return None
-    name = spec.partition(":")[2] or DEFAULT_TRAIN_FAMILY
-    suite = get_suite(name)
-    if not suite.is_training:
-        families = ", ".join(n for n, s in SUITES.items() if s.is_training)
-        raise SuiteError(f"pipeline '{spec}': '{name}' is a held-out suite; train on one of {families}")
-    return suite
-
-
 def resolve_training(spec) -> Pipeline | Suite:
-    """A fixed pipeline (built-in name, JSON file) or a training family (``random[:NAME]``)."""
-    from pipefollow.sim.pipeline import resolve
+    """:func:`pipefollow.sim.pipe_names.resolve_training`, where the names of pipes are resolved."""
+    from pipefollow.sim.pipe_names import resolve_training as resolve
 
-    family = parse_random_spec(spec)
-    return family if family is not None else resolve(spec)
+    return resolve(spec)
 
 
 def export_suite(suite: Suite, folder, n: int | None = None, min_length: float = MIN_LENGTH_M) -> list:

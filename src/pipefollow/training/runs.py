@@ -149,7 +149,7 @@ def train_into(
             training fails or is interrupted.
     """
     from pipefollow.files.output_paths import remove_empty_folders
-    from pipefollow.sim.suites import resolve_training
+    from pipefollow.sim.pipe_names import resolve_training
     from pipefollow.training.outputs import write_training_outputs
 
     try:
