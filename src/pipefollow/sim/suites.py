@@ -222,11 +222,6 @@ def suite_pipe(
     return Pipeline(np.array(pts), name or f"{family}-{stream}-{k}")
 
 
-def resolve_training(spec) -> Pipeline | Suite:
-    """:func:`pipefollow.sim.pipe_names.resolve_training`, where the names of pipes are resolved."""
-    from pipefollow.sim.pipe_names import resolve_training as resolve
-
-    return resolve(spec)
 
 
 def export_suite(suite: Suite, folder, n: int | None = None, min_length: float = MIN_LENGTH_M) -> list:

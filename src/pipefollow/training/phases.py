@@ -75,7 +75,8 @@ def train_phases(
     every episode's disturbances from the disturbances' stream instead of ``disturbance``. Returns
     one (episodes, 4) statistics array per phase.
     """
-    from pipefollow.sim.suites import Suite, resolve_training
+    from pipefollow.sim.pipe_names import resolve_training
+    from pipefollow.sim.suites import Suite
 
     pipes = [resolve_training(name) for name, _ in phases]  # a bad pipeline fails before any training
     if randomization is not None:
