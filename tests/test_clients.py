@@ -327,6 +327,20 @@ def test_the_readmes_stable_baselines3_lines_train():
     assert all(-200.0 <= e["r"] <= 10.0 for e in episodes)  # 20 decisions of −10 … +0.5
 
 
+def test_the_readmes_stable_baselines3_lines_run_in_a_fresh_interpreter(tmp_path):
+    # in a fresh process nothing else has imported Gymnasium: the block's own imports must register
+    pytest.importorskip("stable_baselines3")
+    import subprocess
+    import sys
+
+    (block,) = [b for b in readme_blocks() if "stable_baselines3" in b]
+    short = block.replace("total_timesteps=1024", "total_timesteps=128")
+    code = "import torch\ntorch.set_num_threads(1)\n" + short
+    run = [sys.executable, "-c", code]
+    res = subprocess.run(run, capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert res.returncode == 0, res.stderr[-2000:]
+
+
 def test_the_readmes_torchrl_lines_roll_out():
     torch = _torch()
     pytest.importorskip("torchrl")
