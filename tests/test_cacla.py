@@ -5,8 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from pipefollow.learners import cacla
-from pipefollow.learners.cacla import A, Cacla, CaclaParams, G, K, V
+from pipefollow.learners import cacla, cacla_update
+from pipefollow.learners.cacla import Cacla, CaclaParams
+from pipefollow.learners.cacla_update import A, G, K, V
 from pipefollow.learners.exploration import skew_normal_from_normals
 from pipefollow.learners.rbf import RBFGrid
 from pipefollow.sim.pipeline import builtin
@@ -99,7 +100,7 @@ def test_k_update_readings():
     cacla.update(w, PHI, 0.6, 0.0, -1.0, 0.8, PHI_NEXT, CaclaParams(supervised=True))  # δ < 0
     np.testing.assert_allclose(w[K], 0.05 * PHI)  # every visit (default): w_k += Δk φ
     w = weights()
-    p = CaclaParams(supervised=True, k_update=cacla.K_POSITIVE)
+    p = CaclaParams(supervised=True, k_update=cacla_update.K_POSITIVE)
     cacla.update(w, PHI, 0.6, 0.0, -1.0, 0.8, PHI_NEXT, p)
     np.testing.assert_array_equal(w[K], 0.0)  # only when δ > 0
     cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)  # δ = 0.55

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from pipefollow.learners import cacla
-from pipefollow.learners.cacla import A, CaclaParams, V
-from pipefollow.learners.cacla_update import MAX_ACTOR_REPEATS
+from pipefollow.learners.cacla import CaclaParams
+from pipefollow.learners.cacla_update import MAX_ACTOR_REPEATS, A, V
 from pipefollow.sim.pipeline import builtin
 from pipefollow.training.agents import make_agent
 from pipefollow.training.compiled import train_compiled

@@ -6,7 +6,8 @@ import pytest
 from pipefollow import readings as rd
 from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.learners import cacla
-from pipefollow.learners.cacla import A, CaclaParams, V
+from pipefollow.learners.cacla import CaclaParams
+from pipefollow.learners.cacla_update import A, V
 from pipefollow.sim.pipeline import builtin
 from pipefollow.training.agents import make_agent
 from pipefollow.training.compiled import train, train_compiled

@@ -16,7 +16,7 @@ from pipefollow.sim.suites import get_suite
 
 def test_default_seconds():
     assert ev.default_seconds("paper-validation") == 60.0
-    assert ev.default_seconds("paper-left") == ev.SECONDS == 20.0
+    assert ev.default_seconds("paper-left") == ev.EPISODE_SECONDS == 20.0
 
 
 def test_episodes_alike_only_without_anything_random():

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pipefollow import readings as rd
-from pipefollow.learners import cacla
+from pipefollow.learners import cacla, cacla_update
 from pipefollow.learners.rbf import STATE_CENTRES
 from pipefollow.sim import decision as sim
 from pipefollow.training.agents import make_agent
@@ -68,7 +68,7 @@ def test_cacla_params_under_each_reading():
     r = rd.parse("skew_step=weights,skew_sample=moments,gamma_max=0.5,k_update=positive,k_step=k")
     q = rd.cacla_params(r, 22.5)
     assert (q.skew_step, q.skew_sample, q.gamma_max) == (cacla.STEP_WEIGHTS, cacla.SAMPLE_MOMENTS, 0.5)
-    assert (q.k_update, q.k_step) == (cacla.K_POSITIVE, cacla.STEP_GAMMA)
+    assert (q.k_update, q.k_step) == (cacla_update.K_POSITIVE, cacla_update.STEP_GAMMA)
     np.testing.assert_array_equal(cacla.unpack(cacla.pack(q)), q)  # the packed form keeps them
 
 

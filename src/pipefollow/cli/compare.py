@@ -57,9 +57,10 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
     """
     import numpy as np
 
-    from pipefollow.evaluation.benchmark import RET, run_episodes
+    from pipefollow.evaluation.benchmark import run_episodes
     from pipefollow.evaluation.compare import compare as run_compare
     from pipefollow.readings import parse, sim_params
+    from pipefollow.sim.episode import STAT_RETURN
     from pipefollow.sim.pipe_names import resolve_suite
     from pipefollow.sim.suites import min_length_for
 
@@ -77,7 +78,7 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
         reading = parse(getattr(agent, "readings", "default"), source=f"policy '{spec}' readings")
         params = sim_params(reading)._replace(disturbance=disturbance)
         res, _ = run_episodes(agent, pipe_list, seconds, params, noise_seed=seed)
-        rows.setdefault(label, []).append(res[:, RET])
+        rows.setdefault(label, []).append(res[:, STAT_RETURN])
     result = run_compare({k: np.stack(v) for k, v in rows.items()}, reps=reps, seed=seed)
     summary = {"suite": suite.name, "seconds": seconds, **result.summary}
     pairs = list(zip(policies, labels, strict=True))

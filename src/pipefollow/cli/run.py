@@ -26,11 +26,10 @@ from pipefollow.cli.options import (
     seconds_option,
     seed_option,
 )
-from pipefollow.files.paper_training import TRAINING_EPISODES
+from pipefollow.files.paper_training import EPISODE_SECONDS, TRAINING_EPISODES
 from pipefollow.files.progress import progress as progress_report
 from pipefollow.learners.registry import NAMES as LEARNER_NAMES
 from pipefollow.sim import disturbance as _disturbance
-from pipefollow.training.runs import SECONDS
 
 DEEP = ("ppo", "sac")  # the learners of Stable-Baselines3 (pipefollow.training.deep)
 
@@ -63,7 +62,7 @@ DEEP = ("ppo", "sac")  # the learners of Stable-Baselines3 (pipefollow.training.
 @episodes_option(
     TRAINING_EPISODES, "Training episodes (σ falls linearly from 1 to 0.01 over them); SARSA and CACLA."
 )
-@seconds_option(default=SECONDS)
+@seconds_option(default=EPISODE_SECONDS)
 @click.option(
     "--steps",
     type=click.IntRange(min=1, max=100_000_000),

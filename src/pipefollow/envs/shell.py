@@ -27,9 +27,6 @@ from pipefollow.sim.disturbance import Disturbance, check, disturbance_from_dict
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.suites import Suite, min_length_for
 
-# The longest episode the environments run (a day of 1-s decisions): the registered
-# ``max_episode_steps``, which must not cut any episode shorter than its ``episode_seconds``.
-
 # The constructor arguments of the single environment that the vector environment shares.
 SHARED_ARGUMENTS = (
     "episode_seconds",

@@ -46,7 +46,6 @@ from pipefollow.learners.registry import learner_of
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
 from pipefollow.sim.episode import STAT_NAMES, Run, tracks_of
-from pipefollow.sim.episode import STAT_RETURN as RET  # noqa: F401  (the name cli/compare.py reads)
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.suites import Suite, min_length_for
 from pipefollow.training.compiled import run_episode

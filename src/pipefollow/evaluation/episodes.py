@@ -8,7 +8,6 @@ for an animation if asked; :class:`Evaluation` holds the statistics and writes t
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from inspect import signature
 from pathlib import Path
 from typing import Any
 
@@ -16,19 +15,19 @@ import numpy as np
 
 from pipefollow import readings as rd
 from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.files.paper_training import EPISODE_SECONDS
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance, noise_count
 from pipefollow.sim.suites import Suite
 
-SECONDS: float = signature(PipelineFollowingEnv).parameters["episode_seconds"].default  # episode (s)
 VALIDATION_SECONDS = 60.0  # the validation episode on paper-validation (paper §4.2)
 
 
 def default_seconds(pipeline: str) -> float:
     """The episode length (s) for ``pipeline``.
 
-    :data:`VALIDATION_SECONDS` on paper-validation, else the environment's :data:`SECONDS`.
+    :data:`VALIDATION_SECONDS` on paper-validation, else the paper's training episode (``EPISODE_SECONDS``).
     """
-    return VALIDATION_SECONDS if pipeline == "paper-validation" else SECONDS
+    return VALIDATION_SECONDS if pipeline == "paper-validation" else EPISODE_SECONDS
 
 
 def episodes_alike(pipe, start_noise: float, heading_noise: float, disturbance: Disturbance) -> bool:

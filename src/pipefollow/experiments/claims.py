@@ -137,8 +137,13 @@ def convergence_margin(summaries: Sequence[PhaseSummary], expect_all: bool = Tru
         return ""
     pick = min if expect_all else max
     s, r = pick(repeats, key=lambda sr: _slack(sr[1]))
+    # the repeat that decides the part: one on the rule's other side is named for what it did
+    if expect_all:
+        label = "closest to failing" if _slack(r) >= 0.0 else "failed furthest"
+    else:
+        label = "closest to converging" if _slack(r) < 0.0 else "converged furthest"
     return (
-        f"{'closest to failing' if expect_all else 'closest to converging'}: {s.label} seed {r.seed}, "
+        f"{label}: {s.label} seed {r.seed}, "
         f"in view {r.last_in_view * 100:.1f} % (rule ≥ {r.min_in_view * 100:g} %), "
         f"progress {r.last_progress_m:.2f} m (rule ≥ {r.min_progress_m:g} m)"
     )

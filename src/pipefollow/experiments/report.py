@@ -39,7 +39,7 @@ from pipefollow.experiments.summary import (
     read_rows,
     read_training,
 )
-from pipefollow.learners.episodes import IN_VIEW, PROGRESS, RETURN
+from pipefollow.sim.episode import STAT_IN_VIEW, STAT_PROGRESS, STAT_RETURN
 
 # ---------------------------------------------------------------------------------------------
 # The run folder
@@ -142,9 +142,9 @@ def training_of(config: ExperimentConfig, results: Mapping[tuple[str, int], obje
             out.setdefault(t.name, {})[seed] = [
                 PhaseSeries(
                     t.phases[ph].pipeline,
-                    np.array(r.stats[phase == ph, RETURN], dtype=np.float64),
-                    np.array(r.stats[phase == ph, IN_VIEW], dtype=np.float64),
-                    np.array(r.stats[phase == ph, PROGRESS], dtype=np.float64),
+                    np.array(r.stats[phase == ph, STAT_RETURN], dtype=np.float64),
+                    np.array(r.stats[phase == ph, STAT_IN_VIEW], dtype=np.float64),
+                    np.array(r.stats[phase == ph, STAT_PROGRESS], dtype=np.float64),
                 )
                 for ph in dict.fromkeys(phase.tolist())
             ]

@@ -20,6 +20,7 @@ from pipefollow.experiments.claims import (
     paper_improvement_pct,
     pm,
 )
+from pipefollow.experiments.config import load_experiment
 from pipefollow.experiments.summary import (
     CONVERGE_EPISODES,
     CONVERGE_PIPELINE,
@@ -82,7 +83,7 @@ def _setup_lines(f: Findings) -> list[str]:
             f"The trials took {took} of compute in total (summed over trials that may have run in parallel)."
         )
     if f.machine:
-        lines.append(f"Computed with {describe_machine(f.machine)}.")
+        lines.append(f"Started on {describe_machine(f.machine)}.")
     missing = [t.name for t in cfg.trials if t.name not in f.summaries]
     if missing:
         lines.append("No training results for: " + ", ".join(f"`{m}`" for m in missing) + ".")
@@ -201,7 +202,8 @@ def _firmness_lines(f: Findings) -> list[str]:
             "",
             f"Each verdict above rests on this run's {f.config.repeats} repeats, and its margin says how "
             "near the rule's threshold it lies. `pipefollow reproduce --experiment repeats` judges the same "
-            "claims over 30 repeats, with these repeats' verdicts beside them.",
+            f"claims over {load_experiment('repeats').repeats} repeats, with the first "
+            f"{PAPER_REPEATS} repeats' verdicts beside them.",
             "",
         ]
     seeds = f.config.seeds()
@@ -218,8 +220,11 @@ def _firmness_lines(f: Findings) -> list[str]:
         "| firm |",
         "|---|---|---|---|---|",
     ]
-    for c_few, c_all in zip(f.first_repeats, f.claims, strict=True):
-        for i, (few, full) in enumerate(zip(c_few.parts, c_all.parts, strict=True)):
+    few_parts = {(c.number, i): p for c in f.first_repeats for i, p in enumerate(c.parts)}
+    for c_all in f.claims:
+        for i, full in enumerate(c_all.parts):
+            # a part the first repeats cannot judge (no results of theirs for a phase) is not tested there
+            few = few_parts.get((c_all.number, i), Part(full.statement, "", NOT_TESTED))
             firm = "yes" if few.verdict == full.verdict else "**no**"
             if full.verdict == NOT_TESTED:
                 firm = "—"

@@ -176,7 +176,7 @@ def render_markdown(s: Sensitivity, wall_seconds: float | None = None, machine: 
     if wall_seconds is not None:
         lines += [f"The trials took {wall_seconds:.1f} s of compute in total.", ""]
     if machine:
-        lines += [f"Computed with {describe_machine(machine)}.", ""]
+        lines += [f"Started on {describe_machine(machine)}.", ""]
     lines += ["## Per claim", ""]
     statements = {r.claim: r.statement for r in s.rows if r.reading == s.readings[0]}
     for claim in s.claim_ids():

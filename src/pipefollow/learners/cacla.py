@@ -45,8 +45,6 @@ from pipefollow.learners.cacla_update import (
     clip1,
     update,
 )
-from pipefollow.learners.cacla_update import K_POSITIVE as K_POSITIVE  # k_update's codes, beside K_EVERY
-from pipefollow.learners.cacla_update import V as V  # the critic's row, beside A, G, K
 from pipefollow.learners.episodes import features_of
 from pipefollow.learners.exploration import DEGREES_PER_GAMMA, skew_normal_from_normals
 from pipefollow.learners.heuristic import heuristic_action

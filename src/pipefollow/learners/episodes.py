@@ -13,11 +13,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-# The statistics' columns under their former names, for modules not yet reading pipefollow.sim.episode.
-from pipefollow.sim.episode import STAT_IN_VIEW as IN_VIEW  # noqa: F401
-from pipefollow.sim.episode import STAT_PROGRESS as PROGRESS  # noqa: F401
-from pipefollow.sim.episode import STAT_RETURN as RETURN  # noqa: F401
-
 
 class Features(NamedTuple):
     """A packed RBF grid (:attr:`~pipefollow.learners.rbf.RBFGrid.packed`) and its form."""

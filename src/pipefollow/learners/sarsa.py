@@ -100,8 +100,8 @@ def update(W, phi, psi, reward, discount, phi_next, psi_next, alpha):
 def update_on(W, phi, psi, reward, discount, q_next, psi_next, alpha):
     """:func:`update` with ``q_next = W φ(s')`` given (the compiled loop has it from choosing a')."""
     q_sa = dot(psi, matvec(W, phi))
-    q_next = dot(psi_next, q_next) if discount != 0.0 else 0.0
-    delta = reward + discount * q_next - q_sa
+    v_next = dot(psi_next, q_next) if discount != 0.0 else 0.0
+    delta = reward + discount * v_next - q_sa
     c = alpha * delta
     for j in range(psi.shape[0]):
         cj = c * psi[j]
@@ -144,10 +144,11 @@ class Sarsa(Agent):
     def _psi(self, a: float) -> np.ndarray:
         return action_features(a, self._action_centres, self._action_width, self._action_normalized)
 
-    def _choose(self, phi: np.ndarray, explore: bool) -> float:
+    def _choose(self, phi: np.ndarray, explore: bool) -> tuple[float, np.ndarray]:
+        """The action for features ``phi`` and the ``W φ`` it was chosen on."""
         sigma = self.sigma if explore else 0.0
         z = self.rng.standard_normal() if sigma > 0.0 else 0.0
-        return choose(self.weights, phi, self.search_actions, self.search_psi, sigma, z)
+        return choose_with_q(self.weights, phi, self.search_actions, self.search_psi, sigma, z)
 
     def act(self, obs, explore: bool = True) -> float:
         """The action for ``obs``: the pending on-policy action if the last update chose one."""
@@ -155,7 +156,7 @@ class Sarsa(Agent):
         if explore and self._pending is not None and np.array_equal(self._pending[0], obs):
             return self._pending[2]
         phi = self.features(obs)
-        a = self._choose(phi, explore)
+        a, _ = self._choose(phi, explore)
         self._pending = (obs.copy(), phi, a) if explore else None
         return a
 
@@ -172,14 +173,17 @@ class Sarsa(Agent):
             phi = self.features(obs)
         next_obs = np.asarray(next_obs, dtype=np.float64)
         phi_next = self.features(next_obs)
-        a_next = self._choose(phi_next, True) if discount != 0.0 else 0.0
-        delta = update(
+        if discount != 0.0:  # W φ(s') of choosing a' is the one the update needs, as in the compiled loop
+            a_next, q_next = self._choose(phi_next, True)
+        else:
+            a_next, q_next = 0.0, np.zeros(self.weights.shape[0])
+        delta = update_on(
             self.weights,
             phi,
             self._psi(float(action)),
             float(reward),
             float(discount),
-            phi_next,
+            q_next,
             self._psi(a_next),
             self.params.alpha,
         )

@@ -1,7 +1,7 @@
 """A learner of the registry trained into a folder: ``policy.npz``, ``learning_curve.csv``, TensorBoard.
 
 What ``pipefollow train --algorithm sarsa|cacla|ac`` does once its options are checked: make the
-agent (or continue a saved one, :func:`continue_agent`), train it through
+agent (or continue a saved one: ``--init``), train it through
 :func:`~pipefollow.training.phases.train_phases`, write its files (:func:`train_into`) and
 summarise the run (:class:`LearnerRun`).
 """
@@ -10,19 +10,16 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from inspect import signature
 from pathlib import Path
 
 import numpy as np
 
 from pipefollow import readings as rd
-from pipefollow.files.paper_training import TRAINING_EPISODES
+from pipefollow.files.paper_training import EPISODE_SECONDS, TRAINING_EPISODES
 from pipefollow.learners.registry import learner
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
 from pipefollow.sim.episode import TRAINING_STAT_NAMES
 from pipefollow.training.phases import phase_sigmas, train_phases
-
-SECONDS: float = signature(train_phases).parameters["episode_seconds"].default  # episode length (s)
 
 
 def step_sizes(algorithm: str) -> tuple[str, ...]:
@@ -126,7 +123,7 @@ def train_into(
     readings: rd.Readings = rd.DEFAULT,
     disturbance: Disturbance = NO_DISTURBANCE,
     randomization=None,
-    seconds: float = SECONDS,
+    seconds: float = EPISODE_SECONDS,
     progress: Callable[[int], None] | None = None,
     tensorboard: str | Path | None = None,
     made: Path | None = None,
