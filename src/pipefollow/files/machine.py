@@ -49,8 +49,8 @@ def describe(stamp: dict) -> str:
     """One line for a report: numba's CPU target, the host, the platform, Python and the package versions."""
     versions = ", ".join(f"{k} {v}" for k, v in stamp.get("packages", {}).items())
     return (
-        f"numba's CPU target {stamp.get('numba_cpu_target', '?')} on {stamp.get('host_cpu', '?')} "
-        f"({stamp.get('platform', '?')}), Python {stamp.get('python', '?')}; {versions}"
+        f"{stamp.get('host_cpu', '?')} ({stamp.get('platform', '?')}), numba's CPU target "
+        f"{stamp.get('numba_cpu_target', '?')}, Python {stamp.get('python', '?')}; {versions}"
     )
 
 
