@@ -122,9 +122,7 @@ def from_policy(data: dict, seed: int | None = None):
 def make(params: ActorCriticParams, grid: RBFGrid, rng: np.random.Generator | None = None, *,
          readings: str = "default") -> ActorCritic:  # fmt: skip
     """A fresh actor-critic with ``params`` on ``grid``, built under the readings with id ``readings``."""
-    agent = ActorCritic(params, grid=grid, rng=rng)
-    agent.readings = readings
-    return agent
+    return cacla.make(params, grid, rng, readings=readings, agent_class=ActorCritic)
 
 
 LEARNER = LearnerKind(

@@ -437,9 +437,9 @@ def from_policy(
 
 
 def make(params: CaclaParams, grid: RBFGrid, rng: np.random.Generator | None = None, *,
-         readings: str = "default") -> Cacla:  # fmt: skip
-    """A fresh CACLA agent with ``params`` on ``grid``, built under the readings with id ``readings``."""
-    agent = Cacla(params, grid=grid, rng=rng)
+         readings: str = "default", agent_class: type | None = None) -> Cacla:  # fmt: skip
+    """A fresh CACLA agent (or ``agent_class``) with ``params`` on ``grid``, readings id ``readings``."""
+    agent = (agent_class or Cacla)(params, grid=grid, rng=rng)
     agent.readings = readings
     return agent
 
