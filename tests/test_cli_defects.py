@@ -213,3 +213,22 @@ def test_reproduce_says_one_worker_and_prints_progress_lines_off_a_terminal(runn
     assert res.exit_code == 0, res.output
     assert "(1 worker)" in res.stdout and "(1 workers)" not in res.stdout
     assert "paper: trials: 1/1 trials (100%)" in res.stderr
+
+
+def test_no_command_writes_into_the_repositorys_docs_by_default():
+    # committed results are written only by their documented regeneration commands (--out docs/...)
+    import click
+
+    from pipefollow.cli import COMMANDS, main
+
+    ctx = click.Context(main)
+    found = []
+    for name in COMMANDS:
+        cmd = main.get_command(ctx, name)
+        commands = list(cmd.commands.values()) if isinstance(cmd, click.Group) else [cmd]
+        for c in commands:
+            for p in c.params:
+                path = p.default.replace("\\", "/").lstrip("./") if isinstance(p.default, str) else ""
+                if path.startswith("docs"):
+                    found.append(f"{name} {c.name} {p.opts}: {p.default}")
+    assert found == []

@@ -25,7 +25,11 @@ REPORT_COLUMNS = (
 
 @vision.command()
 @click.option(
-    "--out", "out_dir", default="docs/vision", show_default=True, help="Folder of report.csv and samples.png."
+    "--out",
+    "out_dir",
+    default="vision-report",
+    show_default=True,
+    help="Folder of report.csv and samples.png (the committed ones: --out docs/vision).",
 )
 @click.option(
     "--pipes",
@@ -72,9 +76,9 @@ def report(out_dir, pipes, frames, seed):
 @click.option(
     "--report",
     "report_path",
-    default="docs/vision/report.csv",
+    default="vision-report/report.csv",
     show_default=True,
-    help="The report.csv of 'pipefollow vision report'.",
+    help="The report.csv of 'pipefollow vision report' (the committed one: docs/vision/report.csv).",
 )
 @click.option("--out", "out_path", default=None, help="Write the calibration as JSON here.")
 @guard
