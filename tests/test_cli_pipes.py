@@ -157,3 +157,11 @@ def test_each_entry_point_takes_its_forms_and_shares_the_fixed_ones():
             resolve("heldout-003")
     with pytest.raises(PipelineError, match="no such file"):
         resolve_fixed("random:hard")  # a family is no fixed pipeline
+
+
+def test_robustness_takes_what_benchmark_takes_and_an_exported_folder_equals_its_suite(runner, exported):
+    args = ["robustness", "--speeds", "0,0.1", "--scenarios", "", "--json"]
+    on_files = _json(runner.invoke(main, [*args, "--suite", str(exported)]))
+    on_suite = _json(runner.invoke(main, [*args, "--suite", "heldout", "--pipes", "4"]))
+    assert on_files["pipes"] == on_suite["pipes"] == 4 and on_files["suite"] == "pipes"
+    assert on_files["curve"] == on_suite["curve"]

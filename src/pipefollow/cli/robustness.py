@@ -16,7 +16,7 @@ from pipefollow.cli.common import (
     pipe_count,
     writable_folder,
 )
-from pipefollow.cli.options import MAX_EPISODE_SECONDS, pipes_option
+from pipefollow.cli.options import MAX_EPISODE_SECONDS, pipes_option, suite_option
 
 OUTPUTS = ("curve.csv", "scenarios.csv", "robustness.json", "robustness.png")
 
@@ -53,9 +53,7 @@ def _controllers(specs, seed: int) -> dict[str, list]:
     help="'heuristic', 'los' or a policy file, optionally labelled; policies given the same label are "
     "seeds of one learner (repeatable) [default: heuristic and los].",
 )
-@click.option(
-    "--suite", "suite_name", default="heldout", show_default=True, help="Suite (see 'pipefollow suites')."
-)
+@suite_option()
 @pipes_option()
 @click.option(
     "--seconds",
@@ -88,7 +86,7 @@ def _controllers(specs, seed: int) -> dict[str, list]:
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of tables.")
 @guard
-def robustness(controllers, suite_name, pipes, seconds, speeds, sets, seed, out_dir, as_json):
+def robustness(controllers, suite_specs, pipes, seconds, speeds, sets, seed, out_dir, as_json):
     """Success rate and mean return against current speed, and on fixed scenario sets.
 
     Every controller runs one deterministic episode per pipe of the suite at each current speed
@@ -97,11 +95,11 @@ def robustness(controllers, suite_name, pipes, seconds, speeds, sets, seed, out_
     the heuristic. Policies that share a label are pooled as training seeds.
     """
     from pipefollow.evaluation import robustness as rb
-    from pipefollow.sim.suites import get_suite
+    from pipefollow.sim.pipe_names import resolve_suite
 
     speed_list = _numbers(speeds, "--speeds")
     set_list = [s for s in sets.split(",") if s]
-    suite = get_suite(suite_name)
+    suite = resolve_suite(suite_specs or ["heldout"])  # what benchmark --suite takes
     n = pipe_count(suite, pipes)
     for v in speed_list:
         rb.curve_scenarios(v, suite, 1, seconds)  # a bad speed fails before any episode
