@@ -16,7 +16,10 @@ from pipefollow.sim.suites import get_suite
 
 def test_default_seconds():
     assert ev.default_seconds("paper-validation") == 60.0
-    assert ev.default_seconds("paper-left") == ev.EPISODE_SECONDS == 20.0
+    assert ev.default_seconds("paper-left") == ev.default_seconds("paper-right") == 20.0
+    assert ev.default_seconds("random:hard") == ev.default_seconds("random") == 20.0  # training families
+    # the kinds of pipe benchmark runs for 60 s: a suite's pipe, a user's file
+    assert ev.default_seconds("heldout-003") == ev.default_seconds("mine.json") == 60.0
 
 
 def test_episodes_alike_only_without_anything_random():

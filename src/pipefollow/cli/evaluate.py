@@ -28,7 +28,7 @@ from pipefollow.cli.options import (
     seconds_option,
     seed_option,
 )
-from pipefollow.files.paper_training import EPISODE_SECONDS
+from pipefollow.files.paper_training import EPISODE_SECONDS, TEST_EPISODE_SECONDS
 from pipefollow.sim import disturbance as _disturbance
 
 
@@ -41,8 +41,11 @@ from pipefollow.sim import disturbance as _disturbance
 @episodes_option(
     1, "Number of episodes; they differ only with start noise, random disturbances or a random pipeline."
 )
-@seconds_option(f"Episode length in seconds [default: 60 on paper-validation, else {EPISODE_SECONDS:g}].",
-                default=None)  # fmt: skip
+@seconds_option(
+    f"Episode length in seconds [default: {EPISODE_SECONDS:g} on a training pipe (paper-left, paper-right, "
+    f"random[:FAMILY]), else {TEST_EPISODE_SECONDS:g}, as benchmark].",
+    default=None,
+)
 @seed_option("Seed of the start perturbation.")
 @offset_option("--start-noise", "Uniform random lateral start offset up to this many metres.")
 @offset_option("--heading-noise", "Uniform random start heading offset up to this many degrees.")

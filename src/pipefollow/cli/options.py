@@ -14,6 +14,7 @@ import click
 from pipefollow.cli import parsing
 from pipefollow.cli.common import SEED, UserError, finite
 from pipefollow.files.limits import MAX_EPISODE_SECONDS, MAX_EPISODES
+from pipefollow.files.paper_training import TEST_EPISODE_SECONDS
 
 SUITE_HELP = (
     "A suite (see 'pipefollow suites'), or pipeline JSON files: folders, files, glob patterns "
@@ -41,7 +42,9 @@ def pipes_option(
     return click.option("--pipes", type=click.IntRange(min=1, max=100_000), default=None, help=help_text)
 
 
-def seconds_option(help_text: str = "Episode length in seconds.", default: float | None = 60.0):
+def seconds_option(
+    help_text: str = "Episode length in seconds.", default: float | None = TEST_EPISODE_SECONDS
+):
     """``--seconds S``: the episode length, 1 s to :data:`MAX_EPISODE_SECONDS`, finite."""
     return click.option(
         "--seconds", type=click.FloatRange(min=1.0, max=MAX_EPISODE_SECONDS), callback=finite,

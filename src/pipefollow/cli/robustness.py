@@ -17,6 +17,7 @@ from pipefollow.cli.common import (
     writable_folder,
 )
 from pipefollow.cli.options import MAX_EPISODE_SECONDS, pipes_option, suite_option
+from pipefollow.files.paper_training import TEST_EPISODE_SECONDS
 
 OUTPUTS = ("curve.csv", "scenarios.csv", "robustness.json", "robustness.png")
 
@@ -59,7 +60,7 @@ def _controllers(specs, seed: int) -> dict[str, list]:
     "--seconds",
     type=click.FloatRange(min=1.0, max=MAX_EPISODE_SECONDS),
     callback=finite,
-    default=60.0,
+    default=TEST_EPISODE_SECONDS,
     show_default=True,
     help="Episode length in seconds.",
 )

@@ -39,6 +39,7 @@ from numba import njit
 
 from pipefollow.evaluation.compare import aggregate_intervals
 from pipefollow.evaluation.stats import bootstrap_ci, iqm, paired_difference
+from pipefollow.files.paper_training import TEST_EPISODE_SECONDS
 from pipefollow.learners import mlp as mlp_mod
 from pipefollow.learners.heuristic import Heuristic, heuristic_action
 from pipefollow.learners.los import LOS, los_action
@@ -209,7 +210,7 @@ def benchmark(
     suite: Suite,
     *,
     controller: str,
-    seconds: float = 60.0,
+    seconds: float = TEST_EPISODE_SECONDS,
     params: sim.SimParams = sim.PAPER_SIM,
     n_pipes: int | None = None,
     seed: int = 0,

@@ -15,19 +15,21 @@ import numpy as np
 
 from pipefollow import readings as rd
 from pipefollow.envs.env import PipelineFollowingEnv
-from pipefollow.files.paper_training import EPISODE_SECONDS
+from pipefollow.files.paper_training import EPISODE_SECONDS, TEST_EPISODE_SECONDS, TRAINING_PIPELINES
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance, noise_count
+from pipefollow.sim.pipe_names import RANDOM_PREFIX
 from pipefollow.sim.suites import Suite
-
-VALIDATION_SECONDS = 60.0  # the validation episode on paper-validation (paper §4.2)
 
 
 def default_seconds(pipeline: str) -> float:
-    """The episode length (s) for ``pipeline``.
+    """The episode length (s) for ``pipeline``, the same as ``benchmark`` gives the same kind of pipe.
 
-    :data:`VALIDATION_SECONDS` on paper-validation, else the paper's training episode (``EPISODE_SECONDS``).
+    The paper's training episode (``EPISODE_SECONDS``, 20 s) on its training pipes and on a training
+    family ``random[:FAMILY]``; its validation episode (``TEST_EPISODE_SECONDS``, 60 s) on every other
+    pipe: ``paper-validation``, a suite's pipe, a pipeline file.
     """
-    return VALIDATION_SECONDS if pipeline == "paper-validation" else EPISODE_SECONDS
+    training = pipeline in TRAINING_PIPELINES or pipeline.startswith(RANDOM_PREFIX)
+    return EPISODE_SECONDS if training else TEST_EPISODE_SECONDS
 
 
 def episodes_alike(pipe, start_noise: float, heading_noise: float, disturbance: Disturbance) -> bool:

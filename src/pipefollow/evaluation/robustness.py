@@ -40,6 +40,7 @@ import numpy as np
 
 from pipefollow.evaluation.benchmark import SUCCESS_IN_VIEW, run_episodes
 from pipefollow.evaluation.stats import bootstrap_ci, iqm, paired_difference
+from pipefollow.files.paper_training import TEST_EPISODE_SECONDS
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim import decision as sim
 from pipefollow.sim import randomization as rz
@@ -130,7 +131,9 @@ def _pipes(suite: Suite, n: int | None, seconds: float) -> list[Pipeline]:
     return suite.pipes(n, min_length_for(seconds))
 
 
-def scenarios(name: str, suite: Suite, n: int | None = None, seconds: float = 60.0) -> list[Scenario]:
+def scenarios(
+    name: str, suite: Suite, n: int | None = None, seconds: float = TEST_EPISODE_SECONDS
+) -> list[Scenario]:
     """The scenarios of set ``name`` on the first ``n`` pipes of ``suite`` (all of a held-out suite)."""
     s = get_scenario_set(name)
     out = []
@@ -146,7 +149,7 @@ def curve_directions(n: int) -> np.ndarray:
 
 
 def curve_scenarios(
-    speed: float, suite: Suite, n: int | None = None, seconds: float = 60.0
+    speed: float, suite: Suite, n: int | None = None, seconds: float = TEST_EPISODE_SECONDS
 ) -> list[Scenario]:
     """The curve's scenarios at ``speed`` (m/s): a constant current, pipe ``k`` towards its direction."""
     if not (isinstance(speed, int | float) and math.isfinite(speed) and 0.0 <= speed <= MAX_SPEED):
@@ -236,7 +239,7 @@ def robustness_curve(
     *,
     speeds: Sequence[float] = SPEEDS,
     n_pipes: int | None = None,
-    seconds: float = 60.0,
+    seconds: float = TEST_EPISODE_SECONDS,
     seed: int = 0,
     progress=None,
 ) -> list[dict]:
@@ -254,7 +257,7 @@ def scenario_table(
     *,
     sets: Sequence[str] = tuple(SCENARIO_SETS),
     n_pipes: int | None = None,
-    seconds: float = 60.0,
+    seconds: float = TEST_EPISODE_SECONDS,
     seed: int = 0,
     progress=None,
 ) -> list[dict]:

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pipefollow.files.paper_training import TEST_EPISODE_SECONDS
 from pipefollow.sim.pipeline import Pipeline
 
 
@@ -83,7 +84,7 @@ def record_rollouts(
     folder: str | os.PathLike,
     dataset_id: str,
     *,
-    seconds: float = 60.0,
+    seconds: float = TEST_EPISODE_SECONDS,
     params=None,
     sigma: float = 0.0,
     seed: int = 0,

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipefollow.files.paper_training import TEST_EPISODE_SECONDS
 from pipefollow.learners.heuristic import heuristic_action
 from pipefollow.perception.detector import detect_pipe
 from pipefollow.perception.image import Renderer, make_textures
@@ -49,7 +50,9 @@ class Frame:
     truth: tuple[float, float, float, float]  # x1, y1, x2, y_near
 
 
-def trajectory_frames(suite: Suite, n_pipes: int, seconds: float = 60.0) -> tuple[list, list[Frame]]:
+def trajectory_frames(
+    suite: Suite, n_pipes: int, seconds: float = TEST_EPISODE_SECONDS
+) -> tuple[list, list[Frame]]:
     """The suite's first ``n_pipes`` pipes and the poses of the heuristic's episodes (ideal camera)."""
     pipes = suite.pipes(n_pipes, min_length_for(seconds))
     frames: list[Frame] = []
