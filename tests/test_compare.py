@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.stats
 from click.testing import CliRunner
 
 from pipefollow.cli import main
@@ -138,3 +139,25 @@ def test_iqm_is_scipys_trimmed_mean(n):
 
     x = np.random.default_rng(n).normal(size=(1, n)).round(1)  # rounded: ties
     assert cmp.iqm(x) == pytest.approx(trim_mean(x, 0.25, axis=None), abs=1e-12)
+
+
+def test_cli_compare_writes_the_score_matrices_it_judged_in_rliables_layout(tmp_path):
+    scores_file = tmp_path / "scores.json"
+    args = ["compare", "heuristic", "los", "heuristic", "--label", "H", "--label", "L", "--label", "H"]
+    res = CliRunner().invoke(main, [*args, "--pipes", "6", "--seconds", "20", "--reps", "500", "--json",
+                                    "--scores", str(scores_file)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    stored = json.loads(scores_file.read_text())
+    assert stored["scores"] == out["scores"] and stored["tasks"] == out["tasks"]
+    assert out["tasks"] == [f"heldout-{k:03d}" for k in range(6)]
+    mats = {k: np.array(v) for k, v in out["scores"].items()}
+    assert mats["H"].shape == (2, 6) and mats["L"].shape == (1, 6)  # runs × tasks, as rliable takes them
+    # the matrices are the ones judged: compare's point estimates recomputed from them by hand
+    for label, m in mats.items():
+        learner = out["learners"][label]
+        assert learner["mean"] == pytest.approx(float(m.mean()), rel=1e-12)
+        assert learner["iqm"] == pytest.approx(float(scipy.stats.trim_mean(m.ravel(), 0.25)), rel=1e-12)
+    assert np.array_equal(mats["H"][0], mats["H"][1])  # the heuristic twice: deterministic runs
+    bad = CliRunner().invoke(main, [*args, "--pipes", "2", "--scores", str(tmp_path / "s.csv")])
+    assert bad.exit_code == 2 and "--scores" in bad.stderr

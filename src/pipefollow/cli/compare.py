@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import click
 
 from pipefollow.cli.common import (
@@ -44,10 +47,18 @@ from pipefollow.cli.options import (
 )
 @seed_option("Seed of the bootstrap and of the random disturbances.")
 @plot_option("Save the intervals and performance profiles as a figure (.png, .svg, .pdf, ...).")
+@click.option(
+    "--scores",
+    "scores_path",
+    default=None,
+    metavar="FILE.json",
+    help="Write the score matrices in rliable's layout: learner → runs × pipes returns, and the pipes.",
+)
 @json_option()
 @disturbance_options
 @guard
-def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path, as_json, disturbance):
+def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path, scores_path, as_json,
+            disturbance):  # fmt: skip
     """Compare learners over training seeds × pipes: IQM, mean, probability of improvement.
 
     Every POLICY (a policy file, or heuristic / los) runs one deterministic episode per pipe
@@ -65,6 +76,8 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
     from pipefollow.sim.suites import min_length_for
 
     check_plot_path(plot_path)
+    if scores_path is not None and not str(scores_path).lower().endswith(".json"):
+        raise UserError(f"--scores '{scores_path}': expected a .json file")
     if labels and len(labels) != len(policies):
         raise UserError(f"--label given {len(labels)} times for {len(policies)} policies (one per policy)")
     suite = resolve_suite(suite_specs or ["heldout"])
@@ -83,6 +96,15 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
     summary = {"suite": suite.name, "seconds": seconds, **result.summary}
     pairs = list(zip(policies, labels, strict=True))
     summary["policies"] = {label: [p for p, q in pairs if q == label] for label in rows}
+    # rliable's layout: {learner: (runs, tasks) array}, here the runs × pipes returns compare judged
+    summary["tasks"] = [p.name for p in pipe_list]
+    summary["scores"] = {label: np.stack(v).tolist() for label, v in rows.items()}
+    if scores_path is not None:
+        from pipefollow.files.atomic import write_text_atomic
+
+        scores = {"tasks": summary["tasks"], "scores": summary["scores"]}
+        write_text_atomic(Path(scores_path), json.dumps(scores) + "\n")
+        summary["scores_file"] = str(scores_path)
     if plot_path:
         from pipefollow.evaluation.plot import plot_comparison
 
@@ -112,4 +134,6 @@ def _format(s: dict) -> str:
         lines.append("note: a learner with one run has intervals of no width; train several seeds")
     if "plot" in s:
         lines.append(f"plot: {s['plot']}")
+    if "scores_file" in s:
+        lines.append(f"scores (rliable's layout): {s['scores_file']}")
     return "\n".join(lines)
