@@ -21,7 +21,7 @@ OUTPUT_OPTIONS = ("--out", "--plot", "--animate")
 
 
 def _commands() -> list[list[str]]:
-    """Every ``pipefollow ...`` command line of the README's and the guides' bash blocks, joined."""
+    """Every ``pipefollow ...`` line of the README's and the guides' bash blocks (continuations joined)."""
     blocks = re.findall(r"```bash\n(.*?)```", README, flags=re.DOTALL)
     lines = "\n".join(blocks).replace("\\\n", " ").splitlines()
     found = []
