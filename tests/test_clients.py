@@ -1,5 +1,5 @@
 """RL clients no one here wrote, on both environments: TorchRL, CleanRL's wrappers and PPO loop,
-Stable-Baselines3, and the README's code for them (extra 'deep' and torchrl)."""
+Stable-Baselines3, and the code for them in the guide docs/guides/deep-rl.md (extra 'deep' and torchrl)."""
 
 import math
 import re
@@ -16,7 +16,7 @@ from pipefollow.envs.env import PipelineFollowingEnv
 pytestmark = pytest.mark.deep
 
 ID = pipefollow.ENV_ID
-README = Path(__file__).resolve().parents[1] / "README.md"
+README = Path(__file__).resolve().parents[1] / "docs" / "guides" / "deep-rl.md"
 SECTION = "## Using pipefollow with Stable-Baselines3, TorchRL and CleanRL"
 
 
@@ -27,10 +27,11 @@ def _torch():
 
 
 def readme_blocks() -> list[str]:
-    """The python code blocks of the README's section on RL clients, in order."""
+    """The python code blocks of the guide's section on RL clients, up to the next section or the end."""
     text = README.read_text(encoding="utf-8")
     start = text.index(SECTION)
-    end = text.index("\n## ", start + len(SECTION))
+    end = text.find("\n## ", start + len(SECTION))
+    end = len(text) if end < 0 else end
     return re.findall(r"```python\n(.*?)```", text[start:end], flags=re.S)
 
 
@@ -38,7 +39,7 @@ def readme_namespace(word: str) -> dict:
     """Run the README block that mentions ``word``; its names."""
     (block,) = [b for b in readme_blocks() if word in b]
     ns: dict = {"__name__": "readme"}
-    exec(compile(block, f"README.md ({word})", "exec"), ns)
+    exec(compile(block, f"docs/guides/deep-rl.md ({word})", "exec"), ns)
     return ns
 
 

@@ -1,4 +1,5 @@
-"""The README's commands: what they write is ignored by git, and the options they use exist."""
+"""The commands of the README and its guides (docs/guides/): what they write is ignored by git, and
+the options they use exist."""
 
 from __future__ import annotations
 
@@ -14,12 +15,13 @@ import pytest
 from pipefollow import cli
 
 ROOT = Path(__file__).resolve().parents[1]
-README = (ROOT / "README.md").read_text(encoding="utf-8")
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs" / "guides").glob("*.md"))]
+README = "\n".join(page.read_text(encoding="utf-8") for page in PAGES)
 OUTPUT_OPTIONS = ("--out", "--plot", "--animate")
 
 
 def _commands() -> list[list[str]]:
-    """Every ``pipefollow ...`` command line of the README's bash blocks (continuations joined)."""
+    """Every ``pipefollow ...`` line of the README's and the guides' bash blocks (continuations joined)."""
     blocks = re.findall(r"```bash\n(.*?)```", README, flags=re.DOTALL)
     lines = "\n".join(blocks).replace("\\\n", " ").splitlines()
     found = []
