@@ -115,13 +115,20 @@ def test_compare_refuses_learners_on_different_pipes():
         cmp.compare({"a": np.zeros((2, 3)), "b": np.zeros((2, 4))})
 
 
+LABELLED = ["compare", "heuristic", "los", "heuristic", "--label", "H", "--label", "L", "--label", "H"]
+
+
+def _compare_json(*extra) -> dict:
+    """``compare --json`` of the heuristic twice (H) and LOS once (L) on 6 held-out pipes of 20 s."""
+    args = [*LABELLED, "--pipes", "6", "--seconds", "20", "--reps", "500", "--json", *extra]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    return json.loads(res.stdout)
+
+
 def test_cli_compare_json_plot_and_labels(tmp_path):
     plot = tmp_path / "c.png"
-    args = ["compare", "heuristic", "los", "heuristic", "--label", "H", "--label", "L", "--label", "H"]
-    res = CliRunner().invoke(main, [*args, "--pipes", "6", "--seconds", "20", "--reps", "500", "--json",
-                                    "--plot", str(plot)])  # fmt: skip
-    assert res.exit_code == 0, res.output
-    out = json.loads(res.stdout)
+    out = _compare_json("--plot", str(plot))
     assert out["learners"]["H"]["runs"] == 2 and out["learners"]["L"]["runs"] == 1
     assert out["policies"] == {"H": ["heuristic", "heuristic"], "L": ["los"]}
     assert out["plot"] == str(plot) and plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -143,11 +150,7 @@ def test_iqm_is_scipys_trimmed_mean(n):
 
 def test_cli_compare_writes_the_score_matrices_it_judged_in_rliables_layout(tmp_path):
     scores_file = tmp_path / "scores.json"
-    args = ["compare", "heuristic", "los", "heuristic", "--label", "H", "--label", "L", "--label", "H"]
-    res = CliRunner().invoke(main, [*args, "--pipes", "6", "--seconds", "20", "--reps", "500", "--json",
-                                    "--scores", str(scores_file)])  # fmt: skip
-    assert res.exit_code == 0, res.output
-    out = json.loads(res.stdout)
+    out = _compare_json("--scores", str(scores_file))
     stored = json.loads(scores_file.read_text())
     assert stored["scores"] == out["scores"] and stored["tasks"] == out["tasks"]
     assert out["tasks"] == [f"heldout-{k:03d}" for k in range(6)]
@@ -159,5 +162,5 @@ def test_cli_compare_writes_the_score_matrices_it_judged_in_rliables_layout(tmp_
         assert learner["mean"] == pytest.approx(float(m.mean()), rel=1e-12)
         assert learner["iqm"] == pytest.approx(float(scipy.stats.trim_mean(m.ravel(), 0.25)), rel=1e-12)
     assert np.array_equal(mats["H"][0], mats["H"][1])  # the heuristic twice: deterministic runs
-    bad = CliRunner().invoke(main, [*args, "--pipes", "2", "--scores", str(tmp_path / "s.csv")])
+    bad = CliRunner().invoke(main, [*LABELLED, "--pipes", "2", "--scores", str(tmp_path / "s.csv")])
     assert bad.exit_code == 2 and "--scores" in bad.stderr
