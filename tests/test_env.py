@@ -1,3 +1,5 @@
+import warnings
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -237,10 +239,10 @@ def test_gym_make_takes_a_pipeline_of_points():
         PipelineFollowingEnv([[0, 0]])
 
 
-def test_stepping_after_the_end_says_to_reset():
+def test_stepping_after_the_end_with_strict_reset_says_to_reset():
     from gymnasium.error import ResetNeeded
 
-    env = PipelineFollowingEnv(episode_seconds=2)
+    env = PipelineFollowingEnv(episode_seconds=2, strict_reset=True)
     with pytest.raises(ResetNeeded, match=r"call reset\(\) before the first step"):
         env.step([0.0])
     env.reset(seed=0)
@@ -250,6 +252,31 @@ def test_stepping_after_the_end_says_to_reset():
         env.step([0.0])
     env.reset()
     assert not env.step([0.0])[3]
+
+
+def test_stepping_after_the_end_warns_once_and_carries_on_as_gymnasiums_environments():
+    from gymnasium.error import ResetNeeded
+
+    env = PipelineFollowingEnv(episode_seconds=2)
+    with pytest.raises(ResetNeeded, match=r"call reset\(\) before the first step"):
+        env.step([0.0])  # before the first reset there is nothing to carry on
+    env.reset(seed=0)
+    env.step([0.0])
+    *_, truncated, last = env.step([0.0])
+    assert truncated and "episode_pipe_in_view" in last
+    t_end = env.state[sim.TIME]
+    with pytest.warns(UserWarning, match="after the episode's end"):
+        _, r, terminated, truncated, info = env.step([0.0])
+    assert truncated and not terminated and "episode_pipe_in_view" not in info  # one summary only
+    assert env.state[sim.TIME] == t_end + 1.0 and np.isfinite(r)  # the simulation went on
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # once per episode: a second step past the end is silent
+        assert env.step([0.0])[3]
+    env.reset()
+    assert not env.step([0.0])[3]
+    env.step([0.0])
+    with pytest.warns(UserWarning, match="after the episode's end"):  # warned again after a reset
+        env.step([0.0])
 
 
 def test_bad_reset_offsets_are_refused():

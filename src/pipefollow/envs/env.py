@@ -26,10 +26,10 @@ from pipefollow.files.paper_training import EPISODE_SECONDS
 from pipefollow.perception.camera import VisionCamera, camera_settings
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
-from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
+from pipefollow.sim.disturbance import Disturbance
 from pipefollow.sim.pipe_names import pipeline_source
 from pipefollow.sim.pipeline import Pipeline
-from pipefollow.sim.randomization import Randomization
+from pipefollow.sim.randomization import Randomization, check_not_both
 from pipefollow.sim.randomization import resolve as resolve_randomization
 
 __all__ = ["MAX_EPISODE_SECONDS", "PipelineFollowingEnv"]
@@ -89,7 +89,10 @@ class PipelineFollowingEnv(gym.Env):
     paper's training), at most :data:`MAX_EPISODE_SECONDS`. There is no terminal state: agents
     should bootstrap from the last state. The registered spec's ``max_episode_steps`` is that
     upper bound, so the ``TimeLimit`` wrapper of ``gym.make`` never ends an episode early.
-    ``step`` after the episode's last decision raises :class:`gymnasium.error.ResetNeeded`.
+    ``step`` before the first ``reset`` raises :class:`gymnasium.error.ResetNeeded`. After the
+    episode's last decision it carries on as Gymnasium's own environments do: a warning (once until
+    the next reset), the simulation goes on and every further step is ``truncated``, without a
+    second summary; ``strict_reset=True`` raises ``ResetNeeded`` there instead.
 
     ## Arguments
 
@@ -125,6 +128,8 @@ class PipelineFollowingEnv(gym.Env):
       :class:`~pipefollow.sim.randomization.Randomization`, a preset name (``mild``, ``moderate``,
       ``vision``, ``harsh``) or a table of its keys: every reset draws the episode's disturbances from
       ``np_random`` (before the pipe of a ``random`` family); not with ``disturbance``.
+    * ``strict_reset``: raise :class:`gymnasium.error.ResetNeeded` on a step after the episode's
+      end instead of warning and carrying on (default ``False``, Gymnasium's behaviour).
 
     ## Info
 
@@ -161,6 +166,7 @@ class PipelineFollowingEnv(gym.Env):
         reward_from: str = "truth",
         water: Any = None,
         randomization: Randomization | str | dict[str, Any] | None = None,
+        strict_reset: bool = False,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None, 'human' or 'rgb_array', got {render_mode!r}")
@@ -171,8 +177,7 @@ class PipelineFollowingEnv(gym.Env):
         self.randomization = None
         if randomization is not None:
             self.randomization = resolve_randomization(randomization)
-            if setup.params.disturbance != NO_DISTURBANCE:
-                raise ValueError("give a disturbance or a randomization of the disturbances, not both")
+            check_not_both(setup.params.disturbance, self.randomization)
         self.episode_setup = setup  # this episode's: under a randomization, its own disturbances
         self.suite, self.pipeline = pipeline_source(pipeline)
         self.episode_seconds = setup.episode_seconds
@@ -193,7 +198,9 @@ class PipelineFollowingEnv(gym.Env):
         self.state = np.zeros(sim.STATE_SIZE)
         self._z = np.zeros(setup.noise_count)  # standard normals of one camera reading
         self._book = ep.new_book()  # the episode's counts (pipefollow.sim.episode)
-        self._needs_reset = True
+        self._needs_reset = True  # before the first reset
+        self.strict_reset = bool(strict_reset)
+        self._warned_after_end = False  # stepping past the end warns once per episode
         self.trail: list[tuple[float, float, float]] = []
         self.last_reward: float | None = None  # shown by render()
         self.episode_return = 0.0  # the rewards returned, summed (the book counts the decisions)
@@ -214,6 +221,7 @@ class PipelineFollowingEnv(gym.Env):
         )  # fmt: skip
         self._book[:] = 0.0
         self._needs_reset = False
+        self._warned_after_end = False
         s = self.state
         self.trail = [(s[sim.X], s[sim.Y], s[sim.PSI])]
         self.last_reward, self.episode_return = None, 0.0
@@ -226,11 +234,17 @@ class PipelineFollowingEnv(gym.Env):
     def step(self, action):
         """One 1-s decision; see the class docstring."""
         if self._needs_reset:
-            raise ResetNeeded(
-                "the episode has ended: call reset() before step()"
-                if self._book[ep.DECISIONS]
-                else "call reset() before the first step()"
-            )
+            raise ResetNeeded("call reset() before the first step()")
+        past_end = bool(ep.ended.py_func(self._book, self.max_decisions))  # in Python: no dispatch
+        if past_end:
+            if self.strict_reset:
+                raise ResetNeeded("the episode has ended: call reset() before step()")
+            if not self._warned_after_end:
+                self._warned_after_end = True
+                gym.logger.warn(
+                    "step() after the episode's end (truncated=True was returned): the episode goes on, "
+                    "but call reset() to start a new one"
+                )
         arr = np.asarray(action, dtype=np.float64)
         if arr.shape not in ((1,), ()):  # a wrong shape is a caller's bug, not an action
             raise ValueError(f"action must have shape (1,) (or be a number), got shape {arr.shape}")
@@ -248,15 +262,14 @@ class PipelineFollowingEnv(gym.Env):
         self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
         if self._vision is not None:  # the book's count in view stays the true geometry's
             r = self._vision.step(s, pipe.points, pipe.cumulative, self.np_random, r, a_prev)
-        self._needs_reset = truncated
         self.last_reward = r
         self.episode_return += r
         if self.render_mode == "human":
             self.render()
         info = self._info()
-        if truncated:  # the episode's summary, for clients that log per episode
+        if truncated and not past_end:  # the episode's summary, once, for clients that log per episode
             info.update(episode_summary(book, s))
-        return self._observation(), r, False, truncated, info
+        return self._observation(), r, False, truncated or past_end, info
 
     def _observation(self) -> np.ndarray:
         if self._vision is None:

@@ -71,10 +71,9 @@ from pipefollow.envs.shell import (
 from pipefollow.perception.camera import VisionCamera, camera_settings
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
-from pipefollow.sim.disturbance import NO_DISTURBANCE
 from pipefollow.sim.pipe_names import is_points, pipeline_source
 from pipefollow.sim.pipeline import Pipeline
-from pipefollow.sim.randomization import MAX_NOISE
+from pipefollow.sim.randomization import MAX_NOISE, check_not_both
 from pipefollow.sim.randomization import resolve as resolve_randomization
 
 
@@ -180,8 +179,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self.randomization = None
         if randomization is not None:
             self.randomization = resolve_randomization(randomization)
-            if setup.params.disturbance != NO_DISTURBANCE:
-                raise ValueError("give a disturbance or a randomization of the disturbances, not both")
+            check_not_both(setup.params.disturbance, self.randomization)
         self._describe(n, mode, camera)
         self._load_pipelines(specs)
         self._make_buffers()
