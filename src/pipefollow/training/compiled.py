@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipefollow.files.paper_training import EPISODE_SECONDS
-from pipefollow.learners.exploration import SIGMA_END, SIGMA_START, linear_sigma, sigma_schedule
+from pipefollow.learners.exploration import SIGMA_END, SIGMA_START, sigma_schedule
 from pipefollow.learners.registry import learner_of
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
@@ -132,9 +132,8 @@ def train(
 ) -> np.ndarray:
     """Train ``agent`` for ``episodes`` episodes in ``env``; returns (episodes, 4) statistics."""
     stats = np.empty((episodes, len(TRAINING_STAT_NAMES)))
-    for e in range(episodes):
-        sigma = linear_sigma(e, episodes, sigma_start, sigma_end)
-        stats_e = run_episode(env, agent, learn=True, explore=True, sigma=sigma)
+    for e, sigma in enumerate(sigma_schedule(episodes, sigma_start, sigma_end)):
+        stats_e = run_episode(env, agent, learn=True, explore=True, sigma=float(sigma))
         stats[e] = stats_e.as_row()
         if callback is not None:
             callback(e, stats_e)
