@@ -42,7 +42,8 @@ def docs() -> None:
 @click.option(
     "--check",
     is_flag=True,
-    help="Write nothing; list the pages that differ from what the stored outputs give and exit with status 1 if any.",
+    help="Write nothing; list the pages that differ from what the stored outputs give "
+    "and exit with status 1 if any.",
 )
 @guard
 def results(docs_dir, out_dir, names, check):
@@ -56,7 +57,9 @@ def results(docs_dir, out_dir, names, check):
 
     for n in names:
         if n not in results_pages.PAGES:
-            raise click.BadParameter(f"unknown page {n!r} (choose from {', '.join(results_pages.PAGES)})", param_hint="--page")
+            raise click.BadParameter(
+                f"unknown page {n!r} (choose from {', '.join(results_pages.PAGES)})", param_hint="--page"
+            )
     if not Path(docs_dir).is_dir():
         raise UserError(f"--docs '{docs_dir}': no such folder")
     out = Path(out_dir) if out_dir else Path(docs_dir) / "results"

@@ -76,13 +76,23 @@ def _ci(summary: dict) -> list[float]:
 
 
 def render(docs: Path) -> str:
+    """The page's Markdown from the stored outputs under ``docs``."""
     folder = docs / "deep-vs-paper"
     runs = _runs(folder)
     h = next(r for r in runs if r["learner"] == "heuristic")
-    rows = [(
-        "heuristic", "—", "—", f"{num(h['calm']['mean_return'])} {ci(*_ci(h['calm']))}", pct(h["calm"]["success_rate"]),
-        f"{num(h['disturbed']['mean_return'])} {ci(*_ci(h['disturbed']))}", pct(h["disturbed"]["success_rate"]), "—", "—",
-    )]  # fmt: skip
+    rows = [
+        (
+            "heuristic",
+            "—",
+            "—",
+            f"{num(h['calm']['mean_return'])} {ci(*_ci(h['calm']))}",
+            pct(h["calm"]["success_rate"]),
+            f"{num(h['disturbed']['mean_return'])} {ci(*_ci(h['disturbed']))}",
+            pct(h["disturbed"]["success_rate"]),
+            "—",
+            "—",
+        )
+    ]
     cells: dict[tuple[str, int], dict] = {}
     budgets = sorted({r["budget"] for r in runs if "budget" in r})
     for budget in budgets:
@@ -96,14 +106,24 @@ def render(docs: Path) -> str:
                 succ = [r[cond]["success_rate"] for r in rs]
                 c[cond] = float(np.mean([r[cond]["mean_return"] for r in rs]))
                 c[cond + "_cell"] = f"{num(c[cond])} {ci(*worst)}"
-                c[cond + "_succ"] = pct(min(succ)) if min(succ) == max(succ) else f"{pct(min(succ))}–{pct(max(succ))}"
+                c[cond + "_succ"] = (
+                    pct(min(succ)) if min(succ) == max(succ) else f"{pct(min(succ))}–{pct(max(succ))}"
+                )
                 c[cond + "_diff"] = float(np.mean([r[cond]["vs_heuristic"]["mean_diff"] for r in rs]))
             cells[learner, budget] = c
-            rows.append((
-                label, count(rs[0]["steps"]), len(rs), c["calm_cell"], c["calm_succ"], c["disturbed_cell"],
-                c["disturbed_succ"], f"{num(c['calm_diff'], 1, True)} / {num(c['disturbed_diff'], 1, True)}",
-                f"{np.mean([r['wall_s'] for r in rs]):.1f} s",
-            ))  # fmt: skip
+            rows.append(
+                (
+                    label,
+                    count(rs[0]["steps"]),
+                    len(rs),
+                    c["calm_cell"],
+                    c["calm_succ"],
+                    c["disturbed_cell"],
+                    c["disturbed_succ"],
+                    f"{num(c['calm_diff'], 1, True)} / {num(c['disturbed_diff'], 1, True)}",
+                    f"{np.mean([r['wall_s'] for r in rs]):.1f} s",
+                )
+            )
     small, mid, large = budgets[0], budgets[1], budgets[-1]
     deep_large = [cells[k]["calm"] for k in cells if k[0] in DEEP]
     cacla_large = cells["cacla", large]["calm"]
@@ -117,10 +137,16 @@ def render(docs: Path) -> str:
     for d in disc:
         by.setdefault((d["alg"], d["gamma"]), []).append(d)
     drows = [
-        (alg.upper(), f"{g:g}", len(ds), num(np.mean([d["mean_return"] for d in ds])),
-         pct(float(np.mean([d["success_rate"] for d in ds]))), num(np.mean([d["vs"]["mean_diff"] for d in ds]), 1, True))
+        (
+            alg.upper(),
+            f"{g:g}",
+            len(ds),
+            num(np.mean([d["mean_return"] for d in ds])),
+            pct(float(np.mean([d["success_rate"] for d in ds]))),
+            num(np.mean([d["vs"]["mean_diff"] for d in ds]), 1, True),
+        )
         for (alg, g), ds in sorted(by.items())
-    ]  # fmt: skip
+    ]
 
     def best(alg: str) -> str:
         cand = {g: np.mean([d["mean_return"] for d in ds]) for (a, g), ds in by.items() if a == alg}
@@ -129,24 +155,43 @@ def render(docs: Path) -> str:
     body = fill(
         TEXT,
         table=table(
-            ("learner", "budget (steps)", "seeds", "mean return, calm: mean of seeds [worst seed's 95 % CI]",
-             "success, calm", "mean return, disturbed [worst CI]", "success, disturbed",
-             "vs heuristic, calm / disturbed (mean diff.)", "train wall time per seed"),
+            (
+                "learner",
+                "budget (steps)",
+                "seeds",
+                "mean return, calm: mean of seeds [worst seed's 95 % CI]",
+                "success, calm",
+                "mean return, disturbed [worst CI]",
+                "success, disturbed",
+                "vs heuristic, calm / disturbed (mean diff.)",
+                "train wall time per seed",
+            ),
             rows,
-        ),  # fmt: skip
-        small=count(small), mid=count(mid), large=count(large),
+        ),
+        small=count(small),
+        mid=count(mid),
+        large=count(large),
         deep_small=" and ".join(num(cells[k, small]["calm"]) for k in DEEP if (k, small) in cells),
         ppo_small_wall=f"{np.mean([r['wall_s'] for r in ppo_small]):.1f}",
-        paper_mid=" and ".join(num(cells[k, mid]["calm"]) for k in LEARNERS if k not in DEEP and (k, mid) in cells),
-        paper_large=" and ".join(num(cells[k, large]["calm"]) for k in LEARNERS if k not in DEEP and (k, large) in cells),
+        paper_mid=" and ".join(
+            num(cells[k, mid]["calm"]) for k in LEARNERS if k not in DEEP and (k, mid) in cells
+        ),
+        paper_large=" and ".join(
+            num(cells[k, large]["calm"]) for k in LEARNERS if k not in DEEP and (k, large) in cells
+        ),
         cacla_large=num(cacla_large),
-        gap_lo=num(min(deep_large) - cacla_large), gap_hi=num(max(deep_large) - cacla_large),
-        deep_lo=num(min(deep_large)), deep_hi=num(max(deep_large)),
-        deep_cost_lo=num(min(deep_cost)), deep_cost_hi=num(max(deep_cost)),
-        paper_cost_lo=num(min(paper_cost)), paper_cost_hi=num(max(paper_cost)),
+        gap_lo=num(min(deep_large) - cacla_large),
+        gap_hi=num(max(deep_large) - cacla_large),
+        deep_lo=num(min(deep_large)),
+        deep_hi=num(max(deep_large)),
+        deep_cost_lo=num(min(deep_cost)),
+        deep_cost_hi=num(max(deep_cost)),
+        paper_cost_lo=num(min(paper_cost)),
+        paper_cost_hi=num(max(paper_cost)),
         discount_steps=" / ".join(sorted({count(d["steps"]) for d in disc})),
         discount=table(("learner", "γ", "seeds", "mean return", "success", "vs heuristic"), drows),
-        best_ppo=best("ppo"), best_sac=best("sac"),
-    )  # fmt: skip
+        best_ppo=best("ppo"),
+        best_sac=best("sac"),
+    )
     provenance = [("deep-vs-paper/*.json", "not recorded"), ("deep-vs-paper/discount.jsonl", "not recorded")]
     return page(TITLE, __name__, SOURCES, provenance, body)

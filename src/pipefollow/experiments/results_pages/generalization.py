@@ -16,7 +16,8 @@ SOURCES = ("generalize/heldout.csv",)
 
 TEXT = """\
 Regenerate the stored output with `pipefollow reproduce --experiment examples/generalize.toml --out FOLDER`,
-then `python examples/generalize_table.py` on it (the how-to: [Training and comparing](../guides/training-and-comparing.md#training-that-generalizes)).
+then `python examples/generalize_table.py` on it (the how-to:
+[Training and comparing](../guides/training-and-comparing.md#training-that-generalizes)).
 
 ## On `heldout`, calm and disturbed
 
@@ -45,6 +46,7 @@ def _pct_range(values: list[float]) -> str:
 
 
 def render(docs: Path) -> str:
+    """The page's Markdown from the stored outputs under ``docs``."""
     rows = read_csv(docs / "generalize" / "heldout.csv")
     groups: dict[tuple[str, str], list[dict[str, str]]] = {}
     for r in rows:
@@ -52,23 +54,41 @@ def render(docs: Path) -> str:
     scenarios = list(dict.fromkeys(r["scenario"] for r in rows))
     out = []
     for (scenario, controller), rs in groups.items():
-        f = {k: [float(r[k]) for r in rs] for k in ("mean_return", "ci95_low", "ci95_high", "success_rate",
-                                                   "mean_diff", "ci95_diff_low", "ci95_diff_high")}  # fmt: skip
+        f = {
+            k: [float(r[k]) for r in rs]
+            for k in (
+                "mean_return",
+                "ci95_low",
+                "ci95_high",
+                "success_rate",
+                "mean_diff",
+                "ci95_diff_low",
+                "ci95_diff_high",
+            )
+        }
         worst = min(range(len(rs)), key=lambda i: f["mean_return"][i])
         heuristic = controller == "heuristic"
         worst_d = min(range(len(rs)), key=lambda i: f["ci95_diff_low"][i])
-        out.append((
-            scenario, controller, _range(f["mean_return"]), ci(f["ci95_low"][worst], f["ci95_high"][worst]),
-            _pct_range(f["success_rate"]),
-            "—" if heuristic else _range(f["mean_diff"], sign=True),
-            "—" if heuristic else ci(f["ci95_diff_low"][worst_d], f["ci95_diff_high"][worst_d], sign=True),
-        ))  # fmt: skip
+        out.append(
+            (
+                scenario,
+                controller,
+                _range(f["mean_return"]),
+                ci(f["ci95_low"][worst], f["ci95_high"][worst]),
+                _pct_range(f["success_rate"]),
+                "—" if heuristic else _range(f["mean_diff"], sign=True),
+                "—"
+                if heuristic
+                else ci(f["ci95_diff_low"][worst_d], f["ci95_diff_high"][worst_d], sign=True),
+            )
+        )
     learned = [r for r in rows if r["seed"]]
     heur = {r["scenario"]: r for r in rows if r["controller"] == "heuristic"}
     per_scenario = {s: [r for r in learned if r["scenario"] == s] for s in scenarios}
     beat = min(sum(float(r["ci95_diff_low"]) > 0 for r in rs) for rs in per_scenario.values())
     succ = min(
-        sum(float(r["success_rate"]) > float(heur[s]["success_rate"]) for r in rs) for s, rs in per_scenario.items()
+        sum(float(r["success_rate"]) > float(heur[s]["success_rate"]) for r in rs)
+        for s, rs in per_scenario.items()
     )
     los = [r for r in rows if r["controller"].startswith("LOS")]
     body = fill(
@@ -78,12 +98,20 @@ def render(docs: Path) -> str:
         seeds=len({r["seed"] for r in learned}),
         scenarios=len(scenarios),
         table=table(
-            ("scenario", "controller", "mean return, per seed", "95 % CI, worst seed", "success rate, per seed",
-             "vs heuristic: mean difference, per seed", "its 95 % CI, worst seed"),
+            (
+                "scenario",
+                "controller",
+                "mean return, per seed",
+                "95 % CI, worst seed",
+                "success rate, per seed",
+                "vs heuristic: mean difference, per seed",
+                "its 95 % CI, worst seed",
+            ),
             out,
-        ),  # fmt: skip
-        beat=beat, succ=succ,
+        ),
+        beat=beat,
+        succ=succ,
         los_worse=sum(float(r["mean_diff"]) < 0 for r in los),
         lowest_diff=num(min(float(r["ci95_diff_low"]) for r in learned), 1, sign=True),
-    )  # fmt: skip
+    )
     return page(TITLE, __name__, SOURCES, [("generalize/heldout.csv", "not recorded")], body)

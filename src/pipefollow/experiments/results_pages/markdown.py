@@ -27,7 +27,7 @@ class PageError(ValueError):
 
 
 def num(x: float | None, digits: int = 1, sign: bool = False) -> str:
-    """``x`` with ``digits`` decimals, the minus sign U+2212, ``+`` in front when ``sign``; ``—`` for None/NaN."""
+    """``x`` with ``digits`` decimals, the minus sign U+2212, ``+`` in front when ``sign``; ``—`` for NaN."""
     if x is None or (isinstance(x, float) and math.isnan(x)):
         return "—"
     text = f"{x:+.{digits}f}" if sign else f"{x:.{digits}f}"
@@ -137,6 +137,7 @@ def read_json(path: Path):
 
 
 def read_text(path: Path) -> str:
+    """A stored text file."""
     try:
         return path.read_text(encoding="utf-8")
     except OSError as e:
@@ -182,6 +183,7 @@ def report_table(path: Path, heading: str, index: int = 0) -> list[dict[str, str
 
 
 def row_by(rows: Sequence[Mapping[str, str]], column: str, key: str) -> Mapping[str, str]:
+    """The first row whose ``column`` is ``key``."""
     for r in rows:
         if r.get(column) == key:
             return r
@@ -206,7 +208,9 @@ def report_provenance(path: Path) -> str:
     return m.group(1) if m else NOT_RECORDED
 
 
-def page(title: str, module: str, sources: Sequence[str], provenance: Sequence[tuple[str, str]], body: str) -> str:
+def page(
+    title: str, module: str, sources: Sequence[str], provenance: Sequence[tuple[str, str]], body: str
+) -> str:
     """A whole results page: title, how it is made, the sources and their provenance, the body."""
     lines = [f"# {title}", "", REGENERATE.format(module=module), ""]
     lines.append("Stored outputs: " + ", ".join(f"`docs/{s}`" for s in sources) + ".")
@@ -216,7 +220,7 @@ def page(title: str, module: str, sources: Sequence[str], provenance: Sequence[t
     lines += [f"| `docs/{what}` | {where} |" for what, where in provenance]
     lines.append("")
     lines.append(
-        f"\"{NOT_RECORDED}\": the stored output carries no code stamp, date, numba CPU target or machine; "
+        f'"{NOT_RECORDED}": the stored output carries no code stamp, date, numba CPU target or machine; '
         "the generated reports of `pipefollow reproduce` record the machine, numba's CPU target and the "
         "package versions, but no code stamp or date."
     )

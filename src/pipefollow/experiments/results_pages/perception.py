@@ -25,11 +25,26 @@ from pipefollow.experiments.results_pages.markdown import (
 from pipefollow.perception.water import _RANGES, CLEAR, WATER_PRESETS, Water
 
 TITLE = "Results: perception in the loop"
-SOURCES = ("vision/report.csv", "vision/calibration.json", "vision/closed_loop.csv",
-           "vision/closed_loop_suites.csv", "vision/ppo_pixels.json")  # fmt: skip
-UNITS = {"turbidity": "1/m", "light_falloff": "share", "blur": "px", "noise": "grey levels", "snow": "per frame",
-         "burial": "share", "growth": "share", "width": "px", "height": "px", "pipe_diameter": "m",
-         "altitude": "m"}  # fmt: skip
+SOURCES = (
+    "vision/report.csv",
+    "vision/calibration.json",
+    "vision/closed_loop.csv",
+    "vision/closed_loop_suites.csv",
+    "vision/ppo_pixels.json",
+)
+UNITS = {
+    "turbidity": "1/m",
+    "light_falloff": "share",
+    "blur": "px",
+    "noise": "grey levels",
+    "snow": "per frame",
+    "burial": "share",
+    "growth": "share",
+    "width": "px",
+    "height": "px",
+    "pipe_diameter": "m",
+    "altitude": "m",
+}
 PIXELS = "PPO on pixels"
 
 TEXT = """\
@@ -109,12 +124,20 @@ def presets_table() -> str:
             v = getattr(w, field)
             text = f"{v:g}"
             values.append(f"**{text}**" if v != getattr(CLEAR, field) and w is not CLEAR else text)
-        rows.append((f"`{field}`", UNITS.get(field, ""), f"{'[' if closed else '('}{lo:g}, {hi:g}]",
-                     f"{getattr(Water(), field):g}", *values))  # fmt: skip
+        rows.append(
+            (
+                f"`{field}`",
+                UNITS.get(field, ""),
+                f"{'[' if closed else '('}{lo:g}, {hi:g}]",
+                f"{getattr(Water(), field):g}",
+                *values,
+            )
+        )
     return table(("field", "unit", "range", "default", *(f"`{p}`" for p in WATER_PRESETS)), rows)
 
 
 def render(docs: Path) -> str:
+    """The page's Markdown from the stored outputs under ``docs``."""
     v = docs / "vision"
     report = read_csv(v / "report.csv")
     cal = read_json(v / "calibration.json")
@@ -123,41 +146,98 @@ def render(docs: Path) -> str:
     suites = read_csv(v / "closed_loop_suites.csv")
 
     rep = table(
-        ("turbidity (1/m)", "burial", "frames with the pipe in view", "found", "false detections",
-         "median error (cm)", "90th percentile (cm)", "gross errors"),
-        ((f"{float(r['turbidity']):g}", f"{float(r['burial']):g}", count(float(r["frames_in_view"])),
-          pct(float(r["detection_rate"]), 1), pct(float(r["false_detection_rate"]), 1),
-          f"{float(r['median_error_cm']):.2f}", f"{float(r['p90_error_cm']):.1f}", pct(float(r["gross_error_rate"]), 1))
-         for r in report),
-    )  # fmt: skip
+        (
+            "turbidity (1/m)",
+            "burial",
+            "frames with the pipe in view",
+            "found",
+            "false detections",
+            "median error (cm)",
+            "90th percentile (cm)",
+            "gross errors",
+        ),
+        (
+            (
+                f"{float(r['turbidity']):g}",
+                f"{float(r['burial']):g}",
+                count(float(r["frames_in_view"])),
+                pct(float(r["detection_rate"]), 1),
+                pct(float(r["false_detection_rate"]), 1),
+                f"{float(r['median_error_cm']):.2f}",
+                f"{float(r['p90_error_cm']):.1f}",
+                pct(float(r["gross_error_rate"]), 1),
+            )
+            for r in report
+        ),
+    )
     calib = table(
         ("turbidity (1/m)", "camera noise (m)", "miss probability", "gross errors (apart)"),
-        ((f"{c['turbidity']:g}", f"{c['camera_noise']:.4f}", f"{c['miss_prob']:.4f}", pct(c["gross_error_rate"], 1))
-         for c in cal),
-    )  # fmt: skip
+        (
+            (
+                f"{c['turbidity']:g}",
+                f"{c['camera_noise']:.4f}",
+                f"{c['miss_prob']:.4f}",
+                pct(c["gross_error_rate"], 1),
+            )
+            for c in cal
+        ),
+    )
     by_turb = {round(c["turbidity"], 6): c for c in cal}
     preset_models = "; ".join(
         f"`{name}` ({w.turbidity:g}/m): `--camera-noise {by_turb[round(w.turbidity, 6)]['camera_noise']:.3f} "
         f"--miss-prob {by_turb[round(w.turbidity, 6)]['miss_prob']:.3f}`"
-        for name, w in WATER_PRESETS.items() if round(w.turbidity, 6) in by_turb
-    )  # fmt: skip
+        for name, w in WATER_PRESETS.items()
+        if round(w.turbidity, 6) in by_turb
+    )
 
     rows = [dict(r) for r in loop]
     for p in pixels["rows"]:
-        rows.append({"water": p["water"], "controller": PIXELS, "mean_return": p["mean_return"],
-                     "ci95_low": p["ci95_mean"][0], "ci95_high": p["ci95_mean"][1], "success_rate": p["success_rate"],
-                     "pipe_in_view": p["pipe_in_view"], "mean_diff": p["mean_diff"], "ci95_diff_low": p["ci95_diff"][0],
-                     "ci95_diff_high": p["ci95_diff"][1]})  # fmt: skip
-    cell = {(r["controller"], r["water"]): {k: (float(x) if k not in ("water", "controller") else x) for k, x in r.items()}
-            for r in rows}  # fmt: skip
+        rows.append(
+            {
+                "water": p["water"],
+                "controller": PIXELS,
+                "mean_return": p["mean_return"],
+                "ci95_low": p["ci95_mean"][0],
+                "ci95_high": p["ci95_mean"][1],
+                "success_rate": p["success_rate"],
+                "pipe_in_view": p["pipe_in_view"],
+                "mean_diff": p["mean_diff"],
+                "ci95_diff_low": p["ci95_diff"][0],
+                "ci95_diff_high": p["ci95_diff"][1],
+            }
+        )
+    cell = {
+        (r["controller"], r["water"]): {
+            k: (float(x) if k not in ("water", "controller") else x) for k, x in r.items()
+        }
+        for r in rows
+    }
     controllers = list(dict.fromkeys(r["controller"] for r in rows))
     closed = table(
-        ("controller", "camera", "mean return [95 % CI]", "success", "pipe in view", "vs heuristic, ideal camera [95 % CI]"),
-        ((c, w, f"{num(x['mean_return'])} {ci(x['ci95_low'], x['ci95_high'])}", pct(x["success_rate"]),
-          pct(x["pipe_in_view"], 1),
-          "—" if (c, w) == ("heuristic", "ideal") else f"{num(x['mean_diff'], 1, True)} {ci(x['ci95_diff_low'], x['ci95_diff_high'], sign=True)}")
-         for (c, w), x in cell.items()),
-    )  # fmt: skip
+        (
+            "controller",
+            "camera",
+            "mean return [95 % CI]",
+            "success",
+            "pipe in view",
+            "vs heuristic, ideal camera [95 % CI]",
+        ),
+        (
+            (
+                c,
+                w,
+                f"{num(x['mean_return'])} {ci(x['ci95_low'], x['ci95_high'])}",
+                pct(x["success_rate"]),
+                pct(x["pipe_in_view"], 1),
+                "—"
+                if (c, w) == ("heuristic", "ideal")
+                else num(x["mean_diff"], 1, True)
+                + " "
+                + ci(x["ci95_diff_low"], x["ci95_diff_high"], sign=True),
+            )
+            for (c, w), x in cell.items()
+        ),
+    )
 
     def g(c: str, w: str, k: str = "mean_return") -> float:
         try:
@@ -165,7 +245,11 @@ def render(docs: Path) -> str:
         except KeyError:
             raise PageError(f"vision: no closed-loop row for {c!r} in {w!r} water") from None
 
-    learned = [c for c in controllers if c not in ("heuristic", PIXELS) and not c.startswith("LOS") and "calibrated" not in c]
+    learned = [
+        c
+        for c in controllers
+        if c not in ("heuristic", PIXELS) and not c.startswith("LOS") and "calibrated" not in c
+    ]
     los = next(c for c in controllers if c.startswith("LOS"))
     ppo = next(c for c in controllers if c.startswith("PPO") and c != PIXELS)
     calibrated = next(c for c in controllers if "calibrated" in c)
@@ -175,38 +259,69 @@ def render(docs: Path) -> str:
     view = [g(c, "turbid", "pipe_in_view") for c in controllers if c != PIXELS]
     body = fill(
         TEXT,
-        presets=presets_table(), report=rep, calibration=calib, preset_models=preset_models,
+        presets=presets_table(),
+        report=rep,
+        calibration=calib,
+        preset_models=preset_models,
         frames=count(float(report[0]["frames_without_pipe"])),
-        pixels=PIXELS, pixel_steps=count(pixels["steps"]), pixel_seed=pixels["seed"],
-        pixel_train=f"{pixels['train_seconds']:.0f}", closed_loop=closed,
+        pixels=PIXELS,
+        pixel_steps=count(pixels["steps"]),
+        pixel_seed=pixels["seed"],
+        pixel_train=f"{pixels['train_seconds']:.0f}",
+        closed_loop=closed,
         clear_vs_ideal="; ".join(f"{c} {num(g(c, 'clear'))} against {num(g(c, 'ideal'))}" for c in learned),
         moderate_vs_ideal="; ".join(f"{c} {num(g(c, 'moderate'))}" for c in learned),
-        h_clear=num(g("heuristic", "clear")), h_ideal=num(g("heuristic", "ideal")),
+        h_clear=num(g("heuristic", "clear")),
+        h_ideal=num(g("heuristic", "ideal")),
         h_clear_diff=num(g("heuristic", "clear", "mean_diff"), 1, True),
-        h_clear_ci=ci(g("heuristic", "clear", "ci95_diff_low"), g("heuristic", "clear", "ci95_diff_high"), sign=True),
+        h_clear_ci=ci(
+            g("heuristic", "clear", "ci95_diff_low"), g("heuristic", "clear", "ci95_diff_high"), sign=True
+        ),
         h_moderate=num(g("heuristic", "moderate")),
-        h_succ_clear=pct(g("heuristic", "clear", "success_rate")), h_succ_ideal=pct(g("heuristic", "ideal", "success_rate")),
-        los_succ_ideal=pct(g(los, "ideal", "success_rate")), los_succ_clear=pct(g(los, "clear", "success_rate")),
+        h_succ_clear=pct(g("heuristic", "clear", "success_rate")),
+        h_succ_ideal=pct(g("heuristic", "ideal", "success_rate")),
+        los_succ_ideal=pct(g(los, "ideal", "success_rate")),
+        los_succ_clear=pct(g(los, "clear", "success_rate")),
         los_succ_moderate=pct(g(los, "moderate", "success_rate")),
-        los_ideal=num(g(los, "ideal")), los_clear=num(g(los, "clear")), los_moderate=num(g(los, "moderate")),
-        turbid_drop_lo=num(min(drop)), turbid_drop_hi=num(max(drop)),
-        turbid_view_lo=pct(min(view), 1), turbid_view_hi=pct(max(view), 1),
-        px_clear=num(g(PIXELS, "clear")), px_succ_clear=pct(g(PIXELS, "clear", "success_rate")),
+        los_ideal=num(g(los, "ideal")),
+        los_clear=num(g(los, "clear")),
+        los_moderate=num(g(los, "moderate")),
+        turbid_drop_lo=num(min(drop)),
+        turbid_drop_hi=num(max(drop)),
+        turbid_view_lo=pct(min(view), 1),
+        turbid_view_hi=pct(max(view), 1),
+        px_clear=num(g(PIXELS, "clear")),
+        px_succ_clear=pct(g(PIXELS, "clear", "success_rate")),
         px_clear_diff=num(g(PIXELS, "clear", "mean_diff"), 1, True),
         px_clear_ci=ci(g(PIXELS, "clear", "ci95_diff_low"), g(PIXELS, "clear", "ci95_diff_high"), sign=True),
         px_gap=num(g(ppo, "clear") - g(PIXELS, "clear")),
         px_moderate_cost=num(g(PIXELS, "clear") - g(PIXELS, "moderate")),
         ppo_moderate_cost=num(g(ppo, "clear") - g(ppo, "moderate")),
-        px_turbid=num(g(PIXELS, "turbid")), px_succ_turbid=pct(g(PIXELS, "turbid", "success_rate")),
+        px_turbid=num(g(PIXELS, "turbid")),
+        px_succ_turbid=pct(g(PIXELS, "turbid", "success_rate")),
         calibrated=calibrated,
         calibrated_diffs="; ".join(f"{w} {num(g(calibrated, w) - g(base, w), 1, True)}" for w in waters),
         suites=table(
-            ("suite", "controller", "camera", "mean return [95 % CI]", "success", "vs heuristic, ideal camera"),
-            ((s["suite"], s["controller"], s["camera"],
-              f"{num(float(s['mean_return']))} {ci(float(s['ci95_low']), float(s['ci95_high']))}",
-              pct(float(s["success_rate"])),
-              num(float(s["vs_heuristic_ideal"]), 1, True) if s["vs_heuristic_ideal"] else "—") for s in suites),
-        ),  # fmt: skip
-    )  # fmt: skip
+            (
+                "suite",
+                "controller",
+                "camera",
+                "mean return [95 % CI]",
+                "success",
+                "vs heuristic, ideal camera",
+            ),
+            (
+                (
+                    s["suite"],
+                    s["controller"],
+                    s["camera"],
+                    f"{num(float(s['mean_return']))} {ci(float(s['ci95_low']), float(s['ci95_high']))}",
+                    pct(float(s["success_rate"])),
+                    num(float(s["vs_heuristic_ideal"]), 1, True) if s["vs_heuristic_ideal"] else "—",
+                )
+                for s in suites
+            ),
+        ),
+    )
     provenance = [(s, "not recorded") for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)

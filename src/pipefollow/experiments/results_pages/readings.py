@@ -64,48 +64,68 @@ heuristic's {h_val}).
 """
 
 
+def _verdict_cell(r: dict[str, str]) -> str:
+    mark = "✓" if r["verdict"] == "confirmed" else "✗"
+    return f"{r['passed']}/{r['repeats']} {mark}"
+
+
 def _names(items: list[str]) -> str:
     return ", ".join(f"`{x}`" for x in items) if items else "none"
 
 
 def render(docs: Path) -> str:
+    """The page's Markdown from the stored outputs under ``docs``."""
     rows = read_csv(docs / "readings" / "readings.csv")
     readings = list(dict.fromkeys(r["reading"] for r in rows))
     parts = list(dict.fromkeys(r["claim"] for r in rows))
     cell = {(r["reading"], r["claim"]): r for r in rows}
     verdicts = table(
         ("reading", *parts),
-        ((f"`{rd}`", *(
-            f"{cell[rd, p]['passed']}/{cell[rd, p]['repeats']} {'✓' if cell[rd, p]['verdict'] == 'confirmed' else '✗'}"
-            if (rd, p) in cell else "–" for p in parts)) for rd in readings),
-    )  # fmt: skip
+        (
+            (
+                f"`{rd}`",
+                *(_verdict_cell(cell[rd, p]) if (rd, p) in cell else "–" for p in parts),
+            )
+            for rd in readings
+        ),
+    )
 
     def holds(rd: str, p: str) -> bool:
         return cell.get((rd, p), {}).get("verdict") == "confirmed"
 
     report = docs / "readings" / "REPORT.md"
-    m = re.search(r"the paper's (\d+) trials under each of (\d+) readings, (\d+) repeats each", read_text(report))
+    m = re.search(
+        r"the paper's (\d+) trials under each of (\d+) readings, (\d+) repeats each", read_text(report)
+    )
     setups, n_readings, repeats = (int(x) for x in m.groups()) if m else (0, len(readings), 0)
     default_held = [p for p in parts if holds("default", p)]
     body = fill(
         READINGS_TEXT,
-        setups=setups, others=len(readings) - 1, repeats=repeats, verdicts=verdicts,
+        setups=setups,
+        others=len(readings) - 1,
+        repeats=repeats,
+        verdicts=verdicts,
         fail_all=", ".join(p for p in parts if not any(holds(rd, p) for rd in readings)) or "none",
         hold_all=", ".join(p for p in parts if all(holds(rd, p) for rd in readings)) or "none",
-        default_held=len(default_held), parts=len(parts), default_list=", ".join(default_held),
+        default_held=len(default_held),
+        parts=len(parts),
+        default_list=", ".join(default_held),
         not_1c=_names([rd for rd in readings if not holds(rd, "1c")]),
         not_1b=_names([rd for rd in readings if not holds(rd, "1b")]),
         not_2b=_names([rd for rd in readings if not holds(rd, "2b")]),
         yes_3a=_names([rd for rd in readings if holds(rd, "3a")]),
         yes_4b=_names([rd for rd in readings if holds(rd, "4b")]),
-    )  # fmt: skip
+    )
 
     centred_report = docs / "skew-centred" / "REPORT.md"
     trials = report_table(centred_report, "Results per trial")
     first = [r for r in trials if r["phase"].startswith("1:") and "left then right" not in r["trial"]]
     centred = table(
         ("set-up", "converged", "last-50 return", "first-100 return"),
-        ((r["trial"], r["converged"], minus(r["return, last 50"]), minus(r["return, first 100"])) for r in first),
+        (
+            (r["trial"], r["converged"], minus(r["return, last 50"]), minus(r["return, first 100"]))
+            for r in first
+        ),
     )
     n = fraction_cell(first[0]["converged"])[1]
 
@@ -118,14 +138,16 @@ def render(docs: Path) -> str:
     val = next(r for r in trials if r["phase"].startswith("2:"))
     body += "\n" + fill(
         CENTRED_TEXT,
-        repeats=n, centred=centred,
-        c_first=first100("CACLA, skew 22.5° centred"), cacla_first=first100("CACLA"),
+        repeats=n,
+        centred=centred,
+        c_first=first100("CACLA, skew 22.5° centred"),
+        cacla_first=first100("CACLA"),
         p_first=first100("CACLA, skew 22.5°"),
         c_conv=conv(("CACLA, skew 22.5° centred", "CACLA, skew 45° centred")),
         p_conv=conv(("CACLA, skew 22.5°", "supervised CACLA, skew 22.5°")),
         c_val=num(mean_sd_cell(val["eval. return, learned"])[0], 1),
         h_val=num(mean_sd_cell(val["eval. return, heuristic"])[0], 1),
-    )  # fmt: skip
+    )
     provenance = [
         ("readings/readings.csv", "not recorded (the run of readings/REPORT.md)"),
         ("readings/REPORT.md", report_provenance(report) + "; code stamp and date not recorded"),

@@ -29,7 +29,8 @@ SOURCES = ("reference-learners/REPORT.md",)
 TEXT = """\
 Regenerate the stored output with `pipefollow reproduce --experiment reference-learners --out FOLDER`
 and copy its `REPORT.md` to `docs/reference-learners/` (the full report:
-[reference-learners/REPORT.md](../reference-learners/REPORT.md); the how-to: [The reproduction](../guides/reproduction.md#the-papers-reference-learners-what-eq-7s-sign-and-max-terms-buy)).
+[reference-learners/REPORT.md](../reference-learners/REPORT.md); the how-to:
+[The reproduction]({guide})).
 
 ## Per set-up
 
@@ -53,11 +54,19 @@ PAIRS = (
     ("CACLA (eq. 7)", "actor-critic (eq. 9)", "eq. 7 against eq. 9"),
     ("supervised CACLA (eq. 12)", "supervised actor-critic (eq. 11)", "supervised: eq. 12 against eq. 11"),
     ("actor-critic, max(δ, 0)", "actor-critic (eq. 9)", "max term alone against eq. 9"),
-    ("supervised actor-critic, max(δ, 0)", "supervised actor-critic (eq. 11)", "supervised: max term alone against eq. 11"),
+    (
+        "supervised actor-critic, max(δ, 0)",
+        "supervised actor-critic (eq. 11)",
+        "supervised: max term alone against eq. 11",
+    ),
     ("CACLA (eq. 7)", "actor-critic, max(δ, 0)", "adding the sign term to the max term (CACLA)"),
     ("supervised CACLA (eq. 12)", "supervised actor-critic, max(δ, 0)", "supervised: adding the sign term"),
     ("actor-critic, sgn(δ)", "actor-critic (eq. 9)", "sign term alone against eq. 9"),
-    ("supervised actor-critic, sgn(δ)", "supervised actor-critic (eq. 11)", "supervised: sign term alone against eq. 11"),
+    (
+        "supervised actor-critic, sgn(δ)",
+        "supervised actor-critic (eq. 11)",
+        "supervised: sign term alone against eq. 11",
+    ),
 )
 
 
@@ -68,27 +77,47 @@ def _diff(rows, a: str, b: str, column: str, n: int) -> str:
 
 
 def render(docs: Path) -> str:
+    """The page's Markdown from the stored outputs under ``docs``."""
     report = docs / "reference-learners" / "REPORT.md"
     rows = report_table(report, "Results per trial")
     n = fraction_cell(rows[0]["converged"])[1]
-    episodes = report_table(report, "What was run")[0]["training phases (pipeline × episodes)"].split("×")[-1].strip()
-    cols = ("trial", "converged", "return, last 50", "return, first 100", "pipe in view, last 50 (%)",
-            "progress, last 50 (m)", "eval. return, learned")  # fmt: skip
+    episodes = (
+        report_table(report, "What was run")[0]["training phases (pipeline × episodes)"]
+        .split("×")[-1]
+        .strip()
+    )
+    cols = (
+        "trial",
+        "converged",
+        "return, last 50",
+        "return, first 100",
+        "pipe in view, last 50 (%)",
+        "progress, last 50 (m)",
+        "eval. return, learned",
+    )
     t = table(("set-up", *cols[1:]), ((minus(r[c]) for c in cols) for r in rows))
-    diffs = table(("comparison", "last-50 return, difference"),
-                  ((label, _diff(rows, a, b, "return, last 50", n)) for a, b, label in PAIRS))  # fmt: skip
+    diffs = table(
+        ("comparison", "last-50 return, difference"),
+        ((label, _diff(rows, a, b, "return, last 50", n)) for a, b, label in PAIRS),
+    )
 
     def conv(*labels) -> str:
         return " and ".join(row_by(rows, "trial", x)["converged"] for x in labels)
 
     body = fill(
         TEXT,
-        n=n, episodes=episodes, table=t, diffs=diffs,
+        guide="../guides/reproduction.md#the-papers-reference-learners-what-eq-7s-sign-and-max-terms-buy",
+        n=n,
+        episodes=episodes,
+        table=t,
+        diffs=diffs,
         cacla_conv=conv("CACLA (eq. 7)", "supervised CACLA (eq. 12)"),
         ac_conv=conv("actor-critic (eq. 9)", "supervised actor-critic (eq. 11)"),
         max_conv=conv("actor-critic, max(δ, 0)", "supervised actor-critic, max(δ, 0)"),
         sign_conv=conv("actor-critic, sgn(δ)", "supervised actor-critic, sgn(δ)"),
         early=_diff(rows, "actor-critic (eq. 9)", "CACLA (eq. 7)", "return, first 100", n),
-    )  # fmt: skip
-    provenance = [("reference-learners/REPORT.md", report_provenance(report) + "; code stamp and date not recorded")]
+    )
+    provenance = [
+        ("reference-learners/REPORT.md", report_provenance(report) + "; code stamp and date not recorded")
+    ]
     return page(TITLE, __name__, SOURCES, provenance, body)

@@ -73,8 +73,14 @@ def _table1(rows: list[dict[str, str]]) -> dict[str, np.ndarray]:
     return {k: np.array(v) for k, v in out.items()}
 
 
-def _eval_mean(rows: list[dict[str, str]], trial: str, controller: str, pipeline: str = "paper-left") -> float:
-    v = [float(r["return"]) for r in rows if (r["trial"], r["controller"], r["pipeline"]) == (trial, controller, pipeline)]
+def _eval_mean(
+    rows: list[dict[str, str]], trial: str, controller: str, pipeline: str = "paper-left"
+) -> float:
+    v = [
+        float(r["return"])
+        for r in rows
+        if (r["trial"], r["controller"], r["pipeline"]) == (trial, controller, pipeline)
+    ]
     if not v:
         raise PageError(f"evaluation.csv: no rows of {trial}/{controller} on {pipeline}")
     return float(np.mean(v))
@@ -166,28 +172,43 @@ def render(docs: Path) -> str:
     claims_rows = []
     for pid, p in parts5.items():
         p30 = parts30.get(pid)
-        claims_rows.append((
-            f"{pid} ({p['figure']})", p["statement"], p["ours"], p["verdict"],
-            p30["ours"] if p30 else "—", p30["verdict"] if p30 else "—",
-            firm[pid]["firm"] if pid in firm else "—",
-        ))  # fmt: skip
+        claims_rows.append(
+            (
+                f"{pid} ({p['figure']})",
+                p["statement"],
+                p["ours"],
+                p["verdict"],
+                p30["ours"] if p30 else "—",
+                p30["verdict"] if p30 else "—",
+                firm[pid]["firm"] if pid in firm else "—",
+            )
+        )
     claims_table = table(
-        ("claim", "statement", f"ours, {repeats} repeats", "verdict", f"ours, {seeds30[-1] - seeds30[0] + 1} repeats",
-         "verdict", "firm"),
+        (
+            "claim",
+            "statement",
+            f"ours, {repeats} repeats",
+            "verdict",
+            f"ours, {seeds30[-1] - seeds30[0] + 1} repeats",
+            "verdict",
+            "firm",
+        ),
         claims_rows,
-    )  # fmt: skip
+    )
     repeats30 = seeds30[-1] - seeds30[0] + 1
     trials30 = report_table(repeats_report, "Results per trial")
     skew_labels = ("CACLA, skew 11.25°", "CACLA, skew 22.5°", "CACLA, skew 45°")
     claims = fill(
         CLAIMS_TEXT,
-        repeats=repeats, repeats30=repeats30, seeds30=f"{seeds30[0]}–{seeds30[-1]}",
+        repeats=repeats,
+        repeats30=repeats30,
+        seeds30=f"{seeds30[0]}–{seeds30[-1]}",
         claims_table=minus(claims_table),
         cacla30=conv("CACLA", table_rows=trials30).replace("/", " of "),
         sup_skew30=conv("supervised CACLA, skew 22.5°", table_rows=trials30).replace("/", " of "),
         margin_2b=num(min(_ses(parts5["2b"]["ours"])) - 2.0, 1),
         nearest_2b30=num(min(_ses(parts30["2b"]["ours"])), 1),
-    )  # fmt: skip
+    )
 
     trials_table = table(
         list(trials[0]),
@@ -200,24 +221,35 @@ def render(docs: Path) -> str:
     n = t1["learned"].size
     learned, heur = t1["learned"], t1["heuristic"]
     relative = (learned.mean() - heur.mean()) / abs(heur.mean()) * 100.0
-    paper_relative = (PAPER_TABLE1["learned"] - PAPER_TABLE1["heuristic"]) / abs(PAPER_TABLE1["heuristic"]) * 100.0
+    paper_relative = (
+        (PAPER_TABLE1["learned"] - PAPER_TABLE1["heuristic"]) / abs(PAPER_TABLE1["heuristic"]) * 100.0
+    )
     t1_rows = [
-        ("learned (supervised CACLA, skew 22.5°, as executed)", f"{num(learned.mean(), 2)} ± {num(_sd(learned), 2)}",
-         num(PAPER_TABLE1["learned"], 4)),
-    ]  # fmt: skip
+        (
+            "learned (supervised CACLA, skew 22.5°, as executed)",
+            f"{num(learned.mean(), 2)} ± {num(_sd(learned), 2)}",
+            num(PAPER_TABLE1["learned"], 4),
+        ),
+    ]
     if "actor" in t1:
         t1_rows.append(("its pure actor", f"{num(t1['actor'].mean(), 2)} ± {num(_sd(t1['actor']), 2)}", "—"))
     t1_rows += [
         ("heuristic", num(heur.mean(), 2), num(PAPER_TABLE1["heuristic"], 4)),
-        ("learned relative to heuristic", f"{num(relative, 1, sign=True)} %", f"{num(paper_relative, 1, sign=True)} %"),
+        (
+            "learned relative to heuristic",
+            f"{num(relative, 1, sign=True)} %",
+            f"{num(paper_relative, 1, sign=True)} %",
+        ),
     ]
     seconds = float(_seconds(report))
     table1 = fill(
         TABLE1_TEXT,
-        seconds=f"{seconds:g}", pipeline=val["pipeline"], n=n,
+        seconds=f"{seconds:g}",
+        pipeline=val["pipeline"],
+        n=n,
         table1=table(("controller", "ours: accumulated reward", "paper"), t1_rows),
         wins=int((learned > heur).sum()),
-    )  # fmt: skip
+    )
 
     gmax = DEFAULT.gamma_max
     delta = gmax / math.sqrt(1.0 + gmax**2)
@@ -225,7 +257,8 @@ def render(docs: Path) -> str:
     m2a = re.search(r"progress (\d+\.\d+) m", parts5["2a"]["margin"])
     seen = fill(
         SEEN_TEXT,
-        cacla_last50=ret("CACLA", "return, last 50"), sarsa_last50=ret("SARSA", "return, last 50"),
+        cacla_last50=ret("CACLA", "return, last 50"),
+        sarsa_last50=ret("SARSA", "return, last 50"),
         cacla_eval=num(_eval_mean(rows, "cacla", "learned"), 1),
         sup_eval=num(_eval_mean(rows, "supervised-cacla", "learned"), 1),
         heur_eval=num(_eval_mean(rows, "cacla", "heuristic"), 1),
@@ -235,23 +268,33 @@ def render(docs: Path) -> str:
         max_shift=f"{delta * math.sqrt(2.0 / math.pi):.2f}",
         progress=f"{DEFAULT.converge_progress_m:g}",
         closest_2a=m2a.group(1) if m2a else "—",
-        repeats30=repeats30, skew_conv30=skew_conv30.replace("/", " of "),
-        learned=f"{num(learned.mean(), 1)} ± {num(_sd(learned), 1)}", heuristic=num(heur.mean(), 1),
-        relative=num(relative, 1, sign=True), paper_relative=num(paper_relative, 1, sign=True),
-    )  # fmt: skip
+        repeats30=repeats30,
+        skew_conv30=skew_conv30.replace("/", " of "),
+        learned=f"{num(learned.mean(), 1)} ± {num(_sd(learned), 1)}",
+        heuristic=num(heur.mean(), 1),
+        relative=num(relative, 1, sign=True),
+        paper_relative=num(paper_relative, 1, sign=True),
+    )
 
     provenance = [
         ("reproduction/REPORT.md", report_provenance(report) + "; code stamp and date not recorded"),
         ("reproduction/evaluation.csv", "not recorded (the run of REPORT.md)"),
         ("repeats/REPORT.md", report_provenance(repeats_report) + "; code stamp and date not recorded"),
     ]
-    body = "\n".join((
-        "Regenerate the stored outputs with `pipefollow reproduce --out FOLDER` (then copy "
-        "`REPORT.md`, `evaluation.csv` and the figures to `docs/reproduction/`) and "
-        "`pipefollow reproduce --experiment repeats --out FOLDER` (`docs/repeats/`); the full reports are "
-        "[reproduction/REPORT.md](../reproduction/REPORT.md) and [repeats/REPORT.md](../repeats/REPORT.md).",
-        "", claims, per_trial, table1, seen,
-    ))  # fmt: skip
+    body = "\n".join(
+        (
+            "Regenerate the stored outputs with `pipefollow reproduce --out FOLDER` (then copy "
+            "`REPORT.md`, `evaluation.csv` and the figures to `docs/reproduction/`) and "
+            "`pipefollow reproduce --experiment repeats --out FOLDER` (`docs/repeats/`); the full reports "
+            "are [reproduction/REPORT.md](../reproduction/REPORT.md) and "
+            "[repeats/REPORT.md](../repeats/REPORT.md).",
+            "",
+            claims,
+            per_trial,
+            table1,
+            seen,
+        )
+    )
     return page(TITLE, __name__, SOURCES, provenance, body)
 
 

@@ -24,12 +24,24 @@ from pipefollow.experiments.results_pages.markdown import (
 
 TITLE = "Results: robustness"
 SOURCES = ("robustness/", "robustness/randomized/", "robustness/randomized-ppo-vision/")
-LABELS = {"heuristic": "heuristic", "los": "LOS", "cacla": "CACLA", "supervised-cacla": "supervised CACLA",
-          "sarsa": "SARSA", "ppo": "PPO"}  # fmt: skip
+LABELS = {
+    "heuristic": "heuristic",
+    "los": "LOS",
+    "cacla": "CACLA",
+    "supervised-cacla": "supervised CACLA",
+    "sarsa": "SARSA",
+    "ppo": "PPO",
+}
 PRESETS = ("mild", "moderate", "harsh", "vision")
-COLUMNS = (("curve", "0", "calm"), ("curve", "0.1", "current 0.1 m/s"), ("curve", "0.2", "0.2 m/s"),
-           ("curve", "0.3", "0.3 m/s"), ("scenarios", "noise", "`noise`"), ("scenarios", "buried", "`buried`"),
-           ("scenarios", "sea", "`sea`"))  # fmt: skip
+COLUMNS = (
+    ("curve", "0", "calm"),
+    ("curve", "0.1", "current 0.1 m/s"),
+    ("curve", "0.2", "0.2 m/s"),
+    ("curve", "0.3", "0.3 m/s"),
+    ("scenarios", "noise", "`noise`"),
+    ("scenarios", "buried", "`buried`"),
+    ("scenarios", "sea", "`sea`"),
+)
 
 TEXT = """\
 Regenerate the stored outputs with `pipefollow robustness ... --out FOLDER` (the command and the
@@ -85,20 +97,26 @@ def _cells(folder: Path) -> dict[tuple[str, str, str], dict[str, str]]:
 
 
 def _ci_cell(r: dict[str, str]) -> str:
-    return f"{num(float(r['mean_return']))} {ci(float(r['ci95_low']), float(r['ci95_high']))}, {pct(float(r['success_rate']))}"
+    interval = ci(float(r["ci95_low"]), float(r["ci95_high"]))
+    return f"{num(float(r['mean_return']))} {interval}, {pct(float(r['success_rate']))}"
 
 
 def render(docs: Path) -> str:
+    """The page's Markdown from the stored outputs under ``docs``."""
     base = docs / "robustness"
     main = _cells(base)
     rnd = {**_cells(base / "randomized-ppo-vision"), **_cells(base / "randomized")}
     speeds = list(dict.fromkeys(c for v, c, _ in main if v == "curve"))
     sets = list(dict.fromkeys(c for v, c, _ in main if v == "scenarios"))
     ctrls = [c for c in LABELS if ("curve", speeds[0], c) in main]
-    curve = table(("current (m/s)", *(LABELS[c] for c in ctrls)),
-                  ((s, *(_ci_cell(main["curve", s, c]) for c in ctrls)) for s in speeds))  # fmt: skip
-    scen = table(("scenario set", *(LABELS[c] for c in ctrls)),
-                 ((f"`{s}`", *(_ci_cell(main["scenarios", s, c]) for c in ctrls)) for s in sets))  # fmt: skip
+    curve = table(
+        ("current (m/s)", *(LABELS[c] for c in ctrls)),
+        ((s, *(_ci_cell(main["curve", s, c]) for c in ctrls)) for s in speeds),
+    )
+    scen = table(
+        ("scenario set", *(LABELS[c] for c in ctrls)),
+        ((f"`{s}`", *(_ci_cell(main["scenarios", s, c]) for c in ctrls)) for s in sets),
+    )
 
     def f(cells, view, cond, ctrl, key="mean_return") -> float:
         try:
@@ -115,8 +133,11 @@ def render(docs: Path) -> str:
             break
         leads.append(s)
     seeds_json = read_json(base / "robustness.json")
-    ppo_seeds = next(r["seed_returns"] for r in seeds_json["curve"]
-                     if r["controller"] == "ppo" and f"{r['current_speed']:g}" == vmax)  # fmt: skip
+    ppo_seeds = next(
+        r["seed_returns"]
+        for r in seeds_json["curve"]
+        if r["controller"] == "ppo" and f"{r['current_speed']:g}" == vmax
+    )
 
     rows, diffs = [], {}
     learners = [("cacla", "CACLA"), ("supervised-cacla", "supervised CACLA"), ("ppo", "PPO")]
@@ -126,10 +147,17 @@ def render(docs: Path) -> str:
             if ("curve", "0", name) not in rnd:
                 continue
             values = [(f(rnd, v, c, name), f(rnd, v, c, name, "success_rate")) for v, c, _ in COLUMNS]
-            rows.append((label, f"`{preset}`" if preset else "calm water",
-                         *(f"{num(m)}, {pct(s)}" for m, s in values)))  # fmt: skip
+            rows.append(
+                (
+                    label,
+                    f"`{preset}`" if preset else "calm water",
+                    *(f"{num(m)}, {pct(s)}" for m, s in values),
+                )
+            )
             if preset:
-                diffs[ctrl, preset] = [m - f(rnd, v, c, ctrl) for (v, c, _), (m, _) in zip(COLUMNS, values, strict=True)]
+                diffs[ctrl, preset] = [
+                    m - f(rnd, v, c, ctrl) for (v, c, _), (m, _) in zip(COLUMNS, values, strict=True)
+                ]
     randomized = table(("learner", "trained under", *(h for _, _, h in COLUMNS)), rows)
 
     def span(keys, only=None):
@@ -147,14 +175,26 @@ def render(docs: Path) -> str:
     ppo_d = diffs["ppo", "mild"]
     cur = [i for i, (v, c, _) in enumerate(COLUMNS) if v == "curve" and float(c) >= 0.2]
     sea = next(i for i, (_, c, _) in enumerate(COLUMNS) if c == "sea")
+    at_max = ("curve", vmax)
+
+    def ret_succ(ctrl: str) -> str:
+        return f"{num(f(rnd, *at_max, ctrl))} and {pct(f(rnd, *at_max, ctrl, 'success_rate'))}"
+
     body = fill(
         TEXT,
-        seeds=main["curve", speeds[0], "cacla"]["policies"], curve=curve, scenarios=scen,
-        beat=beat, cells=len(speeds) * len(learned), vmax=vmax,
+        seeds=main["curve", speeds[0], "cacla"]["policies"],
+        curve=curve,
+        scenarios=scen,
+        beat=beat,
+        cells=len(speeds) * len(learned),
+        vmax=vmax,
         sup_calm=num(f(main, "curve", speeds[0], "supervised-cacla", "vs_heuristic"), 1, True),
         sup_max=num(f(main, "curve", vmax, "supervised-cacla", "vs_heuristic"), 1, True),
-        sup_max_ci=ci(f(main, "curve", vmax, "supervised-cacla", "vs_heuristic_low"),
-                      f(main, "curve", vmax, "supervised-cacla", "vs_heuristic_high"), sign=True),  # fmt: skip
+        sup_max_ci=ci(
+            f(main, "curve", vmax, "supervised-cacla", "vs_heuristic_low"),
+            f(main, "curve", vmax, "supervised-cacla", "vs_heuristic_high"),
+            sign=True,
+        ),
         cacla_calm=num(f(main, "curve", speeds[0], "cacla", "vs_heuristic"), 1, True),
         cacla_max=num(f(main, "curve", vmax, "cacla", "vs_heuristic"), 1, True),
         h_calm=pct(f(main, "curve", speeds[0], "heuristic", "success_rate")),
@@ -166,16 +206,27 @@ def render(docs: Path) -> str:
         sup_ret_max=num(f(main, "curve", vmax, "supervised-cacla")),
         ppo_succ_max=pct(f(main, "curve", vmax, "ppo", "success_rate")),
         ppo_ret_max=num(f(main, "curve", vmax, "ppo")),
-        ppo_seed_lo=num(min(ppo_seeds)), ppo_seed_hi=num(max(ppo_seeds)),
+        ppo_seed_lo=num(min(ppo_seeds)),
+        ppo_seed_hi=num(max(ppo_seeds)),
         randomized=randomized,
-        cm_lo=cm[0], cm_hi=cm[1], sm_lo=sm[0], sm_hi=sm[1], harsh_lo=harsh[0], harsh_hi=harsh[1],
-        harsh_b_lo=harsh_b[0], harsh_b_hi=harsh_b[1], vision_lo=vision[0], vision_hi=vision[1],
-        vision_b_lo=vision_b[0], vision_b_hi=vision_b[1],
+        cm_lo=cm[0],
+        cm_hi=cm[1],
+        sm_lo=sm[0],
+        sm_hi=sm[1],
+        harsh_lo=harsh[0],
+        harsh_hi=harsh[1],
+        harsh_b_lo=harsh_b[0],
+        harsh_b_hi=harsh_b[1],
+        vision_lo=vision[0],
+        vision_hi=vision[1],
+        vision_b_lo=vision_b[0],
+        vision_b_hi=vision_b[1],
         ppo_calm=num(ppo_d[0], 1, True),
-        ppo_cur_lo=num(min(ppo_d[i] for i in cur), 1, True), ppo_cur_hi=num(max(ppo_d[i] for i in cur), 1, True),
-        ppo_mild_max=f"{num(f(rnd, 'curve', vmax, 'ppo-mild'))} and {pct(f(rnd, 'curve', vmax, 'ppo-mild', 'success_rate'))}",
-        ppo_calm_max=f"{num(f(rnd, 'curve', vmax, 'ppo'))} and {pct(f(rnd, 'curve', vmax, 'ppo', 'success_rate'))}",
+        ppo_cur_lo=num(min(ppo_d[i] for i in cur), 1, True),
+        ppo_cur_hi=num(max(ppo_d[i] for i in cur), 1, True),
+        ppo_mild_max=ret_succ("ppo-mild"),
+        ppo_calm_max=ret_succ("ppo"),
         ppo_sea=num(ppo_d[sea], 1, True),
-    )  # fmt: skip
+    )
     provenance = [(s, "not recorded") for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)

@@ -26,7 +26,11 @@ from pipefollow.experiments.results_pages.markdown import (
 )
 
 TITLE = "Results: sample efficiency"
-SOURCES = ("sample-efficiency/summary.json", "sample-efficiency/cacla-var.md", "sample-efficiency/critic-td-lambda.md")
+SOURCES = (
+    "sample-efficiency/summary.json",
+    "sample-efficiency/cacla-var.md",
+    "sample-efficiency/critic-td-lambda.md",
+)
 
 TEXT = """\
 Regenerate the stored outputs with `python examples/sample_efficiency.py --out FOLDER --variants ...`
@@ -95,6 +99,7 @@ def _ci(lo_hi, sign=False) -> str:
 
 
 def render(docs: Path) -> str:
+    """The page's Markdown from the stored outputs under ``docs``."""
     folder = docs / "sample-efficiency"
     rows = read_json(folder / "summary.json")
     cell = {(r["variant"], r["budget"], r["condition"]): r for r in rows}
@@ -109,20 +114,30 @@ def render(docs: Path) -> str:
             raise PageError(f"summary.json: no row for {v} at {b} ({c})") from None
 
     # the heuristic's return: mean return minus the paired difference (the same on every row)
-    heur = {c: get("cacla", small, c)["mean_return"] - get("cacla", small, c)["vs_heuristic"] for c in ("calm", "disturbed")}
+    heur = {
+        c: get("cacla", small, c)["mean_return"] - get("cacla", small, c)["vs_heuristic"]
+        for c in ("calm", "disturbed")
+    }
     out = []
     for v in variants:
         for b in budgets:
             if (v, b, "calm") not in cell:
                 continue
             c, d = get(v, b, "calm"), get(v, b, "disturbed")
-            out.append((
-                label(v), count(c["steps"]), c["seeds"], f"{num(c['mean_return'])} {_ci(c['ci95'])}",
-                f"{num(c['vs_heuristic'], 1, True)} {_ci(c['vs_heuristic_ci95'], True)}", pct(c["success_rate"]),
-                f"{num(d['mean_return'])} {_ci(d['ci95'])}",
-                f"{num(d['vs_heuristic'], 1, True)} {_ci(d['vs_heuristic_ci95'], True)}", pct(d["success_rate"]),
-                f"{c['wall_s']:.1f} s",
-            ))  # fmt: skip
+            out.append(
+                (
+                    label(v),
+                    count(c["steps"]),
+                    c["seeds"],
+                    f"{num(c['mean_return'])} {_ci(c['ci95'])}",
+                    f"{num(c['vs_heuristic'], 1, True)} {_ci(c['vs_heuristic_ci95'], True)}",
+                    pct(c["success_rate"]),
+                    f"{num(d['mean_return'])} {_ci(d['ci95'])}",
+                    f"{num(d['vs_heuristic'], 1, True)} {_ci(d['vs_heuristic_ci95'], True)}",
+                    pct(d["success_rate"]),
+                    f"{c['wall_s']:.1f} s",
+                )
+            )
 
     def vs(v, b, c="calm"):
         r = get(v, b, c)
@@ -133,37 +148,69 @@ def render(docs: Path) -> str:
 
     family = [v for v in variants if not v.startswith("ppo")]
     best = max(family, key=lambda v: get(v, big, "calm")["mean_return"])
-    both = [label(v) for v in family if (v, mid, "calm") in cell
-            and all(get(v, mid, c)["vs_heuristic_ci95"][0] > 0 for c in ("calm", "disturbed"))]  # fmt: skip
+    both = [
+        label(v)
+        for v in family
+        if (v, mid, "calm") in cell
+        and all(get(v, mid, c)["vs_heuristic_ci95"][0] > 0 for c in ("calm", "disturbed"))
+    ]
 
     def paired(path: Path, heading: str) -> str:
         t = report_table(path, heading)
-        return "\n".join("  " + line for line in table(list(t[0]), ([minus(x) for x in r.values()] for r in t)).splitlines())
+        return "\n".join(
+            "  " + line
+            for line in table(list(t[0]), ([minus(x) for x in r.values()] for r in t)).splitlines()
+        )
 
     var_heading = next(iter(_headings(folder / "cacla-var.md")))
     td_heading = next(iter(_headings(folder / "critic-td-lambda.md")))
     body = fill(
         TEXT,
-        seeds=get("cacla", small, "calm")["seeds"], h_calm=num(heur["calm"]), h_dist=num(heur["disturbed"]),
-        table=table(("variant", "decisions", "seeds", "calm: mean return [95 % CI]", "vs heuristic [95 % CI]", "success",
-                     "disturbed: mean return [95 % CI]", "vs heuristic [95 % CI]", "success", "train wall time per seed"),
-                    out),  # fmt: skip
-        mid=count(mid), big=count(big),
-        sup_mid_vs=vs("supervised-cacla", mid), sup_big_vs=vs("supervised-cacla", big), cacla_big_vs=vs("cacla", big),
-        sup_mid_dist_vs=vs("supervised-cacla", mid, "disturbed"), sup_big_dist_vs=vs("supervised-cacla", big, "disturbed"),
-        s03_big=ret("cacla-sigma0.3", big), cacla_big=ret("cacla", big),
-        ss03_big=ret("supervised-cacla-sigma0.3", big), sup_big=ret("supervised-cacla", big),
-        smild_big=ret("supervised-cacla-mild", big, "disturbed"), sup_big_dist=ret("supervised-cacla", big, "disturbed"),
-        cmild_big=ret("cacla-mild", big, "disturbed"), cacla_big_dist=ret("cacla", big, "disturbed"),
+        seeds=get("cacla", small, "calm")["seeds"],
+        h_calm=num(heur["calm"]),
+        h_dist=num(heur["disturbed"]),
+        table=table(
+            (
+                "variant",
+                "decisions",
+                "seeds",
+                "calm: mean return [95 % CI]",
+                "vs heuristic [95 % CI]",
+                "success",
+                "disturbed: mean return [95 % CI]",
+                "vs heuristic [95 % CI]",
+                "success",
+                "train wall time per seed",
+            ),
+            out,
+        ),
+        mid=count(mid),
+        big=count(big),
+        sup_mid_vs=vs("supervised-cacla", mid),
+        sup_big_vs=vs("supervised-cacla", big),
+        cacla_big_vs=vs("cacla", big),
+        sup_mid_dist_vs=vs("supervised-cacla", mid, "disturbed"),
+        sup_big_dist_vs=vs("supervised-cacla", big, "disturbed"),
+        s03_big=ret("cacla-sigma0.3", big),
+        cacla_big=ret("cacla", big),
+        ss03_big=ret("supervised-cacla-sigma0.3", big),
+        sup_big=ret("supervised-cacla", big),
+        smild_big=ret("supervised-cacla-mild", big, "disturbed"),
+        sup_big_dist=ret("supervised-cacla", big, "disturbed"),
+        cmild_big=ret("cacla-mild", big, "disturbed"),
+        cacla_big_dist=ret("cacla", big, "disturbed"),
         var_table=paired(folder / "cacla-var.md", var_heading),
         td_table=paired(folder / "critic-td-lambda.md", td_heading),
-        std9_mid_vs=vs("supervised-cacla-td0.9", mid), std9_mid_dist_vs=vs("supervised-cacla-td0.9", mid, "disturbed"),
-        std9_big=ret("supervised-cacla-td0.9", big), ppo_big=ret("ppo", big),
+        std9_mid_vs=vs("supervised-cacla-td0.9", mid),
+        std9_mid_dist_vs=vs("supervised-cacla-td0.9", mid, "disturbed"),
+        std9_big=ret("supervised-cacla-td0.9", big),
+        ppo_big=ret("ppo", big),
         ctd9_big_vs=vs("cacla-td0.9", big),
-        best_name=label(best), best_big=ret(best, big),
+        best_name=label(best),
+        best_big=ret(best, big),
         best_gap=num(get("ppo", big, "calm")["mean_return"] - get(best, big, "calm")["mean_return"]),
         both_mid=", ".join(both) or "none",
-    )  # fmt: skip
+    )
     provenance = [(s, "not recorded") for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)
 
