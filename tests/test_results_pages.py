@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import json
 import shutil
+import statistics
 import subprocess
 import sys
 from pathlib import Path
@@ -98,13 +99,13 @@ def test_a_changed_validation_return_moves_table_1_and_its_prose(docs_copy):
     with open(path, newline="", encoding="utf-8") as f:
         rows = list(csv.DictReader(f))
     learned = [r for r in rows if r["trial"] == "validation" and r["controller"] == "learned"]
-    heuristic = float(next(r for r in rows if r["trial"] == "validation" and r["controller"] == "heuristic")["return"])
+    heuristic = next(
+        float(r["return"]) for r in rows if r["trial"] == "validation" and r["controller"] == "heuristic"
+    )
     values = [float(r["return"]) for r in learned]
     values[0] = -50.0
-    import statistics
-
     def change(r):
-        if r is learned[0] or (r["trial"], r["controller"], r["seed"]) == ("validation", "learned", learned[0]["seed"]):
+        if (r["trial"], r["controller"], r["seed"]) == ("validation", "learned", learned[0]["seed"]):
             r["return"] = "-50.0"
 
     _rewrite_csv(path, change)
@@ -122,7 +123,8 @@ def test_a_changed_verdict_moves_the_readings_page(docs_copy):
 
     _rewrite_csv(docs_copy / "readings" / "readings.csv", change)
     page = results_pages.render("readings", docs_copy)
-    assert "| `default` | 6/10 ✗ | 10/10 ✓ | 10/10 ✓ | 30/40 ✗ | 27/30 ✓ | 18/20 ✗ | 2/10 ✗ | 10/10 ✓ |" in page
+    row = "| `default` | 6/10 ✗ | 10/10 ✓ | 10/10 ✓ | 30/40 ✗ | 27/30 ✓ | 18/20 ✗ | 2/10 ✗ | 10/10 ✓ | 2/10 ✗ |"  # noqa: E501
+    assert row in page.splitlines()
     assert "**Claims that fail under every reading**: none." in page  # 4a no longer fails everywhere
     assert "4 of 9 parts hold (1b, 1c, 2b, 4a)" in page
 
@@ -133,7 +135,8 @@ def test_a_changed_run_file_moves_the_deep_vs_paper_page(docs_copy):
     run["calm"]["success_rate"] = 0.37
     path.write_text(json.dumps(run))
     page = results_pages.render("deep-vs-paper", docs_copy)
-    assert next(line for line in page.splitlines() if line.startswith("| heuristic |")).split(" | ")[4] == "37%"
+    row = next(line for line in page.splitlines() if line.startswith("| heuristic |"))
+    assert row.split(" | ")[4] == "37%"
 
 
 def test_a_changed_summary_moves_the_sample_efficiency_prose(docs_copy):
@@ -243,7 +246,10 @@ def test_evaluate_prints_the_camera_and_water_in_one_line_under_its_head():
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 0, res.output
     lines = res.output.splitlines()
-    assert lines[1] == "camera vision, water turbid: turbidity 0.25/m, blur 1.2 px, noise 7 grey levels, 25 snow particles/frame"
+    assert lines[1] == (
+        "camera vision, water turbid: turbidity 0.25/m, blur 1.2 px, noise 7 grey levels, "
+        "25 snow particles/frame"
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -268,7 +274,8 @@ def test_the_command_writes_the_committed_pages_and_checks_them(tmp_path):
 def test_the_command_refuses_an_unknown_page_and_a_missing_folder(tmp_path):
     res = CliRunner().invoke(main, ["docs", "results", "--page", "nope", "--out", str(tmp_path)])
     assert res.exit_code == 2 and "unknown page 'nope'" in res.output
-    res = CliRunner().invoke(main, ["docs", "results", "--docs", str(tmp_path / "none"), "--out", str(tmp_path)])
+    missing = str(tmp_path / "none")
+    res = CliRunner().invoke(main, ["docs", "results", "--docs", missing, "--out", str(tmp_path)])
     assert res.exit_code == 2 and "no such folder" in res.output
     assert list(tmp_path.iterdir()) == []
 
@@ -302,7 +309,8 @@ def test_the_reproduction_regenerates_to_the_committed_outputs_and_page(tmp_path
     shutil.copytree(DOCS / "repeats", docs / "repeats", ignore=shutil.ignore_patterns("*.png", "*.csv"))
 
     def body(text: str) -> list[str]:  # the provenance names the machine of the run: not compared
-        return [line for line in text.splitlines() if not line.startswith("| `docs/reproduction/REPORT.md` |")]
+        machine = "| `docs/reproduction/REPORT.md` |"
+        return [line for line in text.splitlines() if not line.startswith(machine)]
 
     fresh = results_pages.render("reproduction", docs)
     assert body(fresh) == body((RESULTS / "reproduction.md").read_text(encoding="utf-8"))
