@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from types import MappingProxyType
 from typing import Any, NamedTuple
 
 
@@ -45,6 +46,9 @@ _RANGES = {
     "pipe_diameter": (0.02, 1.0, False),
     "altitude": (0.5, 10.0, True),
 }
+
+# every field's range as (low, high, low included), for tables of the settings
+RANGES: Mapping[str, tuple[float, float, bool]] = MappingProxyType(_RANGES)
 
 CLEAR = Water()
 WATER_PRESETS = {

@@ -22,7 +22,7 @@ from pipefollow.experiments.results_pages.markdown import (
     read_json,
     table,
 )
-from pipefollow.perception.water import _RANGES, CLEAR, WATER_PRESETS, Water
+from pipefollow.perception.water import CLEAR, RANGES, WATER_PRESETS, Water
 
 TITLE = "Results: perception in the loop"
 SOURCES = (
@@ -118,7 +118,7 @@ def presets_table() -> str:
     """Every field of :class:`Water` per preset, with the field's unit and range; generated from the code."""
     rows = []
     for field in Water._fields:
-        lo, hi, closed = _RANGES[field]
+        lo, hi, closed = RANGES[field]
         values = []
         for w in WATER_PRESETS.values():
             v = getattr(w, field)
