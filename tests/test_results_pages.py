@@ -235,8 +235,10 @@ def test_describe_names_the_preset_and_its_settings():
     assert describe(water_from("moderate")) == (
         "water moderate: turbidity 0.2/m, blur 0.9 px, noise 5 grey levels, 12 snow particles/frame"
     )
-    custom = describe(water_from({"preset": "clear", "burial": 0.25}))
-    assert custom.startswith("water custom: turbidity 0.1/m,") and custom.endswith("0.25 of the width buried")
+    buried = describe(water_from({"preset": "turbid", "burial": 0.25}))
+    assert buried.startswith("water turbid: turbidity 0.25/m,") and buried.endswith(", 0.25 of the width buried")
+    murky = describe(water_from({"preset": "clear", "turbidity": 0.3}))
+    assert murky == "water custom: turbidity 0.3/m, blur 0.6 px, noise 3 grey levels, 4 snow particles/frame"
 
 
 def test_evaluate_prints_the_camera_and_water_in_one_line_under_its_head():
@@ -250,6 +252,21 @@ def test_evaluate_prints_the_camera_and_water_in_one_line_under_its_head():
         "camera vision, water turbid: turbidity 0.25/m, blur 1.2 px, noise 7 grey levels, "
         "25 snow particles/frame"
     )
+
+
+def test_benchmark_prints_the_camera_and_water_in_one_line_under_its_head():
+    pytest.importorskip("cv2")
+    args = ["benchmark", "--controller", "heuristic", "--pipes", "2", "--seconds", "3",
+            "--camera", "vision", "--water", "moderate", "--burial", "0.2"]  # fmt: skip
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    lines = res.output.splitlines()
+    assert lines[0].startswith("heuristic on 'heldout': 2 pipes")
+    assert lines[1] == (
+        "  camera vision, water moderate: turbidity 0.2/m, blur 0.9 px, noise 5 grey levels, "
+        "12 snow particles/frame, 0.2 of the width buried"
+    )
+    assert lines[2].startswith("  mean return")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -278,17 +295,6 @@ def test_the_command_refuses_an_unknown_page_and_a_missing_folder(tmp_path):
     res = CliRunner().invoke(main, ["docs", "results", "--docs", missing, "--out", str(tmp_path)])
     assert res.exit_code == 2 and "no such folder" in res.output
     assert list(tmp_path.iterdir()) == []
-
-
-def test_no_other_command_writes_into_docs_by_default():
-    """Only `docs results` has a default output inside docs/ (its --out, derived from --docs)."""
-    import re
-
-    for path in sorted((ROOT / "src" / "pipefollow" / "cli").glob("*.py")):
-        for m in re.finditer(r"default=(\"[^\"]*\"|'[^']*')", path.read_text(encoding="utf-8")):
-            value = m.group(1).strip("\"'")
-            if value.startswith("docs"):
-                assert path.name == "docs.py" and value == "docs", (path.name, value)
 
 
 # ---------------------------------------------------------------------------------------------

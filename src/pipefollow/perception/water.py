@@ -77,13 +77,16 @@ _WORDS = {
 
 
 def describe(w: Water) -> str:
-    """One line: the preset ``w`` equals (or ``custom``) and the settings that make the image.
+    """One line: the preset whose fields ``w`` has (or ``custom``) and the settings that make the image.
 
     The preset fields (:data:`PRESET_FIELDS`) always, the others where they differ from the default
     record, e.g. ``water moderate: turbidity 0.2/m, blur 0.9 px, noise 5 grey levels, snow 12 snow
     particles/frame``.
     """
-    name = next((k for k, p in WATER_PRESETS.items() if p == w), "custom")
+    name = next(
+        (k for k, p in WATER_PRESETS.items() if all(getattr(p, f) == getattr(w, f) for f in PRESET_FIELDS)),
+        "custom",
+    )
     parts = []
     for f in Water._fields:
         v = getattr(w, f)
