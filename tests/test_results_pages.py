@@ -236,7 +236,8 @@ def test_describe_names_the_preset_and_its_settings():
         "water moderate: turbidity 0.2/m, blur 0.9 px, noise 5 grey levels, 12 snow particles/frame"
     )
     buried = describe(water_from({"preset": "turbid", "burial": 0.25}))
-    assert buried.startswith("water turbid: turbidity 0.25/m,") and buried.endswith(", 0.25 of the width buried")
+    assert buried.startswith("water turbid: turbidity 0.25/m,")
+    assert buried.endswith(", 0.25 of the width buried")
     murky = describe(water_from({"preset": "clear", "turbidity": 0.3}))
     assert murky == "water custom: turbidity 0.3/m, blur 0.6 px, noise 3 grey levels, 4 snow particles/frame"
 
