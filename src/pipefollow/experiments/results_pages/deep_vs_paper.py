@@ -37,8 +37,8 @@ Regenerate the stored outputs with `python examples/deep-vs-paper.py --out FOLDE
 
 ## Equal budgets on `heldout`
 
-All four train on a new `random:mixed` pipe every 90-s episode, undisturbed, and every policy is
-judged on `heldout` (100 pipes × 60 s) calm and disturbed (a current and camera noise). Per cell:
+All four train on a new `random:mixed` pipe every episode, undisturbed, and every policy is
+judged on `{suite}` ({pipes} pipes) calm and disturbed (a current and camera noise). Per cell:
 the mean over training seeds of the mean return, the 95 % bootstrap interval of the seed whose
 interval lies lowest, the seeds' range of success rates, the mean paired difference to the
 heuristic, and the training's wall time per seed as stored (on a shared machine: compare orders of
@@ -168,6 +168,8 @@ def render(docs: Path) -> str:
             ),
             rows,
         ),
+        suite=h["calm"]["suite"],
+        pipes=h["calm"]["n_episodes"],
         small=count(small),
         mid=count(mid),
         large=count(large),

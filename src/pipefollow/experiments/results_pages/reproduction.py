@@ -217,6 +217,8 @@ def render(docs: Path) -> str:
     per_trial = fill(TRIALS_TEXT, repeats=repeats, trials_table=trials_table)
 
     t1 = _table1(rows)
+    run = row_by(report_table(report, "What was run"), "trial", "`validation`")
+    validation_label = run["label"].removesuffix(", left then right")
     val = next(r for r in rows if r["trial"] == "validation" and r["controller"] == "heuristic")
     n = t1["learned"].size
     learned, heur = t1["learned"], t1["heuristic"]
@@ -226,7 +228,7 @@ def render(docs: Path) -> str:
     )
     t1_rows = [
         (
-            "learned (supervised CACLA, skew 22.5°, as executed)",
+            f"learned ({validation_label}, as executed)",
             f"{num(learned.mean(), 2)} ± {num(_sd(learned), 2)}",
             num(PAPER_TABLE1["learned"], 4),
         ),

@@ -51,7 +51,7 @@ trainings to `randomized/` and `randomized-ppo-vision/`).
 
 ## Against current speed and on the scenario sets
 
-`heldout` (100 pipes × 60 s); cells: mean return [95 % CI], success rate. Learned policies are the
+`{suite}` ({pipes} pipes × {seconds} s); cells: mean return [95 % CI], success rate. Learned policies are the
 mean over their {seeds} training seeds.
 
 {curve}
@@ -208,6 +208,9 @@ def render(docs: Path) -> str:
         ppo_ret_max=num(f(main, "curve", vmax, "ppo")),
         ppo_seed_lo=num(min(ppo_seeds)),
         ppo_seed_hi=num(max(ppo_seeds)),
+        suite=seeds_json["suite"],
+        pipes=seeds_json["pipes"],
+        seconds=f"{seeds_json['seconds']:g}",
         randomized=randomized,
         cm_lo=cm[0],
         cm_hi=cm[1],

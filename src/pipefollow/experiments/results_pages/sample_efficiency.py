@@ -39,7 +39,7 @@ Regenerate the stored outputs with `python examples/sample_efficiency.py --out F
 
 ## Every variant at every budget
 
-Trained on a new `random:mixed` pipe every 90-s episode, {seeds} seeds, judged on `heldout` calm and
+Trained on a new `random:mixed` pipe every episode, {seeds} seeds, judged on `heldout` calm and
 disturbed; per (variant, budget) a pipe's return is the mean over the seeds, intervals are BCa
 bootstraps over the pipes. Training wall times as stored (a shared machine: compare orders of
 magnitude only). The heuristic scores {h_calm} calm and {h_dist} disturbed.
