@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import shutil
 import statistics
 import subprocess
@@ -48,6 +49,27 @@ def test_every_page_is_in_the_site_nav_and_says_how_to_regenerate_it():
         assert f"results/{name}.md" in nav
         text = (RESULTS / f"{name}.md").read_text(encoding="utf-8")
         assert "`pipefollow docs results`" in text and "where and with what it was computed" in text
+
+
+def _result_rows(text: str) -> list[str]:
+    """The table rows of ``text`` with at least two measured numbers (decimals) in their cells."""
+    number = re.compile(r"^[+\N{MINUS SIGN}-]?\d+\.\d+")
+    rows = []
+    for line in text.splitlines():
+        if line.lstrip().startswith("|"):
+            cells = [c.strip() for c in line.strip().strip("|").split("|")]
+            if sum(bool(number.match(c)) for c in cells) >= 2:
+                rows.append(line)
+    return rows
+
+
+def test_the_guides_hold_no_table_of_results():
+    guides = sorted((DOCS / "guides").glob("*.md"))
+    found = [f"{p.name}: {r}" for p in guides for r in _result_rows(p.read_text(encoding="utf-8"))]
+    assert found == []
+    # a results row as the guides had them is found; a table of options is not
+    assert _result_rows("| calm | heuristic | \N{MINUS SIGN}41.3 | [\N{MINUS SIGN}49.8, \N{MINUS SIGN}32.8] | +2.4 |")
+    assert not _result_rows("| `--seconds` | 20 | episode length (s) |\n| `turbidity` | 1/m | [0, 3] |")
 
 
 def test_rendering_twice_gives_the_same_bytes():
