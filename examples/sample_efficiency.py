@@ -176,6 +176,8 @@ def run_all(out: Path, variants, budgets, seeds, judge_on: str = TEST_SUITE) -> 
 def summaries(out: Path) -> list[dict]:
     """One row per (variant, budget, condition): pooled over seeds (module docstring)."""
     runs = [json.loads(p.read_text()) for p in sorted((out / "runs").glob("*.json"))]
+    config = out / "judged-on.txt"
+    judged_on = config.read_text().strip() if config.exists() else TEST_SUITE
     h = next(r for r in runs if r["variant"] == "heuristic")
 
     def per_pipe(variant: str, budget: int, cond: str) -> np.ndarray | None:
@@ -193,7 +195,8 @@ def summaries(out: Path) -> list[dict]:
                 d = paired_difference(returns, h[cond]["returns"])
                 row = {
                     "variant": variant, "label": VARIANTS[variant][0], "budget": budget,
-                    "steps": rs[0]["steps"], "seeds": len(rs), "condition": cond,
+                    "steps": rs[0]["steps"], "seeds": len(rs), "condition": cond, "judged_on": judged_on,
+                    "pipes": len(returns), "seed_list": sorted(r["seed"] for r in rs),
                     "mean_return": float(returns.mean()), "ci95": [lo, hi], "success_rate": float(success),
                     "vs_heuristic": d["mean_diff"], "vs_heuristic_ci95": d["ci95_diff"],
                     "wall_s": float(np.mean([r["wall_s"] for r in rs])),

@@ -26,8 +26,10 @@ from pipefollow.experiments.results_pages.markdown import (
 )
 
 TITLE = "Results: sample efficiency"
+CONDITIONS = ("calm", "disturbed")
 SOURCES = (
     "sample-efficiency/summary.json",
+    "sample-efficiency/tuning.json",
     "sample-efficiency/cacla-var.md",
     "sample-efficiency/critic-td-lambda.md",
 )
@@ -47,6 +49,16 @@ magnitude only). The heuristic scores {h_calm} calm and {h_dist} disturbed.
 {table}
 
 ![Held-out return against training decisions](../sample-efficiency/learning-curves.png)
+
+## How the recipe was chosen
+
+`python examples/sample_efficiency.py --out FOLDER --judge-on tuning --variants ...` trains as
+above and judges on the first {tuning_pipes} pipes of the training family (`mixed`; training draws
+its pipe indices from [0, 2⁶²), so it meets none of them), with seeds {tuning_seeds}, which the
+table above does not use; `docs/sample-efficiency/tuning.json`. Differences to the heuristic on
+those pipes (its return {t_h_calm} calm, {t_h_dist} disturbed):
+
+{tuning_table}
 
 ## What helped and what did not, at equal budgets
 
@@ -70,6 +82,14 @@ magnitude only). The heuristic scores {h_calm} calm and {h_dist} disturbed.
   Supervised CACLA with λ = 0.9 is {std9_mid_vs} over the heuristic in calm water at {mid}
   decisions and {std9_mid_dist_vs} disturbed; at {big} it scores {std9_big} calm against PPO's
   {ppo_big}. CACLA with λ = 0.9 is {ctd9_big_vs} over the heuristic at {big} calm.
+* **The recipe** (`examples/recipe-30k.toml`: {rec_label}) was chosen on the tuning pipes (the
+  first {tuning_pipes} pipes of the training family, seeds {tuning_seeds}; table below) and only
+  then judged here, on `heldout` with the table's seeds. Against the heuristic at {mid} decisions it
+  is {rec_mid_vs} calm and {rec_mid_dist_vs} disturbed; paired per pipe against PPO it is
+  {rec_mid_ppo} calm and {rec_mid_dist_ppo} disturbed at {mid}, {rec_big_ppo} calm and
+  {rec_big_dist_ppo} disturbed at {big}. Without the trace (TD(0), the same step sizes and
+  discount) it is {rec0_mid_vs} calm and {rec0_mid_dist_vs} disturbed at {mid}; CACLA without
+  the supervisor, with the recipe's options, {crec_mid_vs} and {crec_mid_dist_vs}.
 * **The paper's family against PPO**: the best of the family at {big} decisions in calm water is
   {best_name} ({best_big}), {best_gap} below PPO ({ppo_big}); within {mid} decisions the variants
   whose interval of the difference to the heuristic lies above 0 in both conditions: {both_mid}.
@@ -98,6 +118,31 @@ def _ci(lo_hi, sign=False) -> str:
     return ci(lo_hi[0], lo_hi[1], sign=sign)
 
 
+def vs_of(row: dict) -> str:
+    """A row's paired difference to the heuristic with its interval."""
+    return f"{num(row['vs_heuristic'], 1, True)} {_ci(row['vs_heuristic_ci95'], True)}"
+
+
+def vs_ppo(row: dict) -> str:
+    """A row's paired difference to PPO at the same budget with its interval."""
+    if "vs_ppo" not in row:
+        raise PageError(f"summary.json: {row['variant']} at {row['budget']} has no paired difference to PPO")
+    return f"{num(row['vs_ppo'], 1, True)} {_ci(row['vs_ppo_ci95'], True)}"
+
+
+def heuristic_of(row: dict) -> float:
+    """The heuristic's mean return: a row's mean return minus its paired difference to it."""
+    return row["mean_return"] - row["vs_heuristic"]
+
+
+def seed_list(seeds) -> str:
+    """``[5, 6, 7, 8, 9]`` → ``5–9`` (a run of consecutive seeds), else the list."""
+    seeds = sorted(seeds)
+    if seeds == list(range(seeds[0], seeds[-1] + 1)) and len(seeds) > 2:
+        return f"{seeds[0]}–{seeds[-1]}"
+    return ", ".join(map(str, seeds))
+
+
 def render(docs: Path) -> str:
     """The page's Markdown from the stored outputs under ``docs``."""
     folder = docs / "sample-efficiency"
@@ -118,6 +163,10 @@ def render(docs: Path) -> str:
         c: get("cacla", small, c)["mean_return"] - get("cacla", small, c)["vs_heuristic"]
         for c in ("calm", "disturbed")
     }
+
+    def name_of(v: str) -> str:  # the label the script stored, else one made from the variant's name
+        return next((r["label"] for r in rows if r["variant"] == v and "label" in r), None) or label(v)
+
     out = []
     for v in variants:
         for b in budgets:
@@ -126,7 +175,7 @@ def render(docs: Path) -> str:
             c, d = get(v, b, "calm"), get(v, b, "disturbed")
             out.append(
                 (
-                    label(v),
+                    name_of(v),
                     count(c["steps"]),
                     c["seeds"],
                     f"{num(c['mean_return'])} {_ci(c['ci95'])}",
@@ -149,7 +198,7 @@ def render(docs: Path) -> str:
     family = [v for v in variants if not v.startswith("ppo")]
     best = max(family, key=lambda v: get(v, big, "calm")["mean_return"])
     both = [
-        label(v)
+        name_of(v)
         for v in family
         if (v, mid, "calm") in cell
         and all(get(v, mid, c)["vs_heuristic_ci95"][0] > 0 for c in ("calm", "disturbed"))
@@ -161,6 +210,20 @@ def render(docs: Path) -> str:
             "  " + line
             for line in table(list(t[0]), ([minus(x) for x in r.values()] for r in t)).splitlines()
         )
+
+    tuning = read_json(folder / "tuning.json")
+    t_cell = {(r["variant"], r["budget"], r["condition"]): r for r in tuning}
+    t_rows = [
+        (
+            t_cell[v, b, "calm"]["label"],
+            count(t_cell[v, b, "calm"]["steps"]),
+            t_cell[v, b, "calm"]["seeds"],
+            *(vs_of(t_cell[v, b, c]) for c in ("calm", "disturbed")),
+        )
+        for v, b in dict.fromkeys((r["variant"], r["budget"]) for r in tuning)
+    ]
+    t_heur = {c: tuning[0 if c == "calm" else 1] for c in ("calm", "disturbed")}
+    rec = "supervised-cacla-recipe"
 
     var_heading = next(iter(_headings(folder / "cacla-var.md")))
     td_heading = next(iter(_headings(folder / "critic-td-lambda.md")))
@@ -206,10 +269,29 @@ def render(docs: Path) -> str:
         std9_big=ret("supervised-cacla-td0.9", big),
         ppo_big=ret("ppo", big),
         ctd9_big_vs=vs("cacla-td0.9", big),
-        best_name=label(best),
+        best_name=name_of(best),
         best_big=ret(best, big),
         best_gap=num(get("ppo", big, "calm")["mean_return"] - get(best, big, "calm")["mean_return"]),
         both_mid=", ".join(both) or "none",
+        rec_label=get(rec, mid, "calm")["label"],
+        tuning_pipes=tuning[0]["pipes"],
+        tuning_seeds=seed_list(tuning[0]["seed_list"]),
+        rec_mid_vs=vs(rec, mid),
+        rec_mid_dist_vs=vs(rec, mid, "disturbed"),
+        rec_mid_ppo=vs_ppo(get(rec, mid, "calm")),
+        rec_mid_dist_ppo=vs_ppo(get(rec, mid, "disturbed")),
+        rec_big_ppo=vs_ppo(get(rec, big, "calm")),
+        rec_big_dist_ppo=vs_ppo(get(rec, big, "disturbed")),
+        rec0_mid_vs=vs(rec + "-td0", mid),
+        rec0_mid_dist_vs=vs(rec + "-td0", mid, "disturbed"),
+        crec_mid_vs=vs("cacla-recipe", mid),
+        crec_mid_dist_vs=vs("cacla-recipe", mid, "disturbed"),
+        t_h_calm=num(heuristic_of(t_heur["calm"])),
+        t_h_dist=num(heuristic_of(t_heur["disturbed"])),
+        tuning_table=table(
+            ("variant", "decisions", "seeds", *(f"{c}: vs heuristic [95 % CI]" for c in CONDITIONS)),
+            t_rows,
+        ),
     )
     provenance = [(s, "not recorded") for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)
