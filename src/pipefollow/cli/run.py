@@ -18,8 +18,8 @@ from pipefollow.cli.common import (
 from pipefollow.cli.options import (
     disturbance_options,
     episodes_option,
-    learner_options,
     json_option,
+    learner_options,
     out_option,
     pipeline_option,
     reading_option,

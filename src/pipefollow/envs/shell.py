@@ -258,8 +258,10 @@ def start_episode(
 
 
 def observation(states: np.ndarray, setup: Setup) -> np.ndarray:
-    """Observations of one state or a batch (``(x1, y1, x2, v_x)`` under the paper's state): a new
-    array of the setup's dtype."""
+    """Observations of one state or a batch: a new array of the setup's dtype.
+
+    ``(x1, y1, x2, v_x)`` under the paper's state, and the measured entries of another.
+    """
     if setup.state == "paper":  # the leading slots: a slice, as cheap as before
         return (states[:4] if states.ndim == 1 else states[:, :4]).astype(setup.obs_dtype)
     return states[..., setup.obs_slots].astype(setup.obs_dtype)

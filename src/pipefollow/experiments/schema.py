@@ -197,7 +197,7 @@ def validate(obj, where: str) -> None:
 
 
 def learner_values(trial: TrialConfig) -> dict:
-    """The values of the learners' options (:data:`~pipefollow.learners.options.LEARNER_OPTIONS`) of ``trial``."""
+    """The values of ``trial``'s learner options (:data:`~pipefollow.learners.options.LEARNER_OPTIONS`)."""
     return {o.name: getattr(trial, o.name) for o in LEARNER_OPTIONS}
 
 

@@ -9,8 +9,8 @@ import numpy as np
 
 from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.experiments.config import TrialConfig
-from pipefollow.learners.heuristic import Heuristic
 from pipefollow.experiments.schema import learner_values
+from pipefollow.learners.heuristic import Heuristic
 from pipefollow.learners.registry import agent_options
 from pipefollow.sim.disturbance import NO_DISTURBANCE, disturbance_from_dict
 from pipefollow.sim.pipe_names import resolve_training

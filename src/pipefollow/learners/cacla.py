@@ -53,8 +53,8 @@ from pipefollow.learners.rbf import STATE_GRID, RBFGrid, features_if_finite, gri
 from pipefollow.learners.sums import dot
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
-from pipefollow.sim.observation import observe
 from pipefollow.sim import records
+from pipefollow.sim.observation import observe
 
 
 class CaclaParams(NamedTuple):

@@ -39,5 +39,5 @@ def features_of(grid, state: str = "paper") -> Features:
     centres, offsets, widths = grid.packed
     observed = slots(state)
     if observed.shape[0] != grid.ndim:
-        raise ValueError(f"state {state!r} has {observed.shape[0]} entries, the RBF grid {grid.ndim} dimensions")
+        raise ValueError(f"state {state!r} has {observed.shape[0]} entries, the RBF grid {grid.ndim}")
     return Features(centres, offsets, widths, grid.form == "normalized", observed)

@@ -74,7 +74,8 @@ class LearnerOption:
         if self.kind is str:
             return f"one of {', '.join(self.choices)}"
         if self.low is not None and self.high is not None:
-            return f"in {'(' if self.low_open else '['}{self.low:g}, {self.high:g}{')' if self.high_open else ']'}"
+            left, right = "(" if self.low_open else "[", ")" if self.high_open else "]"
+            return f"in {left}{self.low:g}, {self.high:g}{right}"
         if self.low is not None:
             return f"{'>' if self.low_open else '≥'} {self.low:g}"
         return "a finite number"
@@ -170,10 +171,11 @@ def check_schedule(sigma_start: float, sigma_end: float) -> None:
 
 
 def describe(values: dict[str, Any]) -> str:
-    """The options of ``values`` that differ from their defaults, in words (``critic_lambda 0.9, state paper+drift``)."""
+    """The options of ``values`` away from their defaults (``critic_lambda 0.9, state paper+yaw``)."""
     parts = []
     for o in LEARNER_OPTIONS:
         v = values.get(o.name, o.default)
         if v != o.default:
-            parts.append(o.name if v is True else f"{o.name} {v:g}" if isinstance(v, float) else f"{o.name} {v}")
+            shown = f"{v:g}" if isinstance(v, float) else str(v)
+            parts.append(o.name if v is True else f"{o.name} {shown}")
     return ", ".join(parts)

@@ -9,7 +9,8 @@ a learner is one module and one registry entry.
 
 An agent (an instance of ``agent_class``) has ``begin_episode(sigma)``, ``act(obs, explore)``,
 ``update(obs, action, reward, next_obs, discount) -> δ``, ``discount``, ``weights``, ``grid``,
-``rng``, ``state`` (the named state it observes, :mod:`pipefollow.sim.observation`), ``readings`` (the id of the readings it learns under), ``algorithm`` (its kind's name),
+``rng``, ``state`` (the named state it observes, :mod:`pipefollow.sim.observation`), ``readings``
+(the id of the readings it learns under), ``algorithm`` (its kind's name),
 ``name`` (a label) and ``supervised``; :class:`Agent` gives the parts every learner's agent shares.
 """
 
@@ -19,6 +20,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
+
 
 def option_code(option: str, codes: Mapping[str, int], value: str) -> int:
     """The code of an option given by name (``actor_repeats``: ``once`` → ``REPEAT_ONCE``).

@@ -312,8 +312,11 @@ STATE_GRID = RBFGrid(STATE_CENTRES)  # 1,764 state features
 
 
 def state_centres(state: str = "paper") -> tuple[np.ndarray, ...]:
-    """The grid's centres for the named ``state`` (:mod:`pipefollow.sim.observation`): the paper's four
-    dimensions, then :data:`MEASURED_CENTRES` of each entry the state adds (1,764 × 5 per entry)."""
+    """The grid's centres for the named ``state`` (:mod:`pipefollow.sim.observation`).
+
+    The paper's four dimensions, then :data:`MEASURED_CENTRES` of each entry the state adds
+    (1,764 × 5 per entry).
+    """
     from pipefollow.sim.observation import components
 
     extra = components(state)[len(STATE_CENTRES) :]

@@ -41,7 +41,7 @@ def learner_of(agent) -> LearnerKind | None:
 
 
 def takes(kind: LearnerKind, option: str) -> bool:
-    """Whether learner ``kind`` takes ``option`` of the table: its switches and step sizes; σ and state all."""
+    """Whether learner ``kind`` takes ``option``: its switches and step sizes; every learner σ and state."""
     group = OPTION[option].group
     if group == "switch":
         return option in kind.options

@@ -268,7 +268,8 @@ def run_compiled(agent: Sarsa, tracks, run, env_rng, dz, stats, poses) -> None:
                           agent._action_normalized)  # fmt: skip
     p = agent.params
     grid = features_of(agent.grid, agent.state)
-    episodes(agent.weights, p.alpha, p.discount, search, tracks, run, grid, agent.rng, env_rng, dz, stats, poses)
+    episodes(agent.weights, p.alpha, p.discount, search, tracks, run, grid, agent.rng, env_rng, dz, stats,
+             poses)  # fmt: skip
 
 
 def policy_fields(agent: Sarsa) -> dict:

@@ -93,7 +93,8 @@ def action_grid(r: Readings = DEFAULT) -> RBFGrid:
 def _cacla_inputs(r: Readings, *, actor_repeats: str = "once", skew_deg: float = 0.0, state: str = "paper",
                   **fields) -> dict:  # fmt: skip
     repeats = option_code("actor_repeats", ACTOR_REPEATS, actor_repeats)
-    return {"params": cacla_params(r, skew_deg, actor_repeats=repeats, **fields), "grid": state_grid(r, state)}
+    params = cacla_params(r, skew_deg, actor_repeats=repeats, **fields)
+    return {"params": params, "grid": state_grid(r, state)}
 
 
 def _actor_critic_inputs(r: Readings, *, actor_update: str = "delta", state: str = "paper", **fields) -> dict:

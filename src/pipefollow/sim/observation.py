@@ -81,7 +81,7 @@ def slots(state: str) -> np.ndarray:
 
 
 def bounds(state: str, camera) -> tuple[np.ndarray, np.ndarray]:
-    """The observation space's ``(low, high)`` of ``state``: the camera's footprint, then the speeds' bounds."""
+    """The observation space's ``(low, high)`` of ``state``: the camera's footprint, the speeds' bounds."""
     w, depth = camera.half_width, camera.depth
     camera_bounds = [(-w, w), (0.0, depth), (-w, w)]
     lows, highs = [], []

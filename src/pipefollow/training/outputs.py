@@ -51,7 +51,9 @@ def write_training_outputs(
     from pipefollow.training.policy_files import save_policy
 
     policy_name, curve_name = TRAINING_OUTPUTS
-    policy_path = save_policy(agent, Path(out) / policy_name, options=options, episodes=len(sigmas), **metadata)
+    policy_path = save_policy(
+        agent, Path(out) / policy_name, options=options, episodes=len(sigmas), **metadata
+    )
     try:
         curve_path = write_learning_curve(Path(out) / curve_name, stats, sigmas)
     except BaseException:

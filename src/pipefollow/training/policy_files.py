@@ -184,5 +184,5 @@ def _read_state_and_options(agent, data: dict, src: str) -> None:
 
 
 def policy_options(agent) -> dict:
-    """The learner options a loaded policy was trained with (empty for files that do not say), and its state."""
+    """The learner options a loaded policy trained with (none for files that do not say), and its state."""
     return {**getattr(agent, "learner_options", {}), "state": getattr(agent, "state", "paper")}

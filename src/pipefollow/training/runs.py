@@ -28,8 +28,10 @@ def step_sizes(algorithm: str) -> tuple[str, ...]:
     return tuple(learner(algorithm).step_sizes.values())
 
 
-def new_agent(algorithm: str, seed: int, reading: rd.Readings, skew_deg: float = 0.0, supervised: bool = False,
-              **options):  # fmt: skip
+def new_agent(
+    algorithm: str, seed: int, reading: rd.Readings, skew_deg: float = 0.0, supervised: bool = False,
+    **options,
+):  # fmt: skip
     """A fresh agent of ``algorithm`` under ``reading``, its generator that of a run with ``seed``.
 
     ``options`` are more values of :data:`~pipefollow.learners.options.LEARNER_OPTIONS` (by their
@@ -47,15 +49,28 @@ def new_agent(algorithm: str, seed: int, reading: rd.Readings, skew_deg: float =
 def run_options(agent, given: dict) -> dict:
     """The learner options of a run of ``agent``: every option of the table its learner takes.
 
-    ``given`` (option → value) wins over the defaults; the σ schedule's defaults are the paper's.
+    ``given`` (option → value) wins over what the agent's record holds (:func:`saved_options`, its
+    skew step in degrees), that over the defaults; the σ schedule's defaults are the paper's.
     """
     from pipefollow.learners.options import LEARNER_OPTIONS
     from pipefollow.learners.registry import learner_of, takes
 
     kind = learner_of(agent)
-    values = {o.name: given.get(o.name, o.default) for o in LEARNER_OPTIONS if takes(kind, o.name)}
-    values["state"] = agent.state
-    return values
+    held = saved_options(agent)
+    if "skew" in agent.params._fields:
+        held["skew_deg"] = _skew_deg(agent)
+    taken = [o for o in LEARNER_OPTIONS if takes(kind, o.name)]
+    return {o.name: given.get(o.name, held.get(o.name, o.default)) for o in taken}
+
+
+def _skew_deg(agent) -> float:
+    """The skew step of ``agent``'s record in degrees, under its readings' ``skew_unit``."""
+    import math
+
+    from pipefollow.learners.exploration import DEGREES_PER_GAMMA
+
+    skew = float(agent.params.skew)
+    return math.degrees(skew) if rd.parse(agent.readings).skew_unit == "rad" else skew * DEGREES_PER_GAMMA
 
 
 def saved_options(agent) -> dict:
@@ -205,7 +220,8 @@ def train_into(
         tensorboard: a folder for TensorBoard scalars, or None.
         made: the outermost folder of ``out`` the caller created: removed again, if empty, when
             training fails or is interrupted.
-        sigma_start, sigma_end: the σ schedule (the paper's units, :func:`.phases.phase_sigmas`).
+        sigma_start: σ of the first episode (the paper's units, :func:`.phases.phase_sigmas`), and
+        sigma_end: of the last.
         options: the learner options given for the run (option → value): stored with the policy,
             completed by :func:`run_options`.
     """
