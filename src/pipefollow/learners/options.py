@@ -171,11 +171,14 @@ def check_schedule(sigma_start: float, sigma_end: float) -> None:
 
 
 def describe(values: dict[str, Any]) -> str:
-    """The options of ``values`` away from their defaults (``critic_lambda 0.9, state paper+yaw``)."""
+    """The options of ``values`` away from their defaults (``skew 22.5°, critic_lambda 0.9``)."""
     parts = []
     for o in LEARNER_OPTIONS:
         v = values.get(o.name, o.default)
         if v != o.default:
             shown = f"{v:g}" if isinstance(v, float) else str(v)
-            parts.append(o.name if v is True else f"{o.name} {shown}")
+            if o.name == "skew_deg":  # as the labels say it
+                parts.append(f"skew {shown}°")
+            else:
+                parts.append(o.name if v is True else f"{o.name} {shown}")
     return ", ".join(parts)
