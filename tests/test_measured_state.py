@@ -95,3 +95,47 @@ def test_a_policy_file_keeps_its_state(tmp_path):
     names = ", ".join(STATE_NAMES).replace("+", "\\+")
     with pytest.raises(ValueError, match="state must be one of " + names):
         make_agent("cacla", state="paper+sonar")
+
+
+def test_the_vector_environment_observes_the_same_measured_state():
+    from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
+
+    d = make_disturbance(0.1, 45.0, dvl_noise=0.01, gyro_noise_deg=0.1)
+    vec = PipelineFollowingVectorEnv(
+        2, "paper-validation", episode_seconds=8, disturbance=d, state="paper+drift+yaw"
+    )
+    single = PipelineFollowingEnv("paper-validation", 8, disturbance=d, state="paper+drift+yaw")
+    obs, _ = vec.reset(seed=4)
+    one, _ = single.reset(seed=5)  # sub-environment i is the single environment reset with seed + i
+    assert vec.single_observation_space == single.observation_space and obs.shape == (2, 6)
+    np.testing.assert_array_equal(obs[1], one)
+    for _ in range(5):
+        obs, *_ = vec.step(np.full((2, 1), 0.25))
+        one, *_ = single.step([0.25])
+        np.testing.assert_array_equal(obs[1], one)
+
+
+def test_a_measured_state_policy_is_evaluated_on_its_own_state(tmp_path):
+    from click.testing import CliRunner
+
+    from pipefollow.cli import main
+
+    out = tmp_path / "p"
+    res = CliRunner().invoke(main, ["train", "--algorithm", "cacla", "--supervised", "--state", "paper+drift",
+                                    "--episodes", "3", "--seconds", "5", "--out", str(out)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    policy = str(out / "policy.npz")
+    for args in (["evaluate", "--controller", policy, "--current", "0.1,90"],
+                 ["benchmark", "--controller", policy, "--pipes", "2"]):  # fmt: skip
+        res = CliRunner().invoke(main, [*args, "--json"])
+        assert res.exit_code == 0, res.output
+    # the benchmark's compiled loop and the environment's episodes agree on the agent's own state
+    from pipefollow.evaluation.benchmark import _env_episodes, run_episodes
+
+    agent = load_policy(policy)
+    pipes = [builtin("paper-validation"), builtin("paper-right")]
+    params = sim.PAPER_SIM._replace(disturbance=make_disturbance(0.1, 90.0))
+    fast, _ = run_episodes(agent, pipes, 30, params)
+    slow, poses = np.zeros_like(fast), np.zeros((2, 31, 3))
+    _env_episodes(agent, pipes, 30, params, slow, poses)
+    np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-9)

@@ -280,7 +280,7 @@ class PipelineFollowingEnv(gym.Env):
     def _observation(self) -> np.ndarray:
         if self._vision is None:
             return observation(self.state, self.setup)
-        return self._vision.observation(self.state, self.setup.observation_space.dtype)
+        return self._vision.observation(self.state, self.setup.observation_space.dtype, self.setup.obs_slots)
 
     def _info(self) -> dict[str, Any]:
         info = state_infos(self.state)
