@@ -50,6 +50,7 @@ def test_train_and_an_experiment_trial_with_the_same_options_write_the_same_poli
     algorithm = options.pop("algorithm")
     args = ["train", "--algorithm", algorithm, "--pipeline", "paper-left", "--episodes", str(EPISODES),
             "--seconds", str(SECONDS), "--seed", str(SEED), "--current", "0.1,45", "--camera-noise", "0.05",
+            "--dvl-noise", "0.01", "--gyro-noise", "0.1",
             "--out", str(tmp_path / "train"), "--json", *_flags(options)]  # fmt: skip
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 0, res.output
@@ -62,7 +63,8 @@ def test_train_and_an_experiment_trial_with_the_same_options_write_the_same_poli
         f'[experiment]\nname = "one"\nrepeats = 1\nseed = {SEED}\n[[trial]]\nname = "t"\n'
         f'algorithm = "{algorithm}"\nphases = [{{ pipeline = "paper-left", episodes = {EPISODES} }}]\n'
         f"episode_seconds = {SECONDS}\n{lines}\n"
-        "disturbance = { current_speed = 0.1, current_direction_deg = 45, camera_noise = 0.05 }\n"
+        "disturbance = { current_speed = 0.1, current_direction_deg = 45, camera_noise = 0.05, "
+        "dvl_noise = 0.01, gyro_noise_deg = 0.1 }\n"
     )
     out = tmp_path / "experiment"
     res = CliRunner().invoke(

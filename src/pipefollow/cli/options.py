@@ -115,7 +115,9 @@ def controller_options(fn):
 
 
 def disturbance_options(fn):
-    """Decorate a command with ``--current``, ``--camera-noise`` and ``--miss-prob``.
+    """Decorate a command with the disturbance options (the current, the camera's and the sensors' faults).
+
+    They are ``--current``, ``--camera-noise``, ``--miss-prob``, ``--dvl-noise`` and ``--gyro-noise``.
 
     The command receives one keyword argument ``disturbance`` (a
     :class:`~pipefollow.sim.disturbance.Disturbance`). Bad values are click usage errors that name the
@@ -136,11 +138,12 @@ def disturbance_options(fn):
         return callback
 
     @functools.wraps(fn)
-    def wrapper(*args, current, camera_noise, miss_prob, **kwargs):
+    def wrapper(*args, current, camera_noise, miss_prob, dvl_noise, gyro_noise, **kwargs):
         from pipefollow.sim.disturbance import make_disturbance
 
         speed, direction = current if current is not None else (0.0, 0.0)
-        d = make_disturbance(speed, direction, camera_noise=camera_noise or 0.0, miss_prob=miss_prob or 0.0)
+        d = make_disturbance(speed, direction, camera_noise=camera_noise or 0.0, miss_prob=miss_prob or 0.0,
+                             dvl_noise=dvl_noise or 0.0, gyro_noise_deg=gyro_noise or 0.0)  # fmt: skip
         return fn(*args, disturbance=d, **kwargs)
 
     options = [
@@ -166,6 +169,24 @@ def disturbance_options(fn):
             metavar="P",
             callback=checked(parsing.parse_miss_prob),
             help="Probability per decision that the camera misses the pipe. [default: 0]",
+        ),
+        click.option(
+            "--dvl-noise",
+            type=float,
+            default=None,
+            metavar="M/S",
+            callback=checked(parsing.parse_sensor_noise("dvl noise")),
+            help="Standard deviation (m/s) of the DVL's sway velocity over ground, which --state "
+            "paper+drift observes. [default: 0]",
+        ),
+        click.option(
+            "--gyro-noise",
+            type=float,
+            default=None,
+            metavar="DEG/S",
+            callback=checked(parsing.parse_sensor_noise("gyro noise")),
+            help="Standard deviation (°/s) of the gyro's yaw rate, which --state paper+yaw observes. "
+            "[default: 0]",
         ),
     ]
     for option in reversed(options):
