@@ -15,6 +15,12 @@ the return of a pipe is the mean over seeds; the 95 % intervals are BCa bootstra
 Options are chosen with ``--judge-on tuning`` (the first 100 pipes of the training family, seeds
 5–9) and only then judged on `heldout` with seeds 0–4.
 
+    python examples/sample_efficiency.py --out runs/measured-state --budgets 30000 --seeds 0 1 2 \
+        --dvl-noise 0.01 --gyro-noise-deg 0.1 --variants supervised-cacla-td0.9 supervised-cacla-td0.9-drift
+
+``--dvl-noise`` and ``--gyro-noise-deg`` give the vehicle's motion sensors their noise in both
+conditions (every controller is judged under them; only the measured states read them).
+
 Each (variant, budget, seed) writes one JSON file under OUT/runs/ with its per-pipe returns
 (resumable: done runs are skipped).
 """
@@ -23,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -34,7 +41,7 @@ from pipefollow.evaluation.stats import bootstrap_ci, paired_difference
 from pipefollow.files.atomic import write_text_atomic
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim.decision import PAPER_SIM
-from pipefollow.sim.disturbance import make_disturbance
+from pipefollow.sim.disturbance import check, make_disturbance
 from pipefollow.sim.episode import STAT_IN_VIEW, STAT_RETURN
 from pipefollow.sim.suites import get_suite, min_length_for
 from pipefollow.training.agents import make_agent
@@ -55,7 +62,8 @@ def _paper(
 ) -> Callable[[int, int], tuple[object, int]]:
     """A trainer of CACLA (or supervised CACLA) on random pipes: (budget, seed) → (agent, decisions).
 
-    ``agent_options`` go to the agent (e.g. ``actor_repeats``), ``options`` to the training loop.
+    ``agent_options`` go to the agent (e.g. ``actor_repeats``, ``state``), ``options`` to the training
+    loop; ``trained_in="disturbed"`` trains in that condition of :data:`CONDITIONS`.
     """
 
     def train(budget: int, seed: int):
@@ -64,7 +72,9 @@ def _paper(
         episodes = max(1, budget // int(EPISODE_S))
         pipe_rng = rng.spawn(1)[0]
         extra = dict(options)
-        if "randomization" in extra:  # the disturbances' stream of pipefollow train (training.phases)
+        if "trained_in" in extra:
+            extra["params"] = CONDITIONS[extra.pop("trained_in")]
+        if "randomization" in extra or "params" in extra:  # the disturbances' stream of pipefollow train
             extra["env_rng"] = disturbance_rng(seed)
         train_random_compiled(agent, get_suite(TRAIN_FAMILY), episodes, pipe_rng=pipe_rng,
                               episode_seconds=EPISODE_S, **extra)  # fmt: skip
@@ -118,6 +128,27 @@ VARIANTS: dict[str, tuple[str, Callable[[int, int], tuple[object, int]]]] = {
     "cacla-recipe": (
         "CACLA, TD(0.9), α_π 0.8, α_V 0.6, γ_d 0.9",
         _paper(False, {"critic_lambda": 0.9, "alpha_pi": 0.8, "alpha_v": 0.6, "discount": 0.9}),
+    ),
+    # the paper's state against it with what the vehicle measures (pipefollow.sim.observation)
+    "supervised-cacla-td0.9-drift": (
+        "supervised CACLA, TD(0.9), state paper+drift",
+        _paper(True, {"critic_lambda": 0.9, "state": "paper+drift"}),
+    ),
+    "supervised-cacla-td0.9-drift-yaw": (
+        "supervised CACLA, TD(0.9), state paper+drift+yaw",
+        _paper(True, {"critic_lambda": 0.9, "state": "paper+drift+yaw"}),
+    ),
+    "supervised-cacla-td0.9-disturbed": (
+        "supervised CACLA, TD(0.9), trained disturbed",
+        _paper(True, {"critic_lambda": 0.9}, trained_in="disturbed"),
+    ),
+    "supervised-cacla-td0.9-drift-disturbed": (
+        "supervised CACLA, TD(0.9), state paper+drift, trained disturbed",
+        _paper(True, {"critic_lambda": 0.9, "state": "paper+drift"}, trained_in="disturbed"),
+    ),
+    "supervised-cacla-td0.9-drift-yaw-disturbed": (
+        "supervised CACLA, TD(0.9), state paper+drift+yaw, trained disturbed",
+        _paper(True, {"critic_lambda": 0.9, "state": "paper+drift+yaw"}, trained_in="disturbed"),
     ),
     "ppo": ("PPO", _deep("ppo")),
     "sac": ("SAC", _deep("sac")),
@@ -277,7 +308,14 @@ def main() -> None:
     )
     ap.add_argument("--table", action="store_true", help="print the table of the finished runs and stop")
     ap.add_argument("--plot", type=Path, default=None, help="also draw the learning curves to this file")
+    ap.add_argument("--dvl-noise", type=float, default=0.0, help="s.d. of the DVL's sway over ground (m/s)")
+    ap.add_argument("--gyro-noise-deg", type=float, default=0.0, help="s.d. of the gyro's yaw rate (deg/s)")
     args = ap.parse_args()
+    if args.dvl_noise or args.gyro_noise_deg:  # the vehicle's motion sensors, in both conditions
+        for name, params in CONDITIONS.items():
+            gyro = math.radians(args.gyro_noise_deg)
+            d = params.disturbance._replace(dvl_noise=args.dvl_noise, gyro_noise=gyro)
+            CONDITIONS[name] = params._replace(disturbance=check(d))
     if not args.table:
         seeds = args.seeds or list(TUNING_SEEDS if args.judge_on == "tuning" else SEEDS)
         run_all(args.out, args.variants, args.budgets, seeds, args.judge_on)

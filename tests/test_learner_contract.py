@@ -18,7 +18,7 @@ from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.evaluation.benchmark import _env_episodes, run_episodes
 from pipefollow.experiments.schema import Phase, TrialConfig
 from pipefollow.experiments.trial import run_trial
-from pipefollow.learners.protocol import OPTIONS
+from pipefollow.learners.options import SWITCHES as OPTIONS
 from pipefollow.learners.registry import LEARNERS, NAMES, learner, learner_of
 from pipefollow.sim import decision as sim
 from pipefollow.sim.disturbance import make_disturbance

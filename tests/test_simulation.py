@@ -198,7 +198,9 @@ def non_default_params():
     auv = AUVParams(*(1.0 + 0.37 * i for i in range(len(AUVParams._fields))))
     ctrl = ControllerParams(*(20.0 + 0.11 * i for i in range(len(ControllerParams._fields))))
     cam = CameraParams(1.7, 4.2)
-    dist = Disturbance(0.2, 1.1, 30.0, 0.05, 0.25, 0.03, 0.1, (1.0, 3.0, 5.0, 7.0), (2.0, 4.0, 6.0, 8.0))
+    dist = Disturbance(
+        0.2, 1.1, 30.0, 0.05, 0.25, 0.03, 0.1, 0.02, 0.004, (1.0, 3.0, 5.0, 7.0), (2.0, 4.0, 6.0, 8.0)
+    )
     return sim.SimParams(
         auv,
         ctrl,
@@ -223,7 +225,7 @@ def test_pack_unpack_round_trip():
     assert all(a != b for a, b in zip(p.disturbance, defaults.disturbance, strict=True))
     start = sim.OFFSETS["disturbance"]
     slots = sim.pack_params(p)[start : start + PACKED_SIZE]
-    assert len(set(slots)) == PACKED_SIZE == 15  # no two disturbance slots alike
+    assert len(set(slots)) == PACKED_SIZE == 17  # no two disturbance slots alike
     assert p.start_speed != defaults.start_speed
     packed = sim.pack_params(p)
     assert packed.dtype == np.float64 and packed.shape == (sim.OFFSETS["start_speed"] + 1,)

@@ -35,7 +35,9 @@ def test_train_into_writes_what_the_command_writes(tmp_path):
         k: v for k, v in from_cli.items() if k not in ("policy", "learning_curve")
     }
     np.testing.assert_array_equal(load_policy(run.policy).weights, load_policy(from_cli["policy"]).weights)
-    assert run.text().splitlines()[1:] == [f"policy: {run.policy}", f"learning curve: {run.learning_curve}"]
+    assert run.text().splitlines()[1:] == [
+        "options: skew 22.5°", f"policy: {run.policy}", f"learning curve: {run.learning_curve}"
+    ]
 
 
 def test_train_into_removes_the_folders_it_was_given_when_training_fails(tmp_path):

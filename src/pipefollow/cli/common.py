@@ -195,6 +195,8 @@ def disturbance_text(d, prefix: str = "; disturbances: ") -> str:
         parts.append(f"camera noise {t['camera_noise']:g} m")
     if t["miss_prob"]:
         parts.append(f"missed detections {t['miss_prob']:.0%}")
+    if t["dvl_noise"] or t["gyro_noise_deg"]:
+        parts.append(f"sensor noise {t['dvl_noise']:g} m/s, {t['gyro_noise_deg']:g}°/s")
     if t["buried"]:
         parts.append(f"{len(t['buried'])} buried stretch(es)")
     return prefix + (", ".join(parts) or "varying current")

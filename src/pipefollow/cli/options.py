@@ -115,7 +115,9 @@ def controller_options(fn):
 
 
 def disturbance_options(fn):
-    """Decorate a command with ``--current``, ``--camera-noise`` and ``--miss-prob``.
+    """Decorate a command with the disturbance options (the current, the camera's and the sensors' faults).
+
+    They are ``--current``, ``--camera-noise``, ``--miss-prob``, ``--dvl-noise`` and ``--gyro-noise``.
 
     The command receives one keyword argument ``disturbance`` (a
     :class:`~pipefollow.sim.disturbance.Disturbance`). Bad values are click usage errors that name the
@@ -136,11 +138,12 @@ def disturbance_options(fn):
         return callback
 
     @functools.wraps(fn)
-    def wrapper(*args, current, camera_noise, miss_prob, **kwargs):
+    def wrapper(*args, current, camera_noise, miss_prob, dvl_noise, gyro_noise, **kwargs):
         from pipefollow.sim.disturbance import make_disturbance
 
         speed, direction = current if current is not None else (0.0, 0.0)
-        d = make_disturbance(speed, direction, camera_noise=camera_noise or 0.0, miss_prob=miss_prob or 0.0)
+        d = make_disturbance(speed, direction, camera_noise=camera_noise or 0.0, miss_prob=miss_prob or 0.0,
+                             dvl_noise=dvl_noise or 0.0, gyro_noise_deg=gyro_noise or 0.0)  # fmt: skip
         return fn(*args, disturbance=d, **kwargs)
 
     options = [
@@ -166,6 +169,24 @@ def disturbance_options(fn):
             metavar="P",
             callback=checked(parsing.parse_miss_prob),
             help="Probability per decision that the camera misses the pipe. [default: 0]",
+        ),
+        click.option(
+            "--dvl-noise",
+            type=float,
+            default=None,
+            metavar="M/S",
+            callback=checked(parsing.parse_sensor_noise("dvl noise")),
+            help="Standard deviation (m/s) of the DVL's sway velocity over ground, which --state "
+            "paper+drift observes. [default: 0]",
+        ),
+        click.option(
+            "--gyro-noise",
+            type=float,
+            default=None,
+            metavar="DEG/S",
+            callback=checked(parsing.parse_sensor_noise("gyro noise")),
+            help="Standard deviation (°/s) of the gyro's yaw rate, which --state paper+yaw observes. "
+            "[default: 0]",
         ),
     ]
     for option in reversed(options):
@@ -272,3 +293,51 @@ def camera_options(fn):
     for option in reversed(options):
         wrapper = option(wrapper)
     return wrapper
+
+
+def learner_options(fn):
+    """Decorate a command with one option per entry of the learners' table, generated from it.
+
+    :data:`pipefollow.learners.options.LEARNER_OPTIONS` gives each option's flag (``--critic-lambda``),
+    type, allowed values and help; the command receives one keyword argument ``learner_options``:
+    option name → value of those given on the command line. A bad value is a usage error naming
+    the option (exit status 2).
+    """
+    from pipefollow.learners.options import LEARNER_OPTIONS
+    from pipefollow.learners.registry import taking
+
+    def checked(option):
+        def callback(ctx, param, value):
+            if value is None or (option.kind is bool and not value):
+                return None
+            try:
+                return option.check(value)
+            except ValueError as e:
+                raise click.BadParameter(str(e), ctx=ctx, param=param) from None
+
+        return callback
+
+    def option_of(o):
+        learners = " and ".join(taking(o.name))
+        default = "" if o.kind is bool else f"; default: {o.default:g}" if o.kind is float else ""
+        default = f"; default: {o.default}" if o.kind is str else default
+        allowed = f"; {o.allowed()}" if o.kind is float else ""
+        text = f"{o.help[0].upper()}{o.help[1:]} [{learners}{allowed}{default}]."
+        kwargs = dict(callback=checked(o), help=text, expose_value=True)
+        if o.kind is bool:
+            return click.option(o.option, o.name, is_flag=True, default=None, **kwargs)
+        if o.kind is str:
+            return click.option(o.option, o.name, type=click.Choice(o.choices), default=None, **kwargs)
+        return click.option(o.option, o.name, type=float, default=None, metavar="X", **kwargs)
+
+    names = [o.name for o in LEARNER_OPTIONS]
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        given = {name: kwargs.pop(name) for name in names}
+        return fn(*args, learner_options={k: v for k, v in given.items() if v is not None}, **kwargs)
+
+    for o in reversed(LEARNER_OPTIONS):
+        wrapper = option_of(o)(wrapper)
+    return wrapper
+

@@ -37,6 +37,17 @@ def parse_camera_noise(value: Any) -> float:
     return non_negative(value, "camera noise")
 
 
+def parse_sensor_noise(name: str):
+    """A parser of ``--dvl-noise M/S`` or ``--gyro-noise DEG/S``: a noise s.d., a finite number ≥ 0."""
+
+    def parse(value: Any) -> float:
+        from pipefollow.sim.disturbance import non_negative
+
+        return non_negative(value, name)
+
+    return parse
+
+
 def parse_miss_prob(value: Any) -> float:
     """``--miss-prob P``: a miss probability, a number in [0, 1]."""
     from pipefollow.sim.disturbance import probability

@@ -11,7 +11,6 @@ from pipefollow.cli.common import (
     UserError,
     apply_readings,
     echo_result,
-    finite,
     guard,
     policy_file,
     writable_folder,
@@ -20,6 +19,7 @@ from pipefollow.cli.options import (
     disturbance_options,
     episodes_option,
     json_option,
+    learner_options,
     out_option,
     pipeline_option,
     reading_option,
@@ -42,25 +42,14 @@ DEEP = ("ppo", "sac")  # the learners of Stable-Baselines3 (pipefollow.training.
     help="The paper's learners (sarsa, cacla; ac: the general actor-critic of eq. 9), or PPO / SAC "
     "from Stable-Baselines3 (extra 'deep').",
 )
-@click.option(
-    "--skew",
-    type=click.FloatRange(min=0.0, max=180.0),
-    callback=finite,
-    default=0.0,
-    show_default=True,
-    help="CACLA skew step Δγ in degrees (eq. 15): 11.25, 22.5 or 45 in the paper; 0 = Gaussian.",
-)
-@click.option(
-    "--supervised",
-    is_flag=True,
-    help="The heuristic as supervisor: supervised CACLA (eq. 12) or actor-critic (eq. 11).",
-)
+@learner_options
 @pipeline_option(
     "Built-in name or JSON file to train on, or random[:FAMILY] for a new pipe every episode "
     "(families: see 'pipefollow suites'; random = random:mixed)."
 )
 @episodes_option(
-    TRAINING_EPISODES, "Training episodes (σ falls linearly from 1 to 0.01 over them); SARSA and CACLA."
+    TRAINING_EPISODES,
+    "Training episodes (σ falls linearly from --sigma-start to --sigma-end over them); the paper's learners.",
 )
 @seconds_option(default=EPISODE_SECONDS)
 @click.option(
@@ -105,8 +94,7 @@ DEEP = ("ppo", "sac")  # the learners of Stable-Baselines3 (pipefollow.training.
 @guard
 def train(
     algorithm,
-    skew,
-    supervised,
+    learner_options,
     pipeline,
     episodes,
     seconds,
@@ -123,14 +111,16 @@ def train(
 ):
     """Train a learner; writes the policy and its learning curve.
 
-    An --out folder that already holds them is refused unless --force is given. Ctrl-C stops
-    without writing anything (exit status 130).
+    Every learner option of experiment files is an option here too (--critic-lambda, --alpha-v,
+    --sigma-start, --state, ...): the same values give the same policy. An --out folder that already
+    holds them is refused unless --force is given. Ctrl-C stops without writing anything (exit status 130).
     """
     _refuse_existing(out_dir, force)
     randomization = _randomization(randomization, disturbance)
     if tensorboard_dir:
         _check_tensorboard(algorithm)
     if algorithm in DEEP:
+        _refuse_learner_options(algorithm, learner_options)
         return _train_deep(
             algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization
         )
@@ -139,7 +129,7 @@ def train(
     from pipefollow.files.output_paths import first_missing
     from pipefollow.training.runs import train_into
 
-    agent, reading = _learner(algorithm, pipeline, seed, init_policy, readings, skew, supervised)
+    agent, reading, options = _learner(algorithm, pipeline, seed, init_policy, readings, learner_options)
     made = first_missing(out_dir)
     out = writable_folder(out_dir, "--out")  # before training, after the checks of --init
     try:
@@ -149,7 +139,8 @@ def train(
             run = train_into(
                 out, agent, pipeline, episodes, seed=seed, readings=reading, disturbance=disturbance,
                 randomization=randomization, seconds=seconds, progress=_counter(bar),
-                tensorboard=tensorboard_dir, made=made,
+                tensorboard=tensorboard_dir, made=made, sigma_start=options["sigma_start"],
+                sigma_end=options["sigma_end"], options=options,
             )  # fmt: skip
     except KeyboardInterrupt:
         click.echo(f"pipefollow: interrupted; nothing written to '{out_dir}'", err=True)
@@ -207,19 +198,42 @@ def _check_tensorboard(algorithm: str) -> None:
         raise UserError(str(e)) from None
 
 
-def _learner(algorithm, pipeline, seed, init_policy, readings, skew, supervised):
-    """The agent to train and its readings: a new one, or the policy of --init with its options."""
-    from pipefollow.learners.registry import learner, taking
+def _flag(option: str) -> str:
+    from pipefollow.learners.options import OPTION
+
+    return OPTION[option].option
+
+
+def _refuse_learner_options(algorithm: str, given: dict) -> None:
+    """PPO and SAC take none of the learners' options."""
+    if given:
+        flags = ", ".join(_flag(k) for k in given)
+        raise UserError(f"{flags} not available with --algorithm {algorithm}")
+
+
+def _learner(algorithm, pipeline, seed, init_policy, readings, given: dict):
+    """The agent to train, its readings and its options (the σ schedule too).
+
+    A new agent from the given options (the others at their defaults), or the policy of --init with
+    its options, which the given ones must not contradict.
+    """
+    from pipefollow.learners.options import DEFAULTS, check_schedule
+    from pipefollow.learners.registry import learner, takes, taking
     from pipefollow.sim.pipe_names import resolve_training
     from pipefollow.training.runs import new_agent
 
-    for option, flag, value in (("skew_deg", "--skew", skew), ("supervised", "--supervised", supervised)):
-        if value and option not in learner(algorithm).options:
-            raise UserError(f"{flag} applies to --algorithm {' and '.join(taking(option))} only")
+    kind = learner(algorithm)
+    for option in given:
+        if not takes(kind, option):
+            raise UserError(f"{_flag(option)} applies to --algorithm {' and '.join(taking(option))} only")
     resolve_training(pipeline)  # a bad pipeline fails before a policy is read
+    schedule = {k: given.get(k, DEFAULTS[k]) for k in ("sigma_start", "sigma_end")}
     if not init_policy:
+        _check_schedule(check_schedule, schedule)
         reading = apply_readings(readings)
-        return new_agent(algorithm, seed, reading, skew, supervised), reading
+        agent_given = {k: v for k, v in given.items() if k not in schedule}
+        agent = new_agent(algorithm, seed, reading, **agent_given)
+        return agent, reading, {**given, **schedule}
     from pipefollow.training.phases import agent_rng
     from pipefollow.training.policy_files import load_policy
 
@@ -228,20 +242,29 @@ def _learner(algorithm, pipeline, seed, init_policy, readings, skew, supervised)
     reading = apply_readings(readings, agent.readings)
     if agent.algorithm != algorithm:
         raise UserError(f"--init {init_policy}: holds a {agent.name} policy, not {algorithm}")
-    _check_init_options(agent, reading, init_policy, skew, supervised)
+    saved = getattr(agent, "learner_options", {})
+    schedule = {k: given.get(k, saved.get(k, DEFAULTS[k])) for k in schedule}
+    _check_schedule(check_schedule, schedule)
+    _check_init_options(agent, reading, init_policy, {k: v for k, v in given.items() if k not in schedule})
     agent.readings = reading.id
     agent.rng = agent_rng(seed)
-    return agent, reading
+    from pipefollow.training.runs import saved_options
+
+    return agent, reading, {**saved, **saved_options(agent), **schedule}
 
 
-def _check_init_options(agent, reading, init_policy, skew, supervised) -> None:
-    """``train --init``: the saved policy's --skew and --supervised unless given; differences named."""
+def _check_schedule(check, schedule: dict) -> None:
+    try:
+        check(schedule["sigma_start"], schedule["sigma_end"])
+    except ValueError as e:
+        raise UserError(f"--sigma-start: {e}") from None
+
+
+def _check_init_options(agent, reading, init_policy, given: dict) -> None:
+    """``train --init``: the saved policy's options unless given; differences named."""
     from pipefollow.training.runs import option_differences
 
-    given = _given("skew", "supervised")
-    differ = option_differences(
-        agent, reading, skew if "--skew" in given else None, supervised if "--supervised" in given else None
-    )
+    differ = option_differences(agent, reading, **given)
     if differ:
         raise UserError(
             f"--init {init_policy}: holds a {agent.name} policy (readings '{agent.readings}') whose options "
@@ -250,7 +273,7 @@ def _check_init_options(agent, reading, init_policy, skew, supervised) -> None:
 
 
 def _given(*names: str) -> list[str]:
-    """The options (``--skew``) of the parameters ``names`` given on the command line, in that order."""
+    """The options (``--steps``) of the parameters ``names`` given on the command line, in that order."""
     from click.core import ParameterSource
 
     ctx = click.get_current_context()
@@ -260,7 +283,7 @@ def _given(*names: str) -> list[str]:
 
 def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization=None):
     """``train --algorithm ppo|sac``: :func:`pipefollow.training.deep.train_to_folder`."""
-    given = _given("skew", "supervised", "episodes", "init_policy", "readings")
+    given = _given("episodes", "init_policy", "readings")
     if given:
         budget = "; its budget is --steps" if "--episodes" in given else ""
         raise UserError(f"{', '.join(given)} not available with --algorithm {algorithm}{budget}")

@@ -11,6 +11,8 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import asdict, dataclass
 
 from pipefollow.experiments.config import ExperimentConfig
+from pipefollow.experiments.schema import learner_values
+from pipefollow.learners.options import describe
 from pipefollow.sim.pipeline import BUILTIN_NAMES, Pipeline, builtin
 
 
@@ -86,11 +88,14 @@ def pipelines() -> list[PipelineEntry]:
 
 
 def trials(exp: ExperimentConfig) -> list[dict]:
-    """One row per trial of ``exp``: name, label, algorithm, options, phases, episodes, repeats."""
+    """One row per trial of ``exp``: name, label, algorithm, options, phases, episodes, repeats.
+
+    ``options`` names the learner options (:data:`~pipefollow.learners.options.LEARNER_OPTIONS`)
+    set away from their defaults, and the readings.
+    """
     rows = []
     for t in exp.trials:
-        options = [f"skew {t.skew_deg:g}°"] if t.skew_deg else []
-        options += ["supervised"] * t.supervised
+        options = [describe(learner_values(t))] if describe(learner_values(t)) else []
         options += [f"readings {t.reading.id}"] * (t.reading.id != "default")
         rows.append(
             {

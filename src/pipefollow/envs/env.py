@@ -68,7 +68,10 @@ class PipelineFollowingEnv(gym.Env):
     | 3     | v_x: surge speed over ground                      | -1 | 1 | m/s |
 
     While the pipe is out of view, (x1, y1, x2) hold the last sighting; ``info["pipe_in_view"]``
-    tells the two apart.
+    tells the two apart. ``state="paper+drift"`` appends the DVL's sway velocity over ground v_y
+    (m/s, −1…1, starboard +), ``"paper+yaw"`` the gyro's yaw rate r (rad/s, −1…1), ``"paper+drift+yaw"``
+    both (:mod:`pipefollow.sim.observation`; noise: the disturbance's ``dvl_noise``, ``gyro_noise_deg``);
+    ``env.setup.observation_names`` and ``.observation_units`` name them.
 
     ## Rewards
 
@@ -130,6 +133,7 @@ class PipelineFollowingEnv(gym.Env):
       ``np_random`` (before the pipe of a ``random`` family); not with ``disturbance``.
     * ``strict_reset``: raise :class:`gymnasium.error.ResetNeeded` on a step after the episode's
       end instead of warning and carrying on (default ``False``, Gymnasium's behaviour).
+    * ``state``: the observation, ``"paper"`` (default) or the paper's with measured motion (above).
 
     ## Info
 
@@ -167,11 +171,13 @@ class PipelineFollowingEnv(gym.Env):
         water: Any = None,
         randomization: Randomization | str | dict[str, Any] | None = None,
         strict_reset: bool = False,
+        state: str = "paper",
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None, 'human' or 'rgb_array', got {render_mode!r}")
         setup = make_setup(
-            episode_seconds, start_lateral_noise, start_heading_noise_deg, params, disturbance, obs_dtype
+            episode_seconds, start_lateral_noise, start_heading_noise_deg, params, disturbance, obs_dtype,
+            state,
         )
         self.setup = setup
         self.randomization = None
@@ -274,7 +280,7 @@ class PipelineFollowingEnv(gym.Env):
     def _observation(self) -> np.ndarray:
         if self._vision is None:
             return observation(self.state, self.setup)
-        return self._vision.observation(self.state, self.setup.observation_space.dtype)
+        return self._vision.observation(self.state, self.setup.observation_space.dtype, self.setup.obs_slots)
 
     def _info(self) -> dict[str, Any]:
         info = state_infos(self.state)

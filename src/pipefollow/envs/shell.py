@@ -13,7 +13,7 @@ shape, so the two environments cannot drift apart.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -24,6 +24,10 @@ from pipefollow.files.paper_training import EPISODE_SECONDS
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
 from pipefollow.sim.disturbance import Disturbance, check, disturbance_from_dict, noise_count
+from pipefollow.sim.observation import bounds as observation_bounds
+from pipefollow.sim.observation import names as observation_names
+from pipefollow.sim.observation import slots as observation_slots
+from pipefollow.sim.observation import units as observation_units
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.suites import Suite, min_length_for
 
@@ -35,6 +39,7 @@ SHARED_ARGUMENTS = (
     "params",
     "disturbance",
     "obs_dtype",
+    "state",
 )
 # the camera's arguments (pipefollow.perception.camera.camera_settings), shared too
 CAMERA_ARGUMENTS = ("camera", "observation", "reward_from", "water")
@@ -84,6 +89,18 @@ class Setup:
     obs_dtype: type
     observation_space: spaces.Box
     action_space: spaces.Box
+    state: str = "paper"  # the named state observed (pipefollow.sim.observation)
+    obs_slots: np.ndarray = field(default_factory=lambda: observation_slots("paper"))  # its state slots
+
+    @property
+    def observation_names(self) -> tuple[str, ...]:
+        """The names of the observation's entries (``x1, y1, x2, v_x`` and any measured ones)."""
+        return observation_names(self.state)
+
+    @property
+    def observation_units(self) -> tuple[str, ...]:
+        """Their units (``m, m, m, m/s`` and ``m/s`` for v_y, ``rad/s`` for r)."""
+        return observation_units(self.state)
 
     @property
     def min_pipe_length(self) -> float:
@@ -98,8 +115,15 @@ def make_setup(
     params: sim.SimParams = sim.PAPER_SIM,
     disturbance: Disturbance | dict[str, Any] | None = None,
     obs_dtype: str | type | np.dtype = "float64",
+    state: str = "paper",
 ) -> Setup:
-    """Check the environments' shared arguments (one-line ``ValueError`` naming the argument)."""
+    """Check the environments' shared arguments (one-line ``ValueError`` naming the argument).
+
+    ``state`` names the observation (:mod:`pipefollow.sim.observation`): the paper's
+    ``(x1, y1, x2, v_x)`` (m, m, m, m/s) or it with the DVL's sway velocity over ground (m/s) and
+    the gyro's yaw rate (rad/s).
+    """
+    slots = observation_slots(state)  # an unknown name: ValueError naming state
     decision_seconds = sim.decision_seconds(params)
     if not (
         isinstance(episode_seconds, int | float | np.number)
@@ -127,12 +151,8 @@ def make_setup(
     if disturbance is not None:
         params = params._replace(disturbance=disturbance)
     check(params.disturbance)
-    cam = params.camera
-    observation_space = spaces.Box(
-        low=np.array([-cam.half_width, 0.0, -cam.half_width, -1.0], dtype=dtype),
-        high=np.array([cam.half_width, cam.depth, cam.half_width, 1.0], dtype=dtype),
-        dtype=dtype,
-    )
+    low, high = observation_bounds(state, params.camera)
+    observation_space = spaces.Box(low=low.astype(dtype), high=high.astype(dtype), dtype=dtype)
     return Setup(
         episode_seconds=float(episode_seconds),
         max_decisions=int(round(float(episode_seconds) / decision_seconds)),
@@ -144,6 +164,8 @@ def make_setup(
         obs_dtype=dtype,
         observation_space=observation_space,
         action_space=spaces.Box(-1.0, 1.0, (1,), dtype=np.float32),
+        state=state,
+        obs_slots=slots,
     )
 
 
@@ -236,8 +258,13 @@ def start_episode(
 
 
 def observation(states: np.ndarray, setup: Setup) -> np.ndarray:
-    """Observations ``(x1, y1, x2, v_x)`` of one state or a batch: a new array of the setup's dtype."""
-    return (states[:4] if states.ndim == 1 else states[:, :4]).astype(setup.obs_dtype)
+    """Observations of one state or a batch: a new array of the setup's dtype.
+
+    ``(x1, y1, x2, v_x)`` under the paper's state, and the measured entries of another.
+    """
+    if setup.state == "paper":  # the leading slots: a slice, as cheap as before
+        return (states[:4] if states.ndim == 1 else states[:, :4]).astype(setup.obs_dtype)
+    return states[..., setup.obs_slots].astype(setup.obs_dtype)
 
 
 def image_space(water) -> spaces.Box:

@@ -402,7 +402,9 @@ class PipelineFollowingVectorEnv(VectorEnv):
         if self._cams is None:
             return observation(self.states, self.setup)
         dtype = self.setup.observation_space.dtype
-        return np.stack([c.observation(s, dtype) for c, s in zip(self._cams, self.states, strict=True)])
+        slots = self.setup.obs_slots
+        cams = zip(self._cams, self.states, strict=True)
+        return np.stack([c.observation(s, dtype, slots) for c, s in cams])
 
     def _infos(self, present: np.ndarray, ended: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """The infos of all sub-environments, ``_key`` masks ``present``; the summary where ``ended``."""

@@ -182,7 +182,8 @@ def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0
     from pipefollow.envs.env import PipelineFollowingEnv
 
     for i, pipe in enumerate(pipes):
-        env = PipelineFollowingEnv(pipe, seconds, params=params, **(camera or {}))
+        state = getattr(agent, "state", "paper")  # what a learner observes (sim.observation)
+        env = PipelineFollowingEnv(pipe, seconds, params=params, state=state, **(camera or {}))
         env.np_random = _noise_rng(noise_seed, i)
         stats = run_episode(env, agent)
         out[i] = stats.as_full_row()

@@ -136,6 +136,7 @@ def evaluate(
         start_noise,
         heading_noise,
         params=rd.sim_params(readings)._replace(disturbance=disturbance),
+        state=getattr(agent, "state", "paper"),  # what a learner observes (sim.observation)
         **(camera or {}),
     )
     stats, frames = [], []

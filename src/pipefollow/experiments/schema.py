@@ -16,11 +16,9 @@ from pipefollow import readings as rd
 from pipefollow.files.limits import MAX_EPISODE_SECONDS as MAX_SECONDS
 from pipefollow.files.limits import MAX_EPISODES, MAX_REPEATS
 from pipefollow.files.paper_training import EPISODE_SECONDS, TRAINING_EPISODES
-from pipefollow.learners.cacla import PAPER_CACLA
-from pipefollow.learners.exploration import SIGMA_END, SIGMA_START
+from pipefollow.learners.options import LEARNER_OPTIONS, check_schedule
 from pipefollow.learners.registry import NAMES as ALGORITHMS
-from pipefollow.learners.registry import check_options
-from pipefollow.learners.sarsa import PAPER_SARSA
+from pipefollow.learners.registry import agent_options
 
 # Figure and table keys of the report a trial can belong to (``figures = [...]`` in a trial).
 FIGURE_KEYS = ("fig5", "fig6", "fig7", "table1")
@@ -61,39 +59,15 @@ class TrialConfig:
         "learner: sarsa (eq. 3), cacla (eqs. 5-7) or ac (the general actor-critic, eq. 9)",
         choices=ALGORITHMS,
     )
-    skew_deg: float = _f(0.0, "CACLA skew step Δγ (deg, eq. 15); 0 = Gaussian exploration (paper §4.1)")
-    supervised: bool = _f(
-        False, "the heuristic as supervisor: supervised CACLA (eqs. 10-13) or actor-critic (eq. 11)"
-    )
-    actor_update: str = _f(
-        "delta",
-        "actor-critic: the actor's step factor on (a - A(s)): delta (eq. 9), positive (max(δ, 0): eq. 7's "
-        "max term alone) or sign (sgn δ: eq. 7's sign term alone)",
-        choices=("delta", "positive", "sign"),
-    )
-    actor_repeats: str = _f(
-        "once",
-        "CACLA, beyond the paper: one actor update per δ > 0 (once, eq. 7) or ⌈δ/√var⌉ of them, var a "
-        "running variance of δ (var: CACLA+Var, Van Hasselt & Wiering 2007)",
-        choices=("once", "var"),
-    )
-    critic_lambda: float = _f(
-        0.0, "CACLA and actor-critic, beyond the paper: λ of the critic's TD(λ) trace; 0 = TD(0) (eqs. 5-6)"
-    )
+    # The learners' options, one field each, from their one table (pipefollow.learners.options):
+    # skew_deg, supervised, actor_update, actor_repeats, critic_lambda, the step sizes, the σ
+    # schedule and the observed state.
+    for _o in LEARNER_OPTIONS:
+        __annotations__[_o.name] = _o.kind.__name__
+        vars()[_o.name] = _f(_o.default, _o.help, **({"choices": _o.choices} if _o.choices else {}))
+    del _o
     phases: tuple[Phase, ...] = _f((Phase(),), "training phases in order (paper §4.2: left, then right)")
     episode_seconds: float = _f(EPISODE_SECONDS, "episode length (s); one decision per second (paper §4.1)")
-    sigma_start: float = _f(
-        SIGMA_START, "exploration σ of the first episode, normalized action units (paper §4)"
-    )
-    sigma_end: float = _f(SIGMA_END, "exploration σ of the last episode of each phase (paper §4)")
-    alpha_v: float = _f(PAPER_CACLA.alpha_v, "CACLA and actor-critic: critic step size α_V (paper §4)")
-    alpha_pi: float = _f(PAPER_CACLA.alpha_pi, "CACLA and actor-critic: actor step size α_π (paper §4)")
-    alpha_q: float = _f(PAPER_SARSA.alpha, "SARSA step size α (paper §4)")
-    discount: float = _f(PAPER_CACLA.discount, "discount factor γ_d (paper §4)")
-    delta_k: float = _f(
-        PAPER_CACLA.delta_k, "supervised learners: increment Δk of k(s) per visit (paper §4.1)"
-    )
-    forgetting: float = _f(0.0, "supervised learners: per-update decay of k's weights; the paper uses none")
     readings: tuple[str, ...] = _f(
         (), "readings of the paper's open points, as key=value ids (docs/design.md); later ones win"
     )
@@ -193,36 +167,20 @@ def validate(obj, where: str) -> None:
 
         if not re.fullmatch(NAME_PATTERN, obj.name):
             raise bad("name", "letters, digits and any of - _ . @ = , +", obj.name)
+        for o in LEARNER_OPTIONS:  # each value as its table allows, then the learner's own
+            try:
+                o.check(getattr(obj, o.name))
+            except ValueError:
+                raise bad(o.name, o.allowed(), getattr(obj, o.name)) from None
         try:
-            check_options(
-                obj.algorithm,
-                skew_deg=obj.skew_deg,
-                supervised=obj.supervised,
-                actor_update=obj.actor_update,
-                actor_repeats=obj.actor_repeats,
-                critic_lambda=obj.critic_lambda,
-            )
+            agent_options(obj.algorithm, learner_values(obj), strict=False)
+            check_schedule(obj.sigma_start, obj.sigma_end)
         except ValueError as e:
-            raise ConfigError(f"{where}: {e}") from None
+            raise ConfigError(f"{where}: {_keyed(e)}") from None
         check_readings(obj.readings, f"{where}: key 'readings'")
-        for key in ("alpha_v", "alpha_pi", "alpha_q", "discount"):
-            v = getattr(obj, key)
-            if not 0.0 < v <= 1.0:
-                raise bad(key, "in (0, 1]", v)
-        for key in ("skew_deg", "delta_k", "forgetting", "sigma_end"):
-            if getattr(obj, key) < 0.0:
-                raise bad(key, "≥ 0", getattr(obj, key))
-        if not 0.0 <= obj.critic_lambda <= 1.0:
-            raise bad("critic_lambda", "in [0, 1]", obj.critic_lambda)
-        if obj.forgetting >= 1.0:
-            raise bad("forgetting", "below 1", obj.forgetting)
-        if obj.sigma_start < obj.sigma_end:
-            raise bad("sigma_start", f"≥ sigma_end ({obj.sigma_end})", obj.sigma_start)
         for key in ("episode_seconds", "evaluate_seconds"):
             if not 1.0 <= getattr(obj, key) <= MAX_SECONDS:
                 raise bad(key, f"from 1 to {MAX_SECONDS:g} (s)", getattr(obj, key))
-        if obj.skew_deg > 180.0:
-            raise bad("skew_deg", "at most 180 (deg)", obj.skew_deg)
     elif isinstance(obj, ExperimentConfig):
         for rid in obj.compare_readings:
             check_readings((rid,), f"{where}: key 'compare_readings'")
@@ -236,6 +194,18 @@ def validate(obj, where: str) -> None:
             raise ConfigError(f"{where}: trial names must be unique, repeated: {', '.join(sorted(dup))}")
         if not obj.trials:
             raise ConfigError(f"{where}: no [[trial]] tables")
+
+
+def learner_values(trial: TrialConfig) -> dict:
+    """The values of ``trial``'s learner options (:data:`~pipefollow.learners.options.LEARNER_OPTIONS`)."""
+    return {o.name: getattr(trial, o.name) for o in LEARNER_OPTIONS}
+
+
+def _keyed(e: ValueError) -> str:
+    """``sigma_start must be …`` as ``key 'sigma_start' must be …``; other messages as they are."""
+    text = str(e)
+    first, _, rest = text.partition(" must be ")
+    return f"key '{first}' must be {rest}" if rest and " " not in first else text
 
 
 def to_dict(obj) -> dict:

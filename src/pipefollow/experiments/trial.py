@@ -9,8 +9,9 @@ import numpy as np
 
 from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.experiments.config import TrialConfig
+from pipefollow.experiments.schema import learner_values
 from pipefollow.learners.heuristic import Heuristic
-from pipefollow.learners.registry import learner
+from pipefollow.learners.registry import agent_options
 from pipefollow.sim.disturbance import NO_DISTURBANCE, disturbance_from_dict
 from pipefollow.sim.pipe_names import resolve_training
 from pipefollow.sim.suites import Suite, min_length_for
@@ -51,11 +52,12 @@ class TrialResult:
 
 
 def build_agent(config: TrialConfig, rng: np.random.Generator | None = None):
-    """A fresh agent for ``config`` under its readings: its learner's options and step sizes."""
-    kind = learner(config.algorithm)
-    options = {name: getattr(config, name) for name in kind.options}
-    steps = {param: getattr(config, field) for field, param in kind.step_sizes.items()}
-    return make_agent(config.algorithm, rng=rng, readings=config.reading, **options, **steps)
+    """A fresh agent for ``config`` under its readings: the values of its learner's options.
+
+    :func:`~pipefollow.learners.registry.agent_options` reads them, as for ``pipefollow train``.
+    """
+    values = agent_options(config.algorithm, learner_values(config), strict=False)
+    return make_agent(config.algorithm, rng=rng, readings=config.reading, **values)
 
 
 class ActorOnly:
@@ -99,7 +101,7 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
     if isinstance(eval_pipe, Suite):  # trained on random pipes only: the family's first pipe
         eval_pipe = eval_pipe.pipe(0, min_length_for(eval_seconds))
     env = PipelineFollowingEnv(
-        eval_pipe, eval_seconds, params=params, camera=config.camera, water=config.water
+        eval_pipe, eval_seconds, params=params, camera=config.camera, water=config.water, state=agent.state
     )
     controllers = {"learned": agent, "heuristic": Heuristic()}
     if agent.supervised:

@@ -131,7 +131,7 @@ LEARNER = LearnerKind(
     summary="the general actor-critic (eq. 9; supervised: Rosenstein & Barto's eq. 11)",
     agent_class=ActorCritic,
     options=frozenset({"supervised", "actor_update", "critic_lambda"}),
-    step_sizes=cacla.LEARNER.step_sizes,
+    step_sizes={k: v for k, v in cacla.LEARNER.step_sizes.items() if k != "var_rate"},  # no CACLA+Var
     make=make,
     check=cacla.check_compiled,
     run=cacla.run_compiled,

@@ -54,6 +54,7 @@ from pipefollow.learners.sums import dot
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
 from pipefollow.sim import records
+from pipefollow.sim.observation import observe
 
 
 class CaclaParams(NamedTuple):
@@ -340,6 +341,7 @@ def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats
     decision_s = sim.decision_seconds(ps)
     nf = w.shape[1]
     s = np.empty(sim.STATE_SIZE)
+    obs = np.empty(grid.slots.shape[0])  # the observation (pipefollow.sim.observation)
     phi, phi_pend, phi_next = np.empty(nf), np.empty(nf), np.empty(nf)
     # the heads' values on φ(s) from acting, reused by the update of the transition from s: no
     # weight moves in between (the one pending transition is updated before the next action)
@@ -359,7 +361,8 @@ def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats
             a = a_rl = a_sup = 0.0
             if visible:
                 if not have_phi:
-                    grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi)
+                    observe(s, grid.slots, obs)
+                    grid_features(obs, grid.centres, grid.offsets, grid.widths, grid.normalized, phi)
                 z0 = z1 = 0.0
                 if sigma > 0.0:
                     z0 = rng.standard_normal()
@@ -376,7 +379,8 @@ def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats
                 heads, heads_pend = heads_pend, heads
                 a_rl_p, a_sup_p = a_rl, a_sup
             if ep.due(book, s[sim.IN_VIEW] != 0.0, ep.ended(book, n)):
-                grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
+                observe(s, grid.slots, obs)
+                grid_features(obs, grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
                 update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p, rule, var,
                        trace, heads_pend)  # fmt: skip
                 book[ep.PENDING] = 0.0
@@ -399,8 +403,9 @@ def check_compiled(agent: Cacla) -> None:
 
 def run_compiled(agent: Cacla, tracks, run, env_rng, dz, stats, poses) -> None:
     """:func:`episodes` for ``agent`` (a CACLA or an actor-critic agent)."""
+    grid = features_of(agent.grid, agent.state)
     episodes(agent.weights, pack(agent.params), agent.rule(agent.params), agent.td_var, agent.critic_trace,
-             tracks, run, features_of(agent.grid), agent.rng, env_rng, dz, stats, poses)  # fmt: skip
+             tracks, run, grid, agent.rng, env_rng, dz, stats, poses)  # fmt: skip
 
 
 def policy_fields(agent: Cacla) -> dict:
@@ -456,6 +461,7 @@ LEARNER = LearnerKind(
         "discount": "discount",
         "delta_k": "delta_k",
         "forgetting": "forgetting",
+        "var_rate": "var_rate",
     },  # fmt: skip
     make=make,
     check=check_compiled,

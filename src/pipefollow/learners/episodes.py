@@ -15,15 +15,29 @@ import numpy as np
 
 
 class Features(NamedTuple):
-    """A packed RBF grid (:attr:`~pipefollow.learners.rbf.RBFGrid.packed`) and its form."""
+    """A packed RBF grid (:attr:`~pipefollow.learners.rbf.RBFGrid.packed`), its form and its input.
+
+    ``slots`` are the simulation state's slots the grid's input is taken from, in order (the
+    observation of the learner's named state, :func:`pipefollow.sim.observation.slots`).
+    """
 
     centres: np.ndarray
     offsets: np.ndarray
     widths: np.ndarray
     normalized: bool
+    slots: np.ndarray
 
 
-def features_of(grid) -> Features:
-    """The grouped argument of an :class:`~pipefollow.learners.rbf.RBFGrid`."""
+def features_of(grid, state: str = "paper") -> Features:
+    """The grouped argument of an :class:`~pipefollow.learners.rbf.RBFGrid` observing the named ``state``.
+
+    Raises:
+        ValueError: the grid's dimensions are not the state's entries.
+    """
+    from pipefollow.sim.observation import slots
+
     centres, offsets, widths = grid.packed
-    return Features(centres, offsets, widths, grid.form == "normalized")
+    observed = slots(state)
+    if observed.shape[0] != grid.ndim:
+        raise ValueError(f"state {state!r} has {observed.shape[0]} entries, the RBF grid {grid.ndim}")
+    return Features(centres, offsets, widths, grid.form == "normalized", observed)

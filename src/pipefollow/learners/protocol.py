@@ -9,7 +9,8 @@ a learner is one module and one registry entry.
 
 An agent (an instance of ``agent_class``) has ``begin_episode(sigma)``, ``act(obs, explore)``,
 ``update(obs, action, reward, next_obs, discount) -> δ``, ``discount``, ``weights``, ``grid``,
-``rng``, ``readings`` (the id of the readings it learns under), ``algorithm`` (its kind's name),
+``rng``, ``state`` (the named state it observes, :mod:`pipefollow.sim.observation`), ``readings``
+(the id of the readings it learns under), ``algorithm`` (its kind's name),
 ``name`` (a label) and ``supervised``; :class:`Agent` gives the parts every learner's agent shares.
 """
 
@@ -19,16 +20,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
-
-# Options of the command line and experiment files, each with its off value; a learner names the
-# ones it takes in ``LearnerKind.options``, and an option set for another learner is refused.
-OPTIONS = {
-    "skew_deg": 0.0,
-    "supervised": False,
-    "actor_update": "delta",
-    "actor_repeats": "once",
-    "critic_lambda": 0.0,
-}
 
 
 def option_code(option: str, codes: Mapping[str, int], value: str) -> int:
@@ -51,7 +42,7 @@ class LearnerKind:
         title: its name in reports (``CACLA``).
         summary: one line for help texts (with the paper's equations).
         agent_class: the class of its agents.
-        options: which of :data:`OPTIONS` it takes.
+        options: which switches of :data:`pipefollow.learners.options.LEARNER_OPTIONS` it takes.
         step_sizes: experiment-file field → keyword of ``make`` (its step sizes and discount).
         make: ``make(params, grid, rng, *, readings, ...) -> agent``, a fresh agent with its
             parameter record, its RBF state grid (SARSA: and ``action_grid``) and the id of the
@@ -96,6 +87,7 @@ class Agent:
         self.params = params
         self.grid = grid
         self.readings = "default"  # id of the readings it learns under (set by the learner's make)
+        self.state = "paper"  # the named state it observes (pipefollow.sim.observation); grid fits it
         self.rng = rng if rng is not None else np.random.default_rng(seed)
         self.sigma = 1.0
         self._pending = None

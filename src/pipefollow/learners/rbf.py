@@ -48,6 +48,13 @@ STATE_CENTRES: tuple[np.ndarray, ...] = (
     _frozen([-1.0, -0.8, -0.4, 0.0, 0.4, 0.8, 1.0]),  # x2: near end of the pipe, lateral (m)
     _frozen([-0.25, -0.156, 0.031, 0.219, 0.406, 0.5]),  # v_x: surge speed (m/s)
 )
+# Centres of what the motion sensors add to the state (beyond the paper; pipefollow.sim.observation):
+# five per entry, evenly spaced over the 1st-99th percentiles the heuristic meets on the held-out
+# pipes, calm and in a 0.1 m/s current (|v_y|, |r| ≤ 0.33): a state entry multiplies the features by 5.
+MEASURED_CENTRES: dict[str, np.ndarray] = {
+    "v_y": _frozen([-0.3, -0.15, 0.0, 0.15, 0.3]),  # DVL sway velocity over ground (m/s)
+    "r": _frozen([-0.3, -0.15, 0.0, 0.15, 0.3]),  # gyro yaw rate (rad/s)
+}
 # SARSA's action centres (paper §4.1; the 13th, 0°, is inferred from the stated 22,932 features).
 ACTION_CENTRES_DEG = _frozen(
     [-90.0, -81.0, -63.0, -45.0, -27.0, -9.0, 0.0, 9.0, 27.0, 45.0, 63.0, 81.0, 90.0]
@@ -302,4 +309,16 @@ class RBFGrid:
 
 
 STATE_GRID = RBFGrid(STATE_CENTRES)  # 1,764 state features
+
+
+def state_centres(state: str = "paper") -> tuple[np.ndarray, ...]:
+    """The grid's centres for the named ``state`` (:mod:`pipefollow.sim.observation`).
+
+    The paper's four dimensions, then :data:`MEASURED_CENTRES` of each entry the state adds
+    (1,764 × 5 per entry).
+    """
+    from pipefollow.sim.observation import components
+
+    extra = components(state)[len(STATE_CENTRES) :]
+    return STATE_CENTRES + tuple(MEASURED_CENTRES[c.name] for c in extra)
 ACTION_GRID = RBFGrid((ACTION_CENTRES,))  # 13 action features

@@ -27,6 +27,7 @@ from pipefollow.learners.rbf import (
 from pipefollow.learners.sums import dot, matvec
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
+from pipefollow.sim.observation import observe
 
 
 class SarsaParams(NamedTuple):
@@ -212,6 +213,7 @@ def episodes(W, alpha, discount, search, tracks, run, grid, rng, env_rng, dz, st
     decision_s = sim.decision_seconds(ps)
     nf = W.shape[1]
     s = np.empty(sim.STATE_SIZE)
+    obs = np.empty(grid.slots.shape[0])  # the observation (pipefollow.sim.observation)
     phi, phi_pend, phi_next = np.empty(nf), np.empty(nf), np.empty(nf)
     psi, psi_next = np.empty(search.centres.shape[0]), np.empty(search.centres.shape[0])
     book = np.empty(ep.BOOK_SIZE)
@@ -231,7 +233,8 @@ def episodes(W, alpha, discount, search, tracks, run, grid, rng, env_rng, dz, st
                     phi[:] = phi_next
                     has_next = False
                 else:
-                    grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi)
+                    observe(s, grid.slots, obs)
+                    grid_features(obs, grid.centres, grid.offsets, grid.widths, grid.normalized, phi)
                     z = rng.standard_normal() if sigma > 0.0 else 0.0
                     a = choose(W, phi, search.actions, search.psi, sigma, z)
             r = ep.draw_and_decide(s, a, points, cum, ps, env_rng, dz, book, poses, e)
@@ -242,7 +245,8 @@ def episodes(W, alpha, discount, search, tracks, run, grid, rng, env_rng, dz, st
                 phi_pend[:] = phi
                 a_p = a
             if ep.due(book, s[sim.IN_VIEW] != 0.0, ep.ended(book, n)):
-                grid_features(s[:4], grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
+                observe(s, grid.slots, obs)
+                grid_features(obs, grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
                 z = rng.standard_normal() if sigma > 0.0 else 0.0
                 # W φ(s') of choosing a' is the one the update needs: W has not moved in between
                 a_next, q_next = choose_with_q(W, phi_next, search.actions, search.psi, sigma, z)
@@ -263,8 +267,9 @@ def run_compiled(agent: Sarsa, tracks, run, env_rng, dz, stats, poses) -> None:
     search = ActionSearch(agent.search_actions, agent.search_psi, agent._action_centres, agent._action_width,
                           agent._action_normalized)  # fmt: skip
     p = agent.params
-    episodes(agent.weights, p.alpha, p.discount, search, tracks, run, features_of(agent.grid), agent.rng,
-             env_rng, dz, stats, poses)  # fmt: skip
+    grid = features_of(agent.grid, agent.state)
+    episodes(agent.weights, p.alpha, p.discount, search, tracks, run, grid, agent.rng, env_rng, dz, stats,
+             poses)  # fmt: skip
 
 
 def policy_fields(agent: Sarsa) -> dict:

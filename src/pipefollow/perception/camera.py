@@ -160,11 +160,11 @@ class VisionCamera:
         s[sim.E_DIST], s[sim.E_ANGL], s[sim.LAST_SIDE] = last.e_dist, last.e_angl, last.side
         s[sim.IN_VIEW] = 1.0 if det.found else 0.0
 
-    def observation(self, state: np.ndarray, dtype=np.float64) -> np.ndarray:
-        """The agent's observation: ``state[:4]`` (as ``dtype``) or the image as ``(1, H, W)``."""
+    def observation(self, state: np.ndarray, dtype=np.float64, slots: np.ndarray | None = None) -> np.ndarray:
+        """The observation: ``state[:4]`` or ``state[slots]`` as ``dtype``, or the image ``(1, H, W)``."""
         if self.settings.observation == "image":
             return self.image[None].copy()
-        return state[:4].astype(dtype)
+        return (state[:4] if slots is None else state[slots]).astype(dtype)
 
     def info(self) -> dict[str, np.ndarray]:
         """The camera's entries of ``info`` (0-d arrays): the detection and the exact camera's view."""

@@ -24,7 +24,7 @@ from pipefollow.learners.cacla_update import (
 )
 from pipefollow.learners.exploration import skew_step_to_gamma
 from pipefollow.learners.protocol import option_code
-from pipefollow.learners.rbf import ACTION_CENTRES, STATE_CENTRES, RBFGrid
+from pipefollow.learners.rbf import ACTION_CENTRES, RBFGrid, state_centres
 from pipefollow.learners.sarsa import SarsaParams
 from pipefollow.readings.points import CRUISE_SPEED, DEFAULT, Readings
 from pipefollow.sim.decision import PAPER_SIM, SimParams
@@ -76,9 +76,13 @@ def sarsa_params(r: Readings = DEFAULT, **fields) -> SarsaParams:
     return SarsaParams(**fields)
 
 
-def state_grid(r: Readings = DEFAULT) -> RBFGrid:
-    """The 1,764-feature state grid under the ``rbf`` and ``rbf_width`` readings."""
-    return RBFGrid(STATE_CENTRES, form=r.rbf, width=r.rbf_width)
+def state_grid(r: Readings = DEFAULT, state: str = "paper") -> RBFGrid:
+    """The state grid of the named ``state`` under the ``rbf`` and ``rbf_width`` readings.
+
+    The paper's state has 1,764 features; each entry a measured state adds multiplies them by 5
+    (:func:`~pipefollow.learners.rbf.state_centres`).
+    """
+    return RBFGrid(state_centres(state), form=r.rbf, width=r.rbf_width)
 
 
 def action_grid(r: Readings = DEFAULT) -> RBFGrid:
@@ -86,18 +90,20 @@ def action_grid(r: Readings = DEFAULT) -> RBFGrid:
     return RBFGrid((ACTION_CENTRES,), form=r.rbf, width=r.rbf_width)
 
 
-def _cacla_inputs(r: Readings, *, actor_repeats: str = "once", skew_deg: float = 0.0, **fields) -> dict:
+def _cacla_inputs(r: Readings, *, actor_repeats: str = "once", skew_deg: float = 0.0, state: str = "paper",
+                  **fields) -> dict:  # fmt: skip
     repeats = option_code("actor_repeats", ACTOR_REPEATS, actor_repeats)
-    return {"params": cacla_params(r, skew_deg, actor_repeats=repeats, **fields), "grid": state_grid(r)}
+    params = cacla_params(r, skew_deg, actor_repeats=repeats, **fields)
+    return {"params": params, "grid": state_grid(r, state)}
 
 
-def _actor_critic_inputs(r: Readings, *, actor_update: str = "delta", **fields) -> dict:
+def _actor_critic_inputs(r: Readings, *, actor_update: str = "delta", state: str = "paper", **fields) -> dict:
     update = option_code("actor_update", ACTOR_UPDATES, actor_update)
-    return {"params": actor_critic_params(r, update, **fields), "grid": state_grid(r)}
+    return {"params": actor_critic_params(r, update, **fields), "grid": state_grid(r, state)}
 
 
-def _sarsa_inputs(r: Readings, **fields) -> dict:
-    return {"params": sarsa_params(r, **fields), "grid": state_grid(r), "action_grid": action_grid(r)}
+def _sarsa_inputs(r: Readings, state: str = "paper", **fields) -> dict:
+    return {"params": sarsa_params(r, **fields), "grid": state_grid(r, state), "action_grid": action_grid(r)}
 
 
 # Learner name (learners.registry) → its inputs under the readings, from its options and record fields
@@ -108,7 +114,8 @@ def learner_inputs(algorithm: str, r: Readings = DEFAULT, **options) -> dict:
     """What learner ``algorithm``'s ``make`` takes under ``r``: its parameter record and RBF grids.
 
     ``options`` are the learner's options (``skew_deg``, ``actor_repeats``, ``actor_update`` by
-    name) and fields of its record (step sizes, ``supervised``, ``critic_lambda``).
+    name), the named ``state`` it observes (its grid) and fields of its record (step sizes,
+    ``supervised``, ``critic_lambda``).
 
     Raises:
         ValueError: an unknown option value (``actor_repeats must be one of once, var, got …``).

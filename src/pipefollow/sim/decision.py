@@ -27,7 +27,14 @@ from numba.np.unsafe.ndarray import to_fixed_tuple
 from pipefollow.sim import records
 from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, observe, tracking_errors
 from pipefollow.sim.controller import PAPER_CONTROLLER, ControllerParams, pd_force, place_waypoint, wrap_angle
-from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance, missed, noise_layout, vary_current
+from pipefollow.sim.disturbance import (
+    NO_DISTURBANCE,
+    Disturbance,
+    missed,
+    noise_layout,
+    sensor_offsets,
+    vary_current,
+)
 from pipefollow.sim.disturbance import unpack as unpack_disturbance
 from pipefollow.sim.dynamics import PAPER_AUV, AUVParams, acceleration, kinematics
 from pipefollow.sim.pipeline import project
@@ -58,7 +65,11 @@ X, Y, PSI, U, V, R = 8, 9, 10, 11, 12, 13
 PROGRESS, PROGRESS_MAX, LAST_SIDE, A_PREV = 14, 15, 16, 17
 TIME, WP_X, WP_Y, OVERRIDDEN = 18, 19, 20, 21
 CURRENT_SPEED, CURRENT_DIR, MISSED = 22, 23, 24  # V_c (m/s), β_c (rad), last reading missed (0/1)
-STATE_SIZE = 25
+# What the vehicle's own motion sensors read at each camera reading (pipefollow.sim.observation):
+# the DVL's sway velocity over ground (m/s, starboard positive) and the gyro's yaw rate (rad/s),
+# each with its noise (Disturbance.dvl_noise, .gyro_noise); no learner sees them under the paper's state.
+DVL_SWAY, GYRO_R = 25, 26
+STATE_SIZE = 27
 
 
 @register_jitable
@@ -147,10 +158,11 @@ def read_camera(s, points, cum, p, z=None):
             sd = d.camera_noise
             x1, y1 = x1 + sd * z[i_cam], y1 + sd * z[i_cam + 1]
             x2, y_near = x2 + sd * z[i_cam + 2], y_near + sd * z[i_cam + 3]
-        if n > i_miss and missed(d, z[i_miss]):
+        if d.miss_prob > 0.0 and missed(d, z[i_miss]):
             s[MISSED] = 1.0
             seen = False
     s[IN_VIEW] = 1.0 if seen else 0.0
+    read_motion_sensors(s, d, z)
     if seen:
         # Clipping puts the ends on the footprint's edges; clamp away floating-point dust there
         # (and noise beyond them).
@@ -161,6 +173,28 @@ def read_camera(s, points, cum, p, z=None):
         s[E_DIST], s[E_ANGL] = tracking_errors(x1, y1, x2, y_near)
         s[LAST_SIDE] = 1.0 if x1 >= 0.0 else -1.0
     # While the pipe is lost the observation holds the last sighting (and the current speed).
+
+
+@njit(cache=True)
+def read_motion_sensors(s, d, z=None):
+    """The DVL's sway velocity over ground and the gyro's yaw rate into ``s[DVL_SWAY]``, ``s[GYRO_R]``.
+
+    The DVL tracks the seabed: it reads the velocity over ground, whose sway part is the sway
+    through the water plus the current's, ``v + (−sin ψ V_n + cos ψ V_e)``; the gyro reads ``r``.
+    Each adds Gaussian noise of s.d. ``d.dvl_noise`` (m/s), ``d.gyro_noise`` (rad/s) from the
+    reading's normals ``z`` (:func:`~pipefollow.sim.disturbance.sensor_offsets`); exact without.
+    """
+    psi, vc, bc = s[PSI], s[CURRENT_SPEED], s[CURRENT_DIR]
+    vn, ve = vc * math.cos(bc), vc * math.sin(bc)
+    sway = s[V] + (math.cos(psi) * ve - math.sin(psi) * vn)
+    rate = s[R]
+    if z is not None:
+        i_dvl, i_gyro = sensor_offsets(d)
+        if d.dvl_noise > 0.0:
+            sway += d.dvl_noise * z[i_dvl]
+        if d.gyro_noise > 0.0:
+            rate += d.gyro_noise * z[i_gyro]
+    s[DVL_SWAY], s[GYRO_R] = sway, rate
 
 
 @njit(cache=True)

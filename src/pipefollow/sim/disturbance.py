@@ -18,8 +18,14 @@ Random numbers: every camera reading (the reset's and each decision's) consumes
 ``numpy.random.Generator`` and handed to the compiled code as an array ``z`` (the environment
 draws from its ``np_random``, the compiled loops from the generator they are given):
 ``z[0:2]`` drive the current's variation (if on), the next four the camera noise on
-``(x1, y1, x2, y_near)`` (if on), the last one the missed detection (if on): the reading is
-missed when ``Φ(z) < miss_prob``, which has probability ``miss_prob``.
+``(x1, y1, x2, y_near)`` (if on), the next the missed detection (if on): the reading is
+missed when ``Φ(z) < miss_prob``, which has probability ``miss_prob``; then one for the DVL's
+noise and one for the gyro's (each if on; :func:`sensor_offsets`).
+
+* **Motion sensors** (beyond the paper): a DVL reading the sway velocity over ground with white
+  noise of s.d. ``dvl_noise`` (m/s) and a gyro reading the yaw rate with s.d. ``gyro_noise``
+  (rad/s), read with every camera reading; only a learner that observes them
+  (:mod:`pipefollow.sim.observation`) sees them.
 
 TOML tables are read and checked here too (:func:`disturbance_from_dict`); single values with
 :func:`non_negative` and :func:`probability`.
@@ -58,6 +64,8 @@ class Disturbance(NamedTuple):
     current_direction_sd: float = 0.0  # stationary standard deviation of β_c (rad)
     camera_noise: float = 0.0  # standard deviation of the end-point noise (m)
     miss_prob: float = 0.0  # probability of a missed detection per camera reading
+    dvl_noise: float = 0.0  # standard deviation of the DVL's sway velocity over ground (m/s)
+    gyro_noise: float = 0.0  # standard deviation of the gyro's yaw rate (rad/s)
     buried_from: tuple[float, float, float, float] = NO_BURIAL  # starts of buried stretches (m)
     buried_to: tuple[float, float, float, float] = NO_BURIAL  # their ends (m)
 
@@ -89,7 +97,16 @@ def noise_layout(d):
     varying = d.current_time_constant > 0.0 and (d.current_speed_sd > 0.0 or d.current_direction_sd > 0.0)
     cam = 2 if varying else 0
     miss = cam + (4 if d.camera_noise > 0.0 else 0)
-    return cam, miss, miss + (1 if d.miss_prob > 0.0 else 0)
+    dvl, gyro = sensor_offsets(d)
+    return cam, miss, gyro + (1 if d.gyro_noise > 0.0 else 0)
+
+
+@njit(cache=True)
+def sensor_offsets(d):
+    """``(DVL offset, gyro offset)`` of the motion sensors' normals in ``z``, after the camera's."""
+    varying = d.current_time_constant > 0.0 and (d.current_speed_sd > 0.0 or d.current_direction_sd > 0.0)
+    dvl = (2 if varying else 0) + (4 if d.camera_noise > 0.0 else 0) + (1 if d.miss_prob > 0.0 else 0)
+    return dvl, dvl + (1 if d.dvl_noise > 0.0 else 0)
 
 
 def noise_count(d: Disturbance) -> int:
@@ -179,9 +196,13 @@ def make_disturbance(
     camera_noise: float = 0.0,
     miss_prob: float = 0.0,
     buried: list | tuple = (),
+    dvl_noise: float = 0.0,
+    gyro_noise_deg: float = 0.0,
     source: str = "",
 ) -> Disturbance:
     """A checked :class:`Disturbance` in user units (m/s, degrees, m; buried as ``[[from, to], ...]``).
+
+    ``dvl_noise`` is in m/s, ``gyro_noise_deg`` in degrees per second.
 
     Raises:
         DisturbanceError: a value out of range; the message starts with ``source``.
@@ -203,6 +224,8 @@ def make_disturbance(
         math.radians(dir_sd),
         non_negative(camera_noise, "camera_noise", src),
         probability(miss_prob, "miss_prob", src),
+        non_negative(dvl_noise, "dvl_noise", src),
+        math.radians(non_negative(gyro_noise_deg, "gyro_noise_deg", src)),
         starts,
         ends,
     )
@@ -222,6 +245,8 @@ def check(d: Disturbance) -> Disturbance:
         camera_noise=d.camera_noise,
         miss_prob=d.miss_prob,
         buried=buried,
+        dvl_noise=d.dvl_noise,
+        gyro_noise_deg=math.degrees(d.gyro_noise),
     )
     if (same.buried_from, same.buried_to) != (tuple(d.buried_from), tuple(d.buried_to)):
         raise DisturbanceError("unused buried slots must hold inf at both ends, after the used ones")
@@ -237,6 +262,8 @@ TOML_KEYS = (
     "camera_noise",
     "miss_prob",
     "buried",
+    "dvl_noise",
+    "gyro_noise_deg",
 )
 
 
@@ -274,4 +301,6 @@ def to_dict(d: Disturbance) -> dict[str, Any]:
         "camera_noise": d.camera_noise,
         "miss_prob": d.miss_prob,
         "buried": [[a, b] for a, b in zip(d.buried_from, d.buried_to, strict=True) if math.isfinite(a)],
+        "dvl_noise": d.dvl_noise,
+        "gyro_noise_deg": math.degrees(d.gyro_noise),
     }

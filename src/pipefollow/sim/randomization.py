@@ -39,7 +39,8 @@ import numpy as np
 from pipefollow.sim.disturbance import MAX_BURIED, NO_BURIAL, NO_DISTURBANCE, Disturbance, DisturbanceError
 
 DRAWS = 4 + 3 * MAX_BURIED  # uniforms consumed by one draw (module docstring)
-MAX_NOISE = 2 + 4 + 1  # the most standard normals a camera reading consumes (current, noise, miss)
+# the most standard normals a camera reading consumes (current, camera noise, miss, motion sensors)
+MAX_NOISE = 2 + 4 + 1 + 2
 
 Range = tuple[float, float]
 

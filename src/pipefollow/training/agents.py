@@ -26,12 +26,15 @@ def make_agent(
     supervised: bool = False,
     rng: np.random.Generator | None = None,
     readings: rd.Readings = rd.DEFAULT,
+    state: str = "paper",
     **params,
 ):
     """A fresh learner of the registry (``sarsa``, ``cacla``, ``ac``) under ``readings``.
 
     ``skew_deg`` is Δγ in degrees (CACLA), ``supervised`` adds the heuristic as supervisor (CACLA,
-    actor-critic); extra keyword arguments override fields of the learner's parameter record.
+    actor-critic); ``state`` names what it observes (:mod:`pipefollow.sim.observation`: ``paper``,
+    ``paper+drift``, …; its RBF grid); extra keyword arguments override fields of the learner's
+    parameter record.
 
     The readings become the learner's parameter record and grids (:func:`pipefollow.readings.learner_inputs`);
     the learner's ``make`` receives those and the readings' id.
@@ -39,6 +42,11 @@ def make_agent(
     Raises:
         ValueError: an unknown algorithm, an option it does not take, or an unknown option value.
     """
+    from pipefollow.learners.options import check_value
+
+    state = check_value("state", state)
     options = registry.options_for(algorithm, skew_deg=skew_deg, supervised=supervised, **params)
-    inputs = rd.learner_inputs(algorithm, readings, **options)
-    return registry.learner(algorithm).make(**inputs, rng=rng, readings=readings.id)
+    inputs = rd.learner_inputs(algorithm, readings, state=state, **options)
+    agent = registry.learner(algorithm).make(**inputs, rng=rng, readings=readings.id)
+    agent.state = state
+    return agent

@@ -130,7 +130,14 @@ def train(
     sigma_end: float = SIGMA_END,
     callback: Callable[[int, EpisodeStats], None] | None = None,
 ) -> np.ndarray:
-    """Train ``agent`` for ``episodes`` episodes in ``env``; returns (episodes, 4) statistics."""
+    """Train ``agent`` for ``episodes`` episodes in ``env``; returns (episodes, 4) statistics.
+
+    Raises:
+        ValueError: ``env`` observes another named state than ``agent`` (``env.setup.state``).
+    """
+    observed = getattr(getattr(env, "setup", None), "state", None)
+    if observed is not None and observed != getattr(agent, "state", observed):
+        raise ValueError(f"the environment observes state {observed!r}, the agent {agent.state!r}")
     stats = np.empty((episodes, len(TRAINING_STAT_NAMES)))
     for e, sigma in enumerate(sigma_schedule(episodes, sigma_start, sigma_end)):
         stats_e = run_episode(env, agent, learn=True, explore=True, sigma=float(sigma))

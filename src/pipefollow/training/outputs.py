@@ -38,11 +38,12 @@ TRAINING_OUTPUTS = ("policy.npz", "learning_curve.csv")
 
 
 def write_training_outputs(
-    out: Path, agent, stats: np.ndarray, sigmas: np.ndarray, **metadata
+    out: Path, agent, stats: np.ndarray, sigmas: np.ndarray, options: dict | None = None, **metadata
 ) -> tuple[Path, Path]:
     """Write ``policy.npz`` and ``learning_curve.csv`` of a training run into ``out``, as a pair.
 
-    ``sigmas`` is the σ of every training episode, as the learner ran it (normalized action units).
+    ``sigmas`` is the σ of every training episode, as the learner ran it (normalized action units);
+    ``options`` the learner options it trained with (stored in the policy file).
 
     Each file is written atomically; if the second cannot be written (a full disk), the first is
     removed again, so that ``out`` never holds one without the other from this run.
@@ -50,7 +51,9 @@ def write_training_outputs(
     from pipefollow.training.policy_files import save_policy
 
     policy_name, curve_name = TRAINING_OUTPUTS
-    policy_path = save_policy(agent, Path(out) / policy_name, episodes=len(sigmas), **metadata)
+    policy_path = save_policy(
+        agent, Path(out) / policy_name, options=options, episodes=len(sigmas), **metadata
+    )
     try:
         curve_path = write_learning_curve(Path(out) / curve_name, stats, sigmas)
     except BaseException:

@@ -6,6 +6,10 @@ the learner's own fields (its ``policy_fields``: ``params``, JSON of the agent's
 ``grid`` and, for SARSA, ``action_grid``, JSON feature specifications, and ``weights``) and
 ``readings``: the id of the readings the policy was trained under (docs/design.md), under which
 it is evaluated unless told otherwise. The loaded agent carries it as ``agent.readings``.
+``state`` names what the learner observes (:mod:`pipefollow.sim.observation`; ``paper`` when
+absent), the loaded agent's ``agent.state``; ``options`` (JSON, when written by a training run) holds
+the values of the learner options of :data:`pipefollow.learners.options.LEARNER_OPTIONS` it was
+trained with, its σ schedule too (:func:`policy_options`; the loaded agent's ``agent.learner_options``).
 
 Format versions read: 3 (``readings`` and CACLA's reading fields) and 4, which adds
 ``algorithm`` ``mlp``: a feed-forward network exported from a deep-RL learner
@@ -38,10 +42,14 @@ class PolicyError(ValueError):
     """A policy file that cannot be used; the message names the file and the problem."""
 
 
-def save_policy(agent, path: str | os.PathLike, *, compress: bool = True, **metadata) -> Path:
+def save_policy(
+    agent, path: str | os.PathLike, *, compress: bool = True, options: dict | None = None, **metadata
+) -> Path:
     """Write ``agent`` (a learner of the registry, or an MLP) to ``path`` (``.npz``) atomically.
 
-    The file holds the agent's readings' id (``agent.readings``); extra string ``metadata`` is stored too.
+    The file holds the agent's readings' id (``agent.readings``) and its named state
+    (``agent.state``), and ``options``, the learner options it trained with (option → value), if
+    given; extra string ``metadata`` is stored too.
     ``compress=False`` stores the arrays uncompressed (a run folder's many policies: zlib cost more
     time than the files' size is worth); either kind loads the same way.
     """
@@ -55,7 +63,10 @@ def save_policy(agent, path: str | os.PathLike, *, compress: bool = True, **meta
         **_header(kind.name, metadata),
         **kind.policy_fields(agent),
         "readings": np.array(getattr(agent, "readings", "default")),
+        "state": np.array(getattr(agent, "state", "paper")),
     }
+    if options is not None:
+        arrays["options"] = np.array(json.dumps(options))
     with atomic_file(path) as f:
         (np.savez_compressed if compress else np.savez)(f, **arrays)
     return path
@@ -149,4 +160,29 @@ def load_policy(path: str | os.PathLike, seed: int | None = None):
     if not np.all(np.isfinite(weights)):
         raise PolicyError(f"{src}: weights contain NaN or infinite values")
     agent.weights[...] = weights
+    _read_state_and_options(agent, data, src)
     return agent
+
+
+def _read_state_and_options(agent, data: dict, src: str) -> None:
+    """``agent.state`` and ``agent.learner_options`` from the file; a state must fit the grid."""
+    from pipefollow.sim.observation import components
+
+    state = str(data.get("state", "paper"))
+    try:
+        entries = len(components(state))
+    except ValueError as e:
+        raise PolicyError(f"{src}: {e}") from None
+    if entries != agent.grid.ndim:
+        raise PolicyError(f"{src}: state {state!r} has {entries} entries, its RBF grid {agent.grid.ndim}")
+    agent.state = state
+    try:
+        options = json.loads(str(data["options"])) if "options" in data else {}
+    except ValueError as e:
+        raise PolicyError(f"{src}: malformed entry 'options' ({e})") from None
+    agent.learner_options = options if isinstance(options, dict) else {}
+
+
+def policy_options(agent) -> dict:
+    """The learner options a loaded policy trained with (none for files that do not say), and its state."""
+    return {**getattr(agent, "learner_options", {}), "state": getattr(agent, "state", "paper")}

@@ -16,6 +16,7 @@ import numpy as np
 
 from pipefollow import readings as rd
 from pipefollow.files.paper_training import EPISODE_SECONDS, TRAINING_EPISODES
+from pipefollow.learners.exploration import SIGMA_END, SIGMA_START
 from pipefollow.learners.registry import learner
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance
 from pipefollow.sim.episode import TRAINING_STAT_NAMES
@@ -28,39 +29,106 @@ def step_sizes(algorithm: str) -> tuple[str, ...]:
 
 
 def new_agent(
-    algorithm: str, seed: int, reading: rd.Readings, skew_deg: float = 0.0, supervised: bool = False
-):
-    """A fresh agent of ``algorithm`` under ``reading``, its generator that of a run with ``seed``."""
+    algorithm: str, seed: int, reading: rd.Readings, skew_deg: float = 0.0, supervised: bool = False,
+    **options,
+):  # fmt: skip
+    """A fresh agent of ``algorithm`` under ``reading``, its generator that of a run with ``seed``.
+
+    ``options`` are more values of :data:`~pipefollow.learners.options.LEARNER_OPTIONS` (by their
+    names: ``critic_lambda``, ``alpha_v``, ``state``, …), read by
+    :func:`~pipefollow.learners.registry.agent_options` as experiment trials read theirs.
+    """
+    from pipefollow.learners.registry import agent_options
     from pipefollow.training.agents import make_agent
     from pipefollow.training.phases import agent_rng
 
-    rng = agent_rng(seed)
-    return make_agent(algorithm, skew_deg=skew_deg, supervised=supervised, rng=rng, readings=reading)
+    values = agent_options(algorithm, {"skew_deg": skew_deg, "supervised": supervised, **options})
+    return make_agent(algorithm, rng=agent_rng(seed), readings=reading, **values)
+
+
+def run_options(agent, given: dict) -> dict:
+    """The learner options of a run of ``agent``: every option of the table its learner takes.
+
+    ``given`` (option → value) wins over what the agent's record holds (:func:`saved_options`, its
+    skew step in degrees), that over the defaults; the σ schedule's defaults are the paper's.
+    """
+    from pipefollow.learners.options import LEARNER_OPTIONS
+    from pipefollow.learners.registry import learner_of, takes
+
+    kind = learner_of(agent)
+    held = saved_options(agent)
+    if "skew" in agent.params._fields:
+        held["skew_deg"] = _skew_deg(agent)
+    taken = [o for o in LEARNER_OPTIONS if takes(kind, o.name)]
+    return {o.name: given.get(o.name, held.get(o.name, o.default)) for o in taken}
+
+
+def _skew_deg(agent) -> float:
+    """The skew step of ``agent``'s record in degrees, under its readings' ``skew_unit``."""
+    import math
+
+    from pipefollow.learners.exploration import DEGREES_PER_GAMMA
+
+    skew = float(agent.params.skew)
+    return math.degrees(skew) if rd.parse(agent.readings).skew_unit == "rad" else skew * DEGREES_PER_GAMMA
+
+
+def saved_options(agent) -> dict:
+    """The learner options a saved ``agent`` holds, read from its record (skew and σ excepted).
+
+    Switches and step sizes of its learner (:func:`~pipefollow.learners.registry.takes`) by the
+    record's fields (a code by its name), and its state. The skew step is kept as the record holds
+    it (its unit depends on the readings); the σ schedule is not in the record.
+    """
+    from pipefollow.learners.actor_critic import ACTOR_UPDATES
+    from pipefollow.learners.cacla_update import ACTOR_REPEATS
+    from pipefollow.learners.options import LEARNER_OPTIONS
+    from pipefollow.learners.registry import takes
+
+    kind, held = learner(agent.algorithm), agent.params
+    names = {"actor_repeats": ACTOR_REPEATS, "actor_update": ACTOR_UPDATES}
+    out = {}
+    for o in LEARNER_OPTIONS:
+        if not takes(kind, o.name) or o.group in ("schedule", "state") or o.name == "skew_deg":
+            continue
+        value = getattr(held, kind.step_sizes.get(o.name, o.name))
+        if o.name in names:
+            value = {code: name for name, code in names[o.name].items()}[int(value)]
+        out[o.name] = bool(value) if o.kind is bool else value
+    out["state"] = agent.state
+    return out
 
 
 def option_differences(
-    agent, reading: rd.Readings, skew_deg: float | None, supervised: bool | None
+    agent, reading: rd.Readings, skew_deg: float | None = None, supervised: bool | None = None, **given
 ) -> list[str]:
     """How a saved ``agent``'s options differ from those of a run continuing it; empty if they agree.
 
-    ``skew_deg`` and ``supervised`` are the run's, or None where the run keeps the saved agent's.
-    The step sizes and discount (:func:`step_sizes`) are always kept from the saved agent.
-    Each difference reads ``field saved (this run: wanted)``.
+    ``skew_deg``, ``supervised`` and ``given`` (more options of the table by name) are the run's;
+    the options not given are the saved agent's (:func:`saved_options`). Each difference reads
+    ``field saved (this run: wanted)``, over the fields of the learner's record and its state.
     """
+    from pipefollow.learners.registry import agent_options
     from pipefollow.training.agents import make_agent
 
     held = agent.params
-    keep = supervised if supervised is not None else bool(getattr(held, "supervised", False))
-    wanted = make_agent(agent.algorithm, skew_deg=skew_deg or 0.0, supervised=keep, readings=reading).params
-    if skew_deg is None and "skew" in wanted._fields:
-        wanted = wanted._replace(skew=held.skew)
-    kept = step_sizes(agent.algorithm)
-    held = held._replace(**{k: getattr(wanted, k) for k in wanted._fields if k in kept})
-    return [
-        f"{f} {getattr(held, f)!r} (this run: {getattr(wanted, f)!r})"
-        for f in wanted._fields
-        if getattr(held, f) != getattr(wanted, f)
+    if skew_deg is not None:
+        given["skew_deg"] = skew_deg
+    if supervised is not None:
+        given["supervised"] = supervised
+    values = {**saved_options(agent), **given}
+    values = {k: v for k, v in values.items() if k not in ("sigma_start", "sigma_end")}
+    wanted = make_agent(agent.algorithm, readings=reading, **agent_options(agent.algorithm, values))
+    if "skew_deg" not in given and "skew" in wanted.params._fields:
+        wanted.params = wanted.params._replace(skew=held.skew)
+    out = [
+        f"{f} {getattr(held, f)!r} (this run: {getattr(wanted.params, f)!r})"
+        for f in wanted.params._fields
+        if getattr(held, f) != getattr(wanted.params, f)
     ]
+    if wanted.state != agent.state:
+        out.append(f"state {agent.state!r} (this run: {wanted.state!r})")
+    return out
 
 
 def write_tensorboard(folder, stats: np.ndarray, sigmas: np.ndarray) -> None:
@@ -89,6 +157,7 @@ class LearnerRun:
     stats: np.ndarray
     policy: Path
     learning_curve: Path
+    options: dict  # the learner options it trained with (run_options)
 
     def summary(self) -> dict:
         """The run as one JSON object: files, returns, and the means of the last 50 episodes."""
@@ -96,6 +165,7 @@ class LearnerRun:
         return {
             "algorithm": self.agent.name,
             "readings": self.readings.id,
+            "options": self.options,
             "policy": str(self.policy),
             "learning_curve": str(self.learning_curve),
             "returns": stats[:, 0].tolist(),
@@ -106,10 +176,13 @@ class LearnerRun:
         """The run in three lines: mean returns of the first and last episodes, the files."""
         stats = self.stats
         k = min(10, len(stats))
+        from pipefollow.learners.options import describe
+
+        options = describe(self.options) or "the paper's"
         return (
             f"{self.agent.name}: mean return of the first {k} episodes {stats[:k, 0].mean():.2f}, "
-            f"of the last {k} {stats[-k:, 0].mean():.2f}\npolicy: {self.policy}\n"
-            f"learning curve: {self.learning_curve}"
+            f"of the last {k} {stats[-k:, 0].mean():.2f}\noptions: {options}\n"
+            f"policy: {self.policy}\nlearning curve: {self.learning_curve}"
         )
 
 
@@ -127,6 +200,9 @@ def train_into(
     progress: Callable[[int], None] | None = None,
     tensorboard: str | Path | None = None,
     made: Path | None = None,
+    sigma_start: float = SIGMA_START,
+    sigma_end: float = SIGMA_END,
+    options: dict | None = None,
 ) -> LearnerRun:
     """Train ``agent`` on ``pipeline`` for ``episodes`` and write its policy and learning curve into ``out``.
 
@@ -144,6 +220,10 @@ def train_into(
         tensorboard: a folder for TensorBoard scalars, or None.
         made: the outermost folder of ``out`` the caller created: removed again, if empty, when
             training fails or is interrupted.
+        sigma_start: σ of the first episode (the paper's units, :func:`.phases.phase_sigmas`), and
+        sigma_end: of the last.
+        options: the learner options given for the run (option → value): stored with the policy,
+            completed by :func:`run_options`.
     """
     from pipefollow.files.output_paths import remove_empty_folders
     from pipefollow.sim.pipe_names import resolve_training
@@ -158,14 +238,19 @@ def train_into(
             disturbance=disturbance,
             randomization=randomization,
             episode_seconds=seconds,
+            sigma_start=sigma_start,
+            sigma_end=sigma_end,
             progress=progress,
         )
         name = resolve_training(pipeline).name
-        sigmas = phase_sigmas(episodes, readings)  # the σ train_phases trained with
-        policy, curve = write_training_outputs(out, agent, stats, sigmas, pipeline=name, seed=seed)
+        sigmas = phase_sigmas(episodes, readings, sigma_start, sigma_end)  # the σ train_phases trained with
+        values = run_options(agent, {**(options or {}), "sigma_start": sigma_start, "sigma_end": sigma_end})
+        policy, curve = write_training_outputs(
+            out, agent, stats, sigmas, options=values, pipeline=name, seed=seed
+        )
         if tensorboard:
             write_tensorboard(tensorboard, stats, sigmas)
     except BaseException:
         remove_empty_folders(out, made)  # an interrupted or failed run leaves no empty folder behind
         raise
-    return LearnerRun(agent, readings, stats, policy, curve)
+    return LearnerRun(agent, readings, stats, policy, curve, values)
