@@ -3,7 +3,8 @@
     python examples/ppo_pixels.py --steps 150000 --out runs/ppo-pixels --json docs/vision/ppo_pixels.json
 
 The policy sees only the rendered camera image (``observation="image"``, ``Box(0, 255, (96, 64, 1),
-uint8)``, which Stable-Baselines3 transposes to channel-first for its ``CnnPolicy``); the decision "pipe in view, or search" comes from the pipe detector (``camera="vision"``),
+uint8)``, which Stable-Baselines3 moves channel first for its ``CnnPolicy``); the decision "pipe in
+view, or search" comes from the pipe detector (``camera="vision"``),
 as for every other controller in the README's closed-loop table, and the reward from the true
 geometry. It trains on a new random pipe every 90-s episode (``random:mixed``) in clear water with
 the project's PPO defaults (``pipefollow.training.deep.DEFAULTS``: 8 environments × 128 steps,

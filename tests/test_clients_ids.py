@@ -104,7 +104,8 @@ def test_torchrl_takes_the_image_id_and_its_to_tensor_image_makes_it_channel_fir
     np.testing.assert_allclose(moved[0].numpy(), image[..., 0] / np.float32(255.0), rtol=1e-6)
     env = TransformedEnv(raw, to_tensor)
     assert env.rollout(3)["observation"].shape == (3, 1, 96, 64)
-    vec = GymWrapper(gym.make_vec(IMAGE_ID, num_envs=2, episode_seconds=3, autoreset_mode=AutoresetMode.DISABLED))
+    disabled = AutoresetMode.DISABLED
+    vec = GymWrapper(gym.make_vec(IMAGE_ID, num_envs=2, episode_seconds=3, autoreset_mode=disabled))
     check_env_specs(vec)
     assert vec.rollout(4, break_when_any_done=False)["observation"].shape == (2, 4, 96, 64, 1)
 
@@ -182,8 +183,9 @@ while True:
     steps += 1
     if dones.any():
         break
-print(json.dumps({"steps": steps, "dones": dones.tolist(), "last": [i["terminal_observation"].tolist() for i in infos],
-                  "summary": [float(i["episode_pipe_in_view"]) for i in infos]}))
+last = [i["terminal_observation"].tolist() for i in infos]
+summary = [float(i["episode_pipe_in_view"]) for i in infos]
+print(json.dumps({"steps": steps, "dones": dones.tolist(), "last": last, "summary": summary}))
 venv.close()
 """
 
@@ -193,7 +195,8 @@ def test_stable_baselines3_subproc_vec_env_from_a_fresh_interpreter(env_id, tmp_
     # the worker processes import nothing by themselves: the id's module prefix registers the ids
     pytest.importorskip("stable_baselines3")
     code = SUBPROC.replace("ENV", env_id)
-    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    run = [sys.executable, "-c", code]
+    res = subprocess.run(run, capture_output=True, text=True, cwd=tmp_path, timeout=300)
     assert res.returncode == 0, res.stderr[-2000:]
     out = json.loads(res.stdout.strip().splitlines()[-1])
     steps = gym.spec(env_id).max_episode_steps

@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import pipefollow
-from pipefollow.envs.shell import SUMMARY_KEYS
 from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.envs.shell import SUMMARY_KEYS
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim import decision as sim
 from pipefollow.sim.pipeline import Pipeline, random_pipeline

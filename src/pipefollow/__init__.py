@@ -1,13 +1,13 @@
 """pipefollow: learning pipeline-following controllers for AUVs with reinforcement learning.
 
 The Gymnasium environment ``pipefollow/PipelineFollowing-v0`` (:data:`ENV_ID`) and the other ids
-of :data:`ENV_IDS` are registered when :mod:`pipefollow.envs` is imported, and by ``import pipefollow`` itself when Gymnasium is
-already loaded (``import gymnasium`` first, or ``gymnasium.make("pipefollow:...")``, Gymnasium's
-``module:id`` form). ``gymnasium.make("pipefollow.envs:pipefollow/PipelineFollowing-v0")``
-registers it whatever was imported before, in any process (subprocess workers too). Importing
-the package alone loads neither Gymnasium nor NumPy nor numba, so that ``pipefollow --help``
-starts in a blink; numba's cache folder is set by the packages that hold compiled code
-(:mod:`pipefollow.files.compile_cache`).
+of :data:`ENV_IDS` are registered when :mod:`pipefollow.envs` is imported, and by
+``import pipefollow`` itself when Gymnasium is already loaded (``import gymnasium`` first, or
+``gymnasium.make("pipefollow:...")``, Gymnasium's ``module:id`` form).
+``gymnasium.make("pipefollow.envs:pipefollow/PipelineFollowing-v0")`` registers them whatever was
+imported before, in any process (subprocess workers too). Importing the package alone loads
+neither Gymnasium nor NumPy nor numba, so that ``pipefollow --help`` starts in a blink; numba's
+cache folder is set by the packages that hold compiled code (:mod:`pipefollow.files.compile_cache`).
 """
 
 from __future__ import annotations

@@ -123,7 +123,8 @@ def detect_pipe(
     """Find the pipe in a grey image of the footprint ``x ∈ [−half_width, half_width]``, ``y ∈ [0, depth]``.
 
     Args:
-        image: ``uint8`` array of shape (H, W) (or the environment's (H, W, 1), or (1, H, W)); row 0 is the far edge y = depth,
+        image: ``uint8`` array of shape (H, W) (or the environment's (H, W, 1), or (1, H, W)); row 0
+            is the far edge y = depth,
             column 0 the port edge x = −half_width.
         half_width: the footprint's lateral half-width (m).
         depth: the footprint's forward extent (m).
