@@ -296,7 +296,9 @@ class PipelineFollowingEnv(gym.Env):
         self.episode_return += r
         if self.render_mode == "human":
             self.render()
-        if not past_end:  # the summary of the episode so far; past the end, the episode's
+        if past_end:  # the episode's summary again, in arrays of its own (no object shared between infos)
+            self._summary = {key: value.copy() for key, value in self._summary.items()}
+        else:  # the summary of the episode so far
             self._summary = episode_summary(book, s)
         info = self._info()
         return self._observation(), r, False, truncated or past_end, info
@@ -310,7 +312,7 @@ class PipelineFollowingEnv(gym.Env):
         info = state_infos(self.state)
         if self._vision is not None:
             info.update(self._vision.info())
-        info.update({key: value.copy() for key, value in self._summary.items()})  # no array shared
+        info.update(self._summary)  # made anew by each reset and step
         return info
 
     def __getstate__(self) -> dict[str, Any]:

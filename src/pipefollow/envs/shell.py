@@ -275,14 +275,15 @@ def episode_summary(book: np.ndarray, states: np.ndarray) -> dict[str, np.ndarra
     ``episode_progress_m`` the arc length reached, ``episode_rms_e_dist`` the RMS of ``e_dist``
     over the decisions in view (NaN if none). Every value is float64.
     """
-    decisions, seen, sum_e2 = book[..., ep.DECISIONS], book[..., ep.SEEN], book[..., ep.E2]
     if book.ndim == 1:  # one episode, at every step: plain floats cost a fraction of array arithmetic
-        d, n = float(decisions), float(seen)
+        counts = book.tolist()
+        d, n, e2 = counts[ep.DECISIONS], counts[ep.SEEN], counts[ep.E2]
         return {
             "episode_pipe_in_view": np.array(n / d if d > 0 else math.nan),
-            "episode_progress_m": np.array(float(states[sim.PROGRESS_MAX])),
-            "episode_rms_e_dist": np.array(math.sqrt(float(sum_e2) / n) if n > 0 else math.nan),
+            "episode_progress_m": np.array(states.item(sim.PROGRESS_MAX)),
+            "episode_rms_e_dist": np.array(math.sqrt(e2 / n) if n > 0 else math.nan),
         }
+    decisions, seen, sum_e2 = book[..., ep.DECISIONS], book[..., ep.SEEN], book[..., ep.E2]
     with np.errstate(invalid="ignore", divide="ignore"):
         share = np.where(decisions > 0, seen / np.maximum(decisions, 1), np.nan)
         rms = np.where(seen > 0, np.sqrt(sum_e2 / np.maximum(seen, 1)), np.nan)
