@@ -1,6 +1,6 @@
 """The registered ids in the RL clients' own standard patterns, unchanged (extra 'deep').
 
-TorchRL's PPO tutorial (a collector, then ``env.rollout`` on the same environment), the image id
+TorchRL's PPO tutorial (evaluation rollouts inside a collector's loop, on the same environment), the image id
 through Gymnasium's image wrappers, Stable-Baselines3's ``CnnPolicy`` and TorchRL's
 ``ToTensorImage``, Stable-Baselines3's ``SubprocVecEnv`` from a fresh interpreter, and CleanRL's
 ``make_env`` of its ``gym-v1.1`` branch as it stands.
@@ -53,37 +53,63 @@ def replay(actions, **kwargs):
 # ---------------------------------------------------------------- TorchRL
 
 
-def test_torchrls_ppo_tutorial_pattern_a_collector_then_a_rollout_on_the_same_env():
-    torch = _torch()
-    Collector = _collector_class()
+def _tutorial_env_and_policy(torch, **kwargs):
+    """The PPO tutorial's environment (a ``StepCounter`` on ``GymEnv``) and a deterministic policy."""
     from tensordict.nn import TensorDictModule
     from torchrl.envs import GymEnv, StepCounter, TransformedEnv
 
-    env = TransformedEnv(GymEnv(ID, obs_dtype="float32"), StepCounter())
+    env = TransformedEnv(GymEnv(ID, obs_dtype="float32", **kwargs), StepCounter())
     torch.manual_seed(0)
     net = torch.nn.Sequential(torch.nn.Linear(4, 1), torch.nn.Tanh())
-    policy = TensorDictModule(net, in_keys=["observation"], out_keys=["action"])
+    return env, TensorDictModule(net, in_keys=["observation"], out_keys=["action"])
+
+
+def test_torchrls_ppo_tutorial_pattern_a_collector_and_evaluation_rollouts_on_the_same_env():
+    torch = _torch()
+    Collector = _collector_class()
+    env, policy = _tutorial_env_and_policy(torch)
     collector = Collector(
-        env, policy, frames_per_batch=30, total_frames=60, split_trajs=False, device="cpu",
+        env, policy, frames_per_batch=25, total_frames=75, split_trajs=False, device="cpu",
         auto_register_policy_transforms=False,
     )  # fmt: skip
-    batches = [td.clone() for td in collector]
+    batches, evaluations = [], []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for data in collector:  # the tutorial's loop: after each batch, an evaluation rollout
+            batches.append(data.clone())
+            with torch.no_grad():
+                evaluations.append(env.rollout(1000, policy))
     collector.shutdown()
-    frames = torch.cat(batches)
-    assert frames.batch_size == (60,)
-    # the id's 20-step episodes end where its spec says: three of them in 60 frames
-    truncated = frames["next", "truncated"].reshape(-1)
-    assert truncated.nonzero().reshape(-1).tolist() == [19, 39, 59]
-    assert frames["next", "step_count"].reshape(-1).tolist() == list(range(1, 21)) * 3
-    # then the tutorial's evaluation rollout on the same environment
-    with torch.no_grad():
-        rollout = env.rollout(100, policy)
-    assert rollout.batch_size == (20,) and rollout["next", "truncated"][-1].item()
-    want = replay(rollout["action"].numpy(), obs_dtype="float32")
-    np.testing.assert_array_equal(rollout["observation"].numpy(), want[:-1])
-    np.testing.assert_array_equal(rollout["next", "observation"].numpy(), want[1:])
-    # the collector's episodes are the same deterministic episode (a fixed pipe, no noise)
-    np.testing.assert_array_equal(frames["observation"][:20].numpy(), want[:-1])
+    # each evaluation ran the id's whole 20-step episode on the collector's environment ...
+    want = replay(evaluations[0]["action"].numpy(), obs_dtype="float32")
+    for rollout in evaluations:
+        assert rollout.batch_size == (20,) and rollout["next", "truncated"][-1].item()
+        np.testing.assert_array_equal(rollout["observation"].numpy(), want[:-1])
+        np.testing.assert_array_equal(rollout["next", "observation"].numpy(), want[1:])
+    # ... so the collector's next step came after that episode's end: the environment warned and
+    # carried on, truncated, and the collector reset it (ResetNeeded stopped the tutorial before)
+    past_end = [w for w in caught if "after the episode's end" in str(w.message)]
+    assert len(past_end) == 2 and all(w.category is UserWarning for w in past_end)
+    ends = [b["next", "truncated"].reshape(-1).nonzero().reshape(-1).tolist() for b in batches]
+    assert ends == [[19], [0, 20], [0, 20]]
+    np.testing.assert_array_equal(batches[0]["observation"][:20].numpy(), want[:-1])
+
+
+def test_torchrls_tutorial_pattern_stops_at_the_end_with_strict_reset():
+    torch = _torch()
+    Collector = _collector_class()
+    from gymnasium.error import ResetNeeded
+
+    env, policy = _tutorial_env_and_policy(torch, strict_reset=True)
+    collector = Collector(
+        env, policy, frames_per_batch=25, total_frames=75, split_trajs=False, device="cpu",
+        auto_register_policy_transforms=False,
+    )  # fmt: skip
+    with pytest.raises(ResetNeeded, match="the episode has ended"):
+        for _ in collector:
+            with torch.no_grad():
+                env.rollout(1000, policy)
+    collector.shutdown()
 
 
 def test_torchrl_takes_the_image_id_and_its_to_tensor_image_makes_it_channel_first():
