@@ -56,7 +56,8 @@ def bench_env_step(repeats):
 
     import pipefollow.envs  # noqa: F401  (registers the environment)
 
-    env = gym.make("pipefollow/PipelineFollowing-v0", episode_seconds=86_400)
+    # a day's episode: the id's TimeLimit (20 steps) is raised to it
+    env = gym.make("pipefollow/PipelineFollowing-v0", episode_seconds=86_400, max_episode_steps=86_400)
     env.reset(seed=0)
     action = np.array([0.1], dtype=np.float32)
     env.step(action)
@@ -79,7 +80,8 @@ def bench_env_step_disturbed(repeats):
 
     dist = make_disturbance(0.1, 45.0, camera_noise=0.05)
     envs = [
-        gym.make("pipefollow/PipelineFollowing-v0", episode_seconds=86_400, disturbance=d)
+        gym.make("pipefollow/PipelineFollowing-v0", episode_seconds=86_400, max_episode_steps=86_400,
+                 disturbance=d)
         for d in (None, dist)
     ]
     action = np.array([0.1], dtype=np.float32)
@@ -218,9 +220,10 @@ def bench_vector_env(repeats):
 
     n = 64
     mode = "vector_entry_point"
-    vec = gym.make_vec("pipefollow/PipelineFollowing-v0", n, vectorization_mode=mode, episode_seconds=86_400)
+    day = {"episode_seconds": 86_400, "max_episode_steps": 86_400}
+    vec = gym.make_vec("pipefollow/PipelineFollowing-v0", n, vectorization_mode=mode, **day)
     vec.reset(seed=0)
-    single = gym.make("pipefollow/PipelineFollowing-v0", episode_seconds=86_400)
+    single = gym.make("pipefollow/PipelineFollowing-v0", **day)
     single.reset(seed=0)
     actions = np.full((n, 1), 0.1, dtype=np.float32)
     action = actions[0]

@@ -90,7 +90,10 @@ def main() -> None:
 
     def stepper(camera):
         """One decision of the heuristic following the pipe (the pipe in view, as in a real run)."""
-        e = gym.make("pipefollow/PipelineFollowing-v0", pipeline=pipe, episode_seconds=600.0, camera=camera)
+        e = gym.make(
+            "pipefollow/PipelineFollowing-v0", pipeline=pipe, episode_seconds=600.0, max_episode_steps=600,
+            camera=camera,
+        )  # fmt: skip
         last = list(e.reset(seed=0))
 
         def step():

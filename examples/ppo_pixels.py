@@ -2,8 +2,9 @@
 
     python examples/ppo_pixels.py --steps 150000 --out runs/ppo-pixels --json docs/vision/ppo_pixels.json
 
-The policy sees only the rendered camera image (``observation="image"``, ``Box(0, 255, (1, 96, 64),
-uint8)``); the decision "pipe in view, or search" comes from the pipe detector (``camera="vision"``),
+The policy sees only the rendered camera image (``observation="image"``, ``Box(0, 255, (96, 64, 1),
+uint8)``, which Stable-Baselines3 moves channel first for its ``CnnPolicy``); the decision "pipe in
+view, or search" comes from the pipe detector (``camera="vision"``),
 as for every other controller in the README's closed-loop table, and the reward from the true
 geometry. It trains on a new random pipe every 90-s episode (``random:mixed``) in clear water with
 the project's PPO defaults (``pipefollow.training.deep.DEFAULTS``: 8 environments × 128 steps,
@@ -45,7 +46,7 @@ def small_cnn():
     class SmallCNN(BaseFeaturesExtractor):
         def __init__(self, observation_space, features_dim: int = 128) -> None:
             super().__init__(observation_space, features_dim)
-            n = observation_space.shape[0]
+            n = observation_space.shape[0]  # channel-first: SB3 transposes the H × W × 1 image
             self.cnn = torch.nn.Sequential(
                 torch.nn.AvgPool2d(2),
                 torch.nn.Conv2d(n, 16, 4, stride=2), torch.nn.ReLU(),

@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 
 import pipefollow
 from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.envs.shell import SUMMARY_KEYS
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim import decision as sim
 from pipefollow.sim.pipeline import Pipeline, random_pipeline
@@ -168,11 +169,37 @@ def test_actions_of_shape_1_or_plain_numbers_are_the_same_action(action):
     np.testing.assert_array_equal(env.step(action)[0], ref.step([0.25])[0])
 
 
-def test_the_registered_spec_bounds_the_episode_length():
+# the ids and their episodes in decisions, from the paper (§4.1: 20 s on the training pipes; §4.2:
+# 60 s on the validation pipe) and the deep-RL guide's random-pipe regime (90 s), 1 s a decision
+IDS = {
+    "pipefollow/PipelineFollowing-v0": ("paper-left", 20, "state"),
+    "pipefollow/PipelineFollowingImage-v0": ("paper-left", 20, "image"),
+    "pipefollow/PipelineFollowingVision-v0": ("paper-left", 20, "state"),
+    "pipefollow/PipelineFollowingRandom-v0": ("mixed-000", 90, "state"),
+    "pipefollow/PipelineFollowingValidation-v0": ("paper-validation", 60, "state"),
+}
+
+
+@pytest.mark.parametrize("env_id", sorted(IDS))
+def test_each_registered_id_ends_its_episode_where_its_time_limit_does(env_id):
+    if env_id.endswith("Vision-v0"):
+        pytest.importorskip("cv2")
+    assert sorted(pipefollow.ENV_IDS) == sorted(IDS)
+    pipe, steps, kind = IDS[env_id]
+    assert gym.spec(env_id).max_episode_steps == steps
+    env = gym.make(env_id)
+    assert env.unwrapped.pipeline.name == pipe and env.observation_space.shape == (
+        (96, 64, 1) if kind == "image" else (4,)
+    )
+    env.reset(seed=0)
+    # the environment's own truncation (unwrapped) and gym.make's TimeLimit agree on the last step
+    ends = [env.step([0.1])[3] for _ in range(steps)]
+    assert ends == [False] * (steps - 1) + [True] and env.unwrapped.max_decisions == steps
+
+
+def test_the_longest_episode_is_checked():
     from pipefollow.envs.env import MAX_EPISODE_SECONDS
 
-    spec = gym.spec(pipefollow.ENV_ID)
-    assert spec.max_episode_steps == MAX_EPISODE_SECONDS  # one decision per second
     with pytest.raises(ValueError, match="episode_seconds must be from 1 to 86400"):
         PipelineFollowingEnv(episode_seconds=MAX_EPISODE_SECONDS + 1)
 
@@ -180,13 +207,25 @@ def test_the_registered_spec_bounds_the_episode_length():
 @pytest.mark.parametrize("seconds", [None, 7, 60])
 def test_gym_make_keeps_the_envs_own_episode_length(seconds):
     kwargs = {} if seconds is None else {"episode_seconds": seconds}
-    made = gym.make(pipefollow.ENV_ID, start_lateral_noise=0.5, **kwargs)
+    # an episode longer than the id's 20 steps needs max_episode_steps (the docstring says so)
+    limit = {"max_episode_steps": seconds} if seconds == 60 else {}
+    made = gym.make(pipefollow.ENV_ID, start_lateral_noise=0.5, **kwargs, **limit)
     assert isinstance(made, gym.wrappers.TimeLimit)
     check_env(made.unwrapped)
     direct = PipelineFollowingEnv(start_lateral_noise=0.5, **kwargs)
     a, b = _episode(made, seed=3), _episode(direct, seed=3)
     assert len(a) - 1 == (seconds or 20)  # decisions until truncation
     np.testing.assert_array_equal(np.array(a[1:]), np.array(b[1:]))
+
+
+def test_a_longer_episode_than_the_ids_is_cut_by_its_time_limit_and_refused_by_make_vec():
+    made = gym.make(pipefollow.ENV_ID, episode_seconds=60)  # Gymnasium's TimeLimit of the id: 20
+    made.reset(seed=0)
+    assert [made.step([0.0])[3] for _ in range(20)][-1]
+    with pytest.raises(ValueError, match="pass max_episode_steps=60 with episode_seconds"):
+        gym.make_vec(pipefollow.ENV_ID, num_envs=2, episode_seconds=60)
+    vec = gym.make_vec(pipefollow.ENV_ID, num_envs=2, episode_seconds=60, max_episode_steps=60)
+    assert vec.unwrapped.max_decisions == 60
 
 
 def test_every_info_value_is_an_array_that_gymnasiums_vector_env_batches_with_its_dtype():
@@ -263,11 +302,14 @@ def test_stepping_after_the_end_warns_once_and_carries_on_as_gymnasiums_environm
     env.reset(seed=0)
     env.step([0.0])
     *_, truncated, last = env.step([0.0])
-    assert truncated and "episode_pipe_in_view" in last
+    assert truncated and last["episode_progress_m"] == last["progress_m"]
     t_end = env.state[sim.TIME]
     with pytest.warns(UserWarning, match="after the episode's end"):
         _, r, terminated, truncated, info = env.step([0.0])
-    assert truncated and not terminated and "episode_pipe_in_view" not in info  # one summary only
+    assert truncated and not terminated and info["progress_m"] > last["progress_m"]
+    for key in SUMMARY_KEYS:  # past the end the summary stays the episode's
+        np.testing.assert_array_equal(info[key], last[key])
+        assert info[key] is not last[key]
     assert env.state[sim.TIME] == t_end + 1.0 and np.isfinite(r)  # the simulation went on
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # once per episode: a second step past the end is silent

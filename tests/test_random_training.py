@@ -75,15 +75,17 @@ def test_gym_make_random_draws_a_new_pipe_every_reset_and_reports_the_episode():
     np.testing.assert_array_equal(second, suite.draw(rng, min_length_for(5)).points)
     env.reset(seed=4)
     np.testing.assert_array_equal(env.unwrapped.pipeline.points, first)
-    # the episode summary arrives at the last step, and equals a count over the steps
+    # the episode's summary is in every info, the episode so far: a count over the steps
     h = Heuristic()
     obs, info = env.reset(seed=4)
+    assert np.isnan(info["episode_pipe_in_view"]) and np.isnan(info["episode_rms_e_dist"])  # no decision
     seen, e2 = 0, 0.0
     for t in range(5):
         obs, r, term, trunc, info = env.step([h.act(obs) if info["pipe_in_view"] else 0.0])
         seen += info["pipe_in_view"]
         e2 += info["e_dist"] ** 2 if info["pipe_in_view"] else 0.0
-        assert ("episode_pipe_in_view" in info) == trunc == (t == 4)
+        assert trunc == (t == 4) and info["episode_pipe_in_view"] == seen / (t + 1)
+        assert info["episode_progress_m"] == info["progress_m"]
     assert info["episode_pipe_in_view"] == seen / 5
     assert info["episode_progress_m"] == info["progress_m"] > 0.5
     assert info["episode_rms_e_dist"] == pytest.approx(math.sqrt(e2 / seen), rel=1e-12)

@@ -5,6 +5,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 
 import pipefollow.envs  # noqa: F401  (registers the environment)
 from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.envs.shell import SUMMARY_KEYS
 from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
 from pipefollow.sim.disturbance import make_disturbance
 
@@ -41,9 +42,9 @@ def run_both(n, steps, seed, pipelines=None, **kwargs):
                 o, r, te, tr, info = e.step(a[i])
                 assert vinfo["pipe_in_view"][i] == info["pipe_in_view"]
                 assert vinfo["progress_m"][i] == pytest.approx(info["progress_m"], abs=1e-12)
-                if tr:
-                    assert vinfo["_episode_progress_m"][i]
-                    assert vinfo["episode_pipe_in_view"][i] == pytest.approx(info["episode_pipe_in_view"])
+                for key in SUMMARY_KEYS:  # the episode's summary so far, at every step (NaN before it counts)
+                    assert vinfo["_" + key][i]
+                    np.testing.assert_allclose(vinfo[key][i], info[key], rtol=1e-12, equal_nan=True)
             np.testing.assert_allclose(vo[i], o, rtol=0, atol=1e-12)
             assert abs(vr[i] - r) <= 1e-12
             assert (vte[i], vtr[i]) == (te, tr)
@@ -66,7 +67,8 @@ def test_make_vec_gives_the_native_vector_env_with_batched_spaces():
         assert obs.shape == (3, 4) and rew.shape == (3,) and term.dtype == bool
     assert trunc.all() and info["_episode_rms_e_dist"].all()
     obs, rew, term, trunc, info = vec.step(vec.action_space.sample())  # the autoreset step
-    assert not trunc.any() and np.all(rew == 0.0) and "episode_progress_m" not in info
+    assert not trunc.any() and np.all(rew == 0.0)
+    assert np.isnan(info["episode_pipe_in_view"]).all()  # the new episodes' summaries: no decision yet
     np.testing.assert_array_equal(obs, vec.reset(seed=1)[0])  # a fixed pipe: the same start
 
 

@@ -24,10 +24,11 @@ def heuristic(obs):
 def test_image_observation_with_the_ideal_camera_leaves_the_dynamics_alone():
     plain = PipelineFollowingEnv("paper-validation", 30.0)
     pixels = PipelineFollowingEnv("paper-validation", 30.0, observation="image")
-    assert pixels.observation_space == gym.spaces.Box(0, 255, (1, 96, 64), np.uint8)
+    assert pixels.observation_space == gym.spaces.Box(0, 255, (96, 64, 1), np.uint8)  # H × W × channel
     obs, _ = plain.reset(seed=1)
     img, info = pixels.reset(seed=1)
-    assert img.shape == (1, 96, 64) and img.dtype == np.uint8
+    assert img.shape == (96, 64, 1) and img.dtype == np.uint8
+    np.testing.assert_array_equal(img[..., 0], pixels._vision.image)  # the rendered image, row 0 far
     for _ in range(30):
         a = heuristic(obs)
         obs, r, _, _, _ = plain.step(a)
@@ -124,8 +125,8 @@ def test_vector_env_with_the_vision_camera_equals_single_environments():
 def test_vector_env_image_observations():
     vec = PipelineFollowingVectorEnv(2, "paper-left", observation="image")
     obs, _ = vec.reset(seed=0)
-    assert obs.shape == (2, 1, 96, 64) and obs.dtype == np.uint8
-    assert vec.observation_space.shape == (2, 1, 96, 64)
+    assert obs.shape == (2, 96, 64, 1) and obs.dtype == np.uint8
+    assert vec.observation_space.shape == (2, 96, 64, 1)
 
 
 def test_render_shows_the_camera_image_beside_the_map():

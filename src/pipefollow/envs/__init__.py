@@ -7,8 +7,10 @@ episode, infos, the episode summary), ``env`` (``pipefollow/PipelineFollowing-v0
 They compose the simulator's stages and the camera; they know no learner. May import ``files``,
 ``sim`` and ``perception``.
 
-Importing this package registers the environment with Gymnasium (:func:`pipefollow.register_envs`),
-so that ``gymnasium.make("pipefollow.envs:pipefollow/PipelineFollowing-v0")`` finds it in any process.
+Importing this package registers the environment's ids with Gymnasium (:data:`pipefollow.ENV_IDS`,
+:func:`pipefollow.register_envs`): the paper's training, its image, vision, random-pipe and
+validation configurations, each with its episode's ``max_episode_steps``; so
+``gymnasium.make("pipefollow.envs:pipefollow/PipelineFollowingRandom-v0")`` finds one in any process.
 """
 
 from pipefollow import register_envs

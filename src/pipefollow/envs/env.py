@@ -73,6 +73,12 @@ class PipelineFollowingEnv(gym.Env):
     both (:mod:`pipefollow.sim.observation`; noise: the disturbance's ``dvl_noise``, ``gyro_noise_deg``);
     ``env.setup.observation_names`` and ``.observation_units`` name them.
 
+    With ``observation="image"``: ``Box(0, 255, (H, W, 1), uint8)``, the grey camera image of the
+    footprint (96 × 64 pixels of 3.125 cm by default: H along y, row 0 at the far edge 3 m ahead;
+    W along x, column 0 at 1 m to port), height × width × channel as Gymnasium's image wrappers
+    (``GrayscaleObservation``, ``ResizeObservation``, ``FrameStackObservation``) and
+    Stable-Baselines3's ``CnnPolicy`` (through its ``VecTransposeImage``) take it.
+
     ## Rewards
 
     Eq. 19: ``v_x − e_dist² − e_angl² − (a − a_prev)²`` with ``e_dist = (x1 + x2)/2`` (m),
@@ -90,8 +96,10 @@ class PipelineFollowingEnv(gym.Env):
 
     The episode is truncated after ``episode_seconds`` (one decision per second; 20 in the
     paper's training), at most :data:`MAX_EPISODE_SECONDS`. There is no terminal state: agents
-    should bootstrap from the last state. The registered spec's ``max_episode_steps`` is that
-    upper bound, so the ``TimeLimit`` wrapper of ``gym.make`` never ends an episode early.
+    should bootstrap from the last state. Each registered id's ``max_episode_steps`` is its own
+    episode's decisions (:data:`pipefollow.ENV_IDS`), so ``gym.make``'s ``TimeLimit`` wrapper ends an
+    episode at the same step as the environment; an ``episode_seconds`` longer than the id's needs
+    ``gym.make(ID, episode_seconds=S, max_episode_steps=S)`` (``gym.make_vec`` refuses it without).
     ``step`` before the first ``reset`` raises :class:`gymnasium.error.ResetNeeded`. After the
     episode's last decision it carries on as Gymnasium's own environments do: a warning (once until
     the next reset), the simulation goes on and every further step is ``truncated``, without a
@@ -121,7 +129,7 @@ class PipelineFollowingEnv(gym.Env):
       observation and the in-view decision come from a pipe detector on the rendered camera image
       (:mod:`pipefollow.perception`; needs the extra ``vision``); "not found" is a lost pipe.
     * ``observation``: ``"state"`` (default, ``Box(4)``) or ``"image"``: the camera image,
-      ``Box(0, 255, (1, H, W), uint8)``.
+      ``Box(0, 255, (H, W, 1), uint8)``.
     * ``reward_from``: ``"truth"`` (default: eq. 19 from the true geometry; a lost detection still
       gives −10) or ``"detected"`` (eq. 19 from the detection).
     * ``water``: the image's water and camera settings: a
@@ -145,12 +153,32 @@ class PipelineFollowingEnv(gym.Env):
     ``executed_action``, ``time_s``, ``y_near`` (forward position of the near end of the pipe in
     view, m), ``camera_missed`` (a missed detection hid the pipe), ``current`` ((V_c m/s, β_c rad)).
     Like the observation, ``e_dist``, ``e_angl`` and ``y_near`` hold the last sighting's values
-    while the pipe is lost. At the episode's last step also its summary:
-    ``episode_pipe_in_view`` (share of decisions ending with the pipe in view),
-    ``episode_progress_m`` and ``episode_rms_e_dist`` (RMS of ``e_dist`` over those decisions;
-    NaN if none). With the vision camera also ``detected``, ``detection_confidence``,
-    ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the exact camera's); the episode's
-    summary is then the exact camera's too.
+    while the pipe is lost. The episode's summary, in every info (reset's included) so that the
+    keys never change within an episode (Minari's ``DataCollector`` and other recorders demand it):
+    ``episode_pipe_in_view`` (share of the decisions so far ending with the pipe in view; NaN
+    before the first), ``episode_progress_m`` (m) and ``episode_rms_e_dist`` (RMS of ``e_dist``
+    over those decisions, m; NaN if none), all float64. They are the episode's so far: at its
+    last step (``terminated or truncated``) the whole episode's, which clients that log per episode
+    read there; steps past the end repeat them. With the vision camera also ``detected``,
+    ``detection_confidence``, ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the
+    exact camera's); the episode's summary is then the exact camera's too.
+
+    ## Registered ids
+
+    Importing :mod:`pipefollow.envs` (or ``gym.make("pipefollow.envs:ID")`` in a fresh
+    interpreter) registers :data:`pipefollow.ENV_IDS`: ``pipefollow/PipelineFollowing-v0`` (the
+    paper's training: ``paper-left``, 20 steps), ``pipefollow/PipelineFollowingImage-v0`` (the
+    same with the camera image as observation), ``pipefollow/PipelineFollowingVision-v0`` (the
+    same through the pipe detector; extra ``vision``), ``pipefollow/PipelineFollowingRandom-v0``
+    (a new ``random:mixed`` pipe every 90-s episode, 90 steps) and
+    ``pipefollow/PipelineFollowingValidation-v0`` (the paper's held-out ``paper-validation`` pipe,
+    60 steps). Keyword arguments of ``gym.make`` override the id's.
+
+    ## Version History
+
+    * v0: the first release. Before it (unreleased): the episode's summary joined every step's
+      info (it was at the last step only); ``observation="image"`` became ``(H, W, 1)`` (was
+      ``(1, H, W)``); the ids got their episodes' ``max_episode_steps`` (was 86,400 for one id).
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 2}
@@ -204,6 +232,7 @@ class PipelineFollowingEnv(gym.Env):
         self.state = np.zeros(sim.STATE_SIZE)
         self._z = np.zeros(setup.noise_count)  # standard normals of one camera reading
         self._book = ep.new_book()  # the episode's counts (pipefollow.sim.episode)
+        self._summary = episode_summary(self._book, self.state)  # the info's summary keys
         self._needs_reset = True  # before the first reset
         self.strict_reset = bool(strict_reset)
         self._warned_after_end = False  # stepping past the end warns once per episode
@@ -226,6 +255,7 @@ class PipelineFollowingEnv(gym.Env):
             opts.lateral_offset, opts.heading_offset_deg,
         )  # fmt: skip
         self._book[:] = 0.0
+        self._summary = episode_summary(self._book, self.state)
         self._needs_reset = False
         self._warned_after_end = False
         s = self.state
@@ -272,9 +302,11 @@ class PipelineFollowingEnv(gym.Env):
         self.episode_return += r
         if self.render_mode == "human":
             self.render()
+        if past_end:  # the episode's summary again, in arrays of its own (no object shared between infos)
+            self._summary = {key: value.copy() for key, value in self._summary.items()}
+        else:  # the summary of the episode so far
+            self._summary = episode_summary(book, s)
         info = self._info()
-        if truncated and not past_end:  # the episode's summary, once, for clients that log per episode
-            info.update(episode_summary(book, s))
         return self._observation(), r, False, truncated or past_end, info
 
     def _observation(self) -> np.ndarray:
@@ -286,6 +318,7 @@ class PipelineFollowingEnv(gym.Env):
         info = state_infos(self.state)
         if self._vision is not None:
             info.update(self._vision.info())
+        info.update(self._summary)  # made anew by each reset and step
         return info
 
     def __getstate__(self) -> dict[str, Any]:

@@ -4,7 +4,8 @@ Both environments are shells around the same compiled decision (:mod:`pipefollow
 this module holds everything else they have in common: the checks of their arguments and the
 spaces (:func:`make_setup`), the reset options (:func:`parse_reset_options`), the start of an
 episode with its draws in a fixed order (:func:`start_episode`), the info keys
-(:func:`state_infos`) and the episode summary (:func:`episode_summary`). (Their pipeline argument
+(:func:`state_infos`) and the episode's summary so far (:func:`episode_summary`), which every
+step's info carries. (Their pipeline argument
 is read by :func:`pipefollow.sim.pipe_names.pipeline_source`.) The functions take one state of
 shape ``(STATE_SIZE,)`` or a batch of shape ``(N, STATE_SIZE)`` and return arrays of the matching
 shape, so the two environments cannot drift apart.
@@ -71,7 +72,7 @@ _INFO_INDEX = tuple(
 )
 
 
-# The summary added to the info of an episode's last step.
+# The episode's summary, in every step's info: the episode so far, at its last step the whole episode.
 SUMMARY_KEYS = ("episode_pipe_in_view", "episode_progress_m", "episode_rms_e_dist")
 
 
@@ -268,8 +269,12 @@ def observation(states: np.ndarray, setup: Setup) -> np.ndarray:
 
 
 def image_space(water) -> spaces.Box:
-    """The observation space of ``observation="image"``: the grey camera image, ``(1, H, W)`` uint8."""
-    return spaces.Box(0, 255, (1, water.height, water.width), dtype=np.uint8)
+    """The observation space of ``observation="image"``: the grey camera image, ``(H, W, 1)`` uint8.
+
+    Height × width × channel, Gymnasium's layout of images (its image wrappers and Stable-Baselines3's
+    ``VecTransposeImage`` read it so); row 0 is the footprint's far edge.
+    """
+    return spaces.Box(0, 255, (water.height, water.width, 1), dtype=np.uint8)
 
 
 def state_infos(states: np.ndarray) -> dict[str, np.ndarray]:
@@ -290,17 +295,27 @@ def state_infos(states: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def episode_summary(book: np.ndarray, states: np.ndarray) -> dict[str, np.ndarray]:
-    """The summary of episodes from their books (:mod:`pipefollow.sim.episode`) and states.
+    """The summary of episodes so far from their books (:mod:`pipefollow.sim.episode`) and states.
 
     One book and state, or a batch of each (rows). ``episode_pipe_in_view`` is the share of
-    decisions that ended with the pipe in view, ``episode_progress_m`` the arc length reached,
-    ``episode_rms_e_dist`` the RMS of ``e_dist`` over the decisions in view (NaN if none).
+    decisions that ended with the pipe in view (NaN before the first decision),
+    ``episode_progress_m`` the arc length reached, ``episode_rms_e_dist`` the RMS of ``e_dist``
+    over the decisions in view (NaN if none). Every value is float64.
     """
+    if book.ndim == 1:  # one episode, at every step: plain floats cost a fraction of array arithmetic
+        counts = book.tolist()
+        d, n, e2 = counts[ep.DECISIONS], counts[ep.SEEN], counts[ep.E2]
+        return {
+            "episode_pipe_in_view": np.array(n / d if d > 0 else math.nan),
+            "episode_progress_m": np.array(states.item(sim.PROGRESS_MAX)),
+            "episode_rms_e_dist": np.array(math.sqrt(e2 / n) if n > 0 else math.nan),
+        }
     decisions, seen, sum_e2 = book[..., ep.DECISIONS], book[..., ep.SEEN], book[..., ep.E2]
     with np.errstate(invalid="ignore", divide="ignore"):
+        share = np.where(decisions > 0, seen / np.maximum(decisions, 1), np.nan)
         rms = np.where(seen > 0, np.sqrt(sum_e2 / np.maximum(seen, 1)), np.nan)
     return {
-        "episode_pipe_in_view": np.asarray(seen / np.maximum(decisions, 1)),
+        "episode_pipe_in_view": share,
         "episode_progress_m": np.array(states[..., sim.PROGRESS_MAX], dtype=np.float64),
-        "episode_rms_e_dist": np.asarray(rms),
+        "episode_rms_e_dist": rms,
     }

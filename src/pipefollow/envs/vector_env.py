@@ -30,9 +30,10 @@ single environment draws them.
   ``vector_kwargs`` for a vector entry point (they are for ``vectorization_mode="sync"`` or
   ``"async"``, whose wrappers take ``autoreset_mode`` the same way).
 * **Infos**: the single environment's keys, each an array with the batch dimension first
-  (``pose`` (N, 3), ``current`` (N, 2), ...), with Gymnasium's ``_key`` masks, and the episode
-  summary (``episode_pipe_in_view``, ``episode_progress_m``, ``episode_rms_e_dist``) where an
-  episode ends.
+  (``pose`` (N, 3), ``current`` (N, 2), ...), with Gymnasium's ``_key`` masks, the episode
+  summary (``episode_pipe_in_view``, ``episode_progress_m``, ``episode_rms_e_dist``) included:
+  each sub-environment's episode so far, its whole episode's where ``terminated | truncated``
+  (in ``final_info`` under same-step autoreset).
 * **Observations**: float64 by default, ``obs_dtype="float32"`` as in the single environment.
 * **Disturbances**: supported, as in the single environment (each sub-environment draws its
   camera reading's normals from its own generator).
@@ -168,12 +169,14 @@ class PipelineFollowingVectorEnv(VectorEnv):
         camera = _camera_of(kwargs)
         specs = _pipeline_specs(pipeline, n)
         setup = make_setup(**kwargs)
-        # gymnasium.make_vec passes the registered spec's max_episode_steps, an upper bound; the
-        # episodes end after episode_seconds, as in the single environment
+        # gymnasium.make_vec passes the registered id's max_episode_steps (its episode's decisions);
+        # the episodes end after episode_seconds, as in the single environment, and a longer
+        # episode than the id's would be cut by the single environment's TimeLimit: refused
         if max_episode_steps is not None and max_episode_steps < setup.max_decisions:
             raise ValueError(
                 f"max_episode_steps {max_episode_steps} is shorter than the episodes "
-                f"({setup.max_decisions} decisions): set episode_seconds instead"
+                f"({setup.max_decisions} decisions): pass max_episode_steps={setup.max_decisions} "
+                "with episode_seconds, or use an id with that episode (pipefollow.ENV_IDS)"
             )
         self.setup = setup
         self.randomization = None
@@ -374,7 +377,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
             last = self._observations()
             for i in np.flatnonzero(truncated):
                 final_obs[i] = last[i]
-            final_info = self._infos(truncated, truncated)
+            final_info = self._infos(truncated)
             for i in np.flatnonzero(truncated):
                 self._reset_one(int(i))
             infos = self._infos(every)
@@ -382,7 +385,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
             infos["final_info"], infos["_final_info"] = final_info, truncated.copy()
             self._ended_before = np.zeros(self.num_envs, dtype=bool)
         else:
-            infos = self._infos(every, truncated)
+            infos = self._infos(every)
             self._ended_before = truncated.copy()
         return self._observations(), rewards.copy(), terminated, truncated, infos
 
@@ -406,8 +409,8 @@ class PipelineFollowingVectorEnv(VectorEnv):
         cams = zip(self._cams, self.states, strict=True)
         return np.stack([c.observation(s, dtype, slots) for c, s in cams])
 
-    def _infos(self, present: np.ndarray, ended: np.ndarray | None = None) -> dict[str, np.ndarray]:
-        """The infos of all sub-environments, ``_key`` masks ``present``; the summary where ``ended``."""
+    def _infos(self, present: np.ndarray) -> dict[str, np.ndarray]:
+        """The infos of all sub-environments, ``_key`` masks ``present``, with the episodes' summaries."""
         infos: dict[str, np.ndarray] = {}
         for key, value in state_infos(self.states).items():
             infos[key], infos["_" + key] = value, present.copy()
@@ -416,9 +419,8 @@ class PipelineFollowingVectorEnv(VectorEnv):
             for key in per_env[0]:
                 infos[key] = np.array([d[key] for d in per_env])
                 infos["_" + key] = present.copy()
-        if ended is not None and ended.any():
-            summary = episode_summary(self._books, self.states)
-            for key, value in summary.items():
-                infos[key] = np.where(ended, value, 0.0)  # 0 where masked out, as Gymnasium's SyncVectorEnv
-                infos["_" + key] = ended.copy()
+        # the summary of each episode so far, as the single environment's info has it at every step
+        for key, value in episode_summary(self._books, self.states).items():
+            infos[key] = np.where(present, value, 0.0)  # 0 where masked out, as Gymnasium's SyncVectorEnv
+            infos["_" + key] = present.copy()
         return infos

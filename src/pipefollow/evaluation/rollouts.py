@@ -8,7 +8,9 @@ actions that offline learners need. Needs the optional extra ``rollouts`` (``min
 
 The dataset is written under ``folder/<dataset id>`` (Minari's layout: ``data/`` and
 ``metadata.json``) and is read back with ``minari.load_dataset(id)`` once
-``MINARI_DATASETS_PATH`` names ``folder``.
+``MINARI_DATASETS_PATH`` names ``folder``. The dataset recovers its environment
+(``recover_environment()``, also with ``eval_env=True``): reset with an episode's seed and pipe
+(its metadata's ``seed`` and ``options``, :func:`episode_reset`), it runs that episode again.
 """
 
 from __future__ import annotations
@@ -42,29 +44,36 @@ def _datasets_path(folder: Path):
             os.environ["MINARI_DATASETS_PATH"] = old
 
 
-def _array_infos(env):
-    """``env`` with infos Minari can store: the keys every step has (each already an array).
+def _environment(first: Pipeline, seconds: float, params):
+    """The environment the rollouts run in, made by ``gym.make`` so that the dataset keeps its spec.
 
-    Minari keeps the infos as arrays with one row per step (the reset's included), so the episode
-    summary that only the last step has (:data:`~pipefollow.envs.shell.SUMMARY_KEYS`) is left out.
+    Its keyword arguments are plain numbers (the first pipe's points, the episode's seconds, the
+    disturbance as its user-unit table), so Minari stores the spec as JSON and
+    ``recover_environment()`` makes the same environment again; each episode's pipe is its reset
+    option, which Minari stores with its seed. A simulation other than the paper's besides its
+    disturbance (another reading) has no such form: the environment is then built directly and the
+    dataset cannot recover it.
     """
     import gymnasium as gym
 
-    from pipefollow.envs.shell import SUMMARY_KEYS
+    import pipefollow.envs  # noqa: F401 (registers the ids)
+    from pipefollow import ENV_ID
+    from pipefollow.envs.env import PipelineFollowingEnv
+    from pipefollow.envs.shell import make_setup
+    from pipefollow.sim import decision as sim
+    from pipefollow.sim.disturbance import disturbance_from_dict, to_dict
 
-    def per_step(info):
-        return {k: v for k, v in info.items() if k not in SUMMARY_KEYS}
-
-    class ArrayInfos(gym.Wrapper):
-        def reset(self, **kwargs):
-            obs, info = self.env.reset(**kwargs)
-            return obs, per_step(info)
-
-        def step(self, action):
-            obs, reward, terminated, truncated, info = self.env.step(action)
-            return obs, reward, terminated, truncated, per_step(info)
-
-    return ArrayInfos(env)
+    params = sim.PAPER_SIM if params is None else params
+    kwargs = {"pipeline": first.points.tolist(), "episode_seconds": float(seconds)}
+    table = to_dict(params.disturbance)
+    if params._replace(disturbance=sim.PAPER_SIM.disturbance) != sim.PAPER_SIM or (
+        disturbance_from_dict(table) != params.disturbance
+    ):
+        return PipelineFollowingEnv(**kwargs, params=params)
+    if params.disturbance != sim.PAPER_SIM.disturbance:
+        kwargs["disturbance"] = table
+    decisions = make_setup(seconds).max_decisions  # the episode's, for gym.make's TimeLimit
+    return gym.make(ENV_ID, **kwargs, max_episode_steps=decisions)
 
 
 def _array_actions(env):
@@ -112,30 +121,28 @@ def record_rollouts(
         raise RolloutsExtraMissing(
             "rollouts need the optional extra 'rollouts' (pip install 'pipefollow[rollouts]')"
         ) from e
-    from pipefollow.envs.env import PipelineFollowingEnv
     from pipefollow.training.compiled import run_episode
 
     folder = Path(folder).resolve()  # Minari joins relative paths twice
     folder.mkdir(parents=True, exist_ok=True)
-    kwargs = {} if params is None else {"params": params}
-    env = PipelineFollowingEnv(pipes[0], seconds, **kwargs)
+    env = _environment(pipes[0], seconds, params)
     import gc
     import warnings
 
-    # Minari's advice for datasets published on its server (an author e-mail, an evaluation
-    # environment's spec: this one is made here, not by gym.make) does not apply to a local one;
-    # and Minari 0.5 removes its temporary folders itself but leaves TemporaryDirectory objects
-    # that warn when collected. Both are silenced for Minari's calls alone.
+    # Minari's advice for datasets published on its server (an author e-mail, ...) does not apply
+    # to a local one; and Minari 0.5 removes its temporary folders itself but leaves
+    # TemporaryDirectory objects that warn when collected. Both are silenced for Minari's calls alone.
     with _datasets_path(folder), warnings.catch_warnings():
         warnings.filterwarnings("ignore", category=UserWarning, module=r"minari\.")
         warnings.simplefilter("ignore", ResourceWarning)
-        collector = minari.DataCollector(_array_infos(env), record_infos=True)
+        collector = minari.DataCollector(env, record_infos=True)  # the same info keys at every step
         recorded = _array_actions(collector)
         for k, pipe in enumerate(pipes):
             options = {"pipeline": pipe.points.tolist()}  # plain numbers: Minari stores the options
             run_episode(recorded, agent, explore=sigma > 0, sigma=sigma, seed=seed + k, options=options)
         collector.create_dataset(
             dataset_id=dataset_id,
+            eval_env=env.spec,  # the same environment: reset it with an episode's seed and pipe
             algorithm_name=getattr(agent, "name", type(agent).__name__),
             description=description or f"{len(pipes)} episodes of {seconds:g} s, σ = {sigma:g}",
         )
@@ -143,3 +150,17 @@ def record_rollouts(
         del collector, recorded
         gc.collect()
     return folder / dataset_id
+
+
+def episode_reset(dataset, index: int) -> dict:
+    """The keyword arguments of ``reset`` that start episode ``index`` of a rollouts dataset again.
+
+    Minari keeps each episode's seed and its reset options (the pipe's points);
+    ``env.reset(**episode_reset(dataset, k))`` on ``dataset.recover_environment()`` then gives that
+    episode's observations for its actions.
+    """
+    (meta,) = dataset.storage.get_episode_metadata([dataset.episode_indices[index]])
+    options = dict(meta.get("options", {}))
+    if "pipeline" in options:  # Minari gives the points back as an array
+        options["pipeline"] = np.asarray(options["pipeline"], dtype=np.float64).tolist()
+    return {"seed": int(meta["seed"]), "options": options}

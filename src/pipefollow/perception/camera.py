@@ -37,7 +37,7 @@ class CameraSettings:
     """How the environment sees: the camera, what the agent observes, the reward's source, the water."""
 
     camera: str = "ideal"  # "ideal" (the paper's exact visible piece) or "vision" (the detector)
-    observation: str = "state"  # "state" (x1, y1, x2, v_x) or "image" (the camera image, (1, H, W))
+    observation: str = "state"  # "state" (x1, y1, x2, v_x) or "image" (the camera image, (H, W, 1))
     reward_from: str = "truth"  # eq. 19 from the true geometry, or from the detection
     water: Water = Water()  # water and camera settings of the image
 
@@ -161,9 +161,9 @@ class VisionCamera:
         s[sim.IN_VIEW] = 1.0 if det.found else 0.0
 
     def observation(self, state: np.ndarray, dtype=np.float64, slots: np.ndarray | None = None) -> np.ndarray:
-        """The observation: ``state[:4]`` or ``state[slots]`` as ``dtype``, or the image ``(1, H, W)``."""
+        """The observation: ``state[:4]`` or ``state[slots]`` as ``dtype``, or the image ``(H, W, 1)``."""
         if self.settings.observation == "image":
-            return self.image[None].copy()
+            return self.image[..., None].copy()
         return (state[:4] if slots is None else state[slots]).astype(dtype)
 
     def info(self) -> dict[str, np.ndarray]:

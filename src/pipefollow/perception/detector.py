@@ -99,7 +99,9 @@ def check_image(image) -> np.ndarray:
     """``image`` as a 2-D ``uint8`` array; a one-line ``ValueError`` naming what it got otherwise."""
     if not isinstance(image, np.ndarray):
         raise ValueError(f"image must be a numpy array of uint8, got {type(image).__name__}")
-    if image.ndim == 3 and image.shape[0] == 1:  # the environment's (1, H, W) observation
+    if image.ndim == 3 and image.shape[-1] == 1:  # the environment's (H, W, 1) observation
+        image = image[..., 0]
+    elif image.ndim == 3 and image.shape[0] == 1:  # channel first, as torch takes it
         image = image[0]
     if image.ndim != 2 or min(image.shape) < MIN_SIDE:
         raise ValueError(
@@ -121,7 +123,8 @@ def detect_pipe(
     """Find the pipe in a grey image of the footprint ``x ∈ [−half_width, half_width]``, ``y ∈ [0, depth]``.
 
     Args:
-        image: ``uint8`` array of shape (H, W) (or (1, H, W)); row 0 is the far edge y = depth,
+        image: ``uint8`` array of shape (H, W) (or the environment's (H, W, 1), or (1, H, W)); row 0
+            is the far edge y = depth,
             column 0 the port edge x = −half_width.
         half_width: the footprint's lateral half-width (m).
         depth: the footprint's forward extent (m).
