@@ -13,6 +13,7 @@ from gymnasium.error import ResetNeeded
 
 from pipefollow.envs.shell import (
     MAX_EPISODE_SECONDS,
+    end_info,
     episode_summary,
     image_space,
     make_setup,
@@ -86,13 +87,18 @@ class PipelineFollowingEnv(gym.Env):
     ## Episode End
 
     The episode is truncated after ``episode_seconds`` (one decision per second; 20 in the
-    paper's training), at most :data:`MAX_EPISODE_SECONDS`. There is no terminal state: agents
-    should bootstrap from the last state. The registered spec's ``max_episode_steps`` is that
-    upper bound, so the ``TimeLimit`` wrapper of ``gym.make`` never ends an episode early.
-    ``step`` before the first ``reset`` raises :class:`gymnasium.error.ResetNeeded`. After the
-    episode's last decision it carries on as Gymnasium's own environments do: a warning (once until
-    the next reset), the simulation goes on and every further step is ``truncated``, without a
-    second summary; ``strict_reset=True`` raises ``ResetNeeded`` there instead.
+    paper's training), at most :data:`MAX_EPISODE_SECONDS`; agents should bootstrap from the last
+    state. The registered spec's ``max_episode_steps`` is that upper bound, so the ``TimeLimit``
+    wrapper of ``gym.make`` never ends an episode early. The episode is terminated when the AUV
+    reaches the pipe's far end (its progress within 0.5 m of the pipe's length,
+    :func:`pipefollow.sim.episode.reached_end`), a terminal state; under the paper's reading
+    ``pipe_end=continue`` (``params.end_at_pipe_end=False``) it goes on there, the pipe lost (−10 a
+    decision). ``info["end_reason"]`` at the episode's last step says which: ``"time_limit"`` or
+    ``"pipe_end"``. ``step`` before the first ``reset`` raises :class:`gymnasium.error.ResetNeeded`.
+    After the episode's last decision it carries on as Gymnasium's own environments do: a warning
+    (once until the next reset), the simulation goes on and every further step ends as the last one
+    did (``truncated`` or ``terminated``), without a second summary; ``strict_reset=True`` raises
+    ``ResetNeeded`` there instead.
 
     ## Arguments
 
@@ -143,8 +149,9 @@ class PipelineFollowingEnv(gym.Env):
     Like the observation, ``e_dist``, ``e_angl`` and ``y_near`` hold the last sighting's values
     while the pipe is lost. At the episode's last step also its summary:
     ``episode_pipe_in_view`` (share of decisions ending with the pipe in view),
-    ``episode_progress_m`` and ``episode_rms_e_dist`` (RMS of ``e_dist`` over those decisions;
-    NaN if none). With the vision camera also ``detected``, ``detection_confidence``,
+    ``episode_progress_m``, ``episode_rms_e_dist`` (RMS of ``e_dist`` over those decisions;
+    NaN if none) and ``end_reason`` (``"time_limit"`` or ``"pipe_end"``, a 0-d string array). With
+    the vision camera also ``detected``, ``detection_confidence``,
     ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the exact camera's); the episode's
     summary is then the exact camera's too.
     """
@@ -201,6 +208,7 @@ class PipelineFollowingEnv(gym.Env):
         self._needs_reset = True  # before the first reset
         self.strict_reset = bool(strict_reset)
         self._warned_after_end = False  # stepping past the end warns once per episode
+        self._end = ep.GOES_ON  # how the episode ended (pipefollow.sim.episode.end_of), once it has
         self.trail: list[tuple[float, float, float]] = []
         self.last_reward: float | None = None  # shown by render()
         self.episode_return = 0.0  # the rewards returned, summed (the book counts the decisions)
@@ -222,6 +230,7 @@ class PipelineFollowingEnv(gym.Env):
         self._book[:] = 0.0
         self._needs_reset = False
         self._warned_after_end = False
+        self._end = ep.GOES_ON
         s = self.state
         self.trail = [(s[sim.X], s[sim.Y], s[sim.PSI])]
         self.last_reward, self.episode_return = None, 0.0
@@ -235,15 +244,15 @@ class PipelineFollowingEnv(gym.Env):
         """One 1-s decision; see the class docstring."""
         if self._needs_reset:
             raise ResetNeeded("call reset() before the first step()")
-        past_end = bool(ep.ended.py_func(self._book, self.max_decisions))  # in Python: no dispatch
+        past_end = self._end != ep.GOES_ON
         if past_end:
             if self.strict_reset:
                 raise ResetNeeded("the episode has ended: call reset() before step()")
             if not self._warned_after_end:
                 self._warned_after_end = True
                 gym.logger.warn(
-                    "step() after the episode's end (truncated=True was returned): the episode goes on, "
-                    "but call reset() to start a new one"
+                    "step() after the episode's end (truncated or terminated was returned): the episode goes "
+                    "on, but call reset() to start a new one"
                 )
         arr = np.asarray(action, dtype=np.float64)
         if arr.shape not in ((1,), ()):  # a wrong shape is a caller's bug, not an action
@@ -256,7 +265,7 @@ class PipelineFollowingEnv(gym.Env):
         if z.size:
             self.np_random.standard_normal(out=z)
         a_prev = s[sim.A_PREV]
-        r, truncated = ep.decide_packed(
+        r, end = ep.decide_packed(
             s, a, pipe.points, pipe.cumulative, self.episode_setup.packed, z, book, self.max_decisions
         )
         self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
@@ -267,9 +276,18 @@ class PipelineFollowingEnv(gym.Env):
         if self.render_mode == "human":
             self.render()
         info = self._info()
-        if truncated and not past_end:  # the episode's summary, once, for clients that log per episode
+        if past_end:
+            end = self._end
+        elif end != ep.GOES_ON:  # the episode's summary, once, for clients that log per episode
+            self._end = end
             info.update(episode_summary(book, s))
-        return self._observation(), r, False, truncated or past_end, info
+            info.update(end_info(end))
+        return self._observation(), r, end == ep.PIPE_END, end == ep.TIME_LIMIT, info
+
+    @property
+    def book(self) -> np.ndarray:
+        """A copy of the episode's book (:mod:`pipefollow.sim.episode`): its counts so far."""
+        return self._book.copy()
 
     def _observation(self) -> np.ndarray:
         if self._vision is None:
