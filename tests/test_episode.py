@@ -44,7 +44,8 @@ def test_tally_and_close_episode_by_hand():
     stats = np.zeros((2, len(ep.STAT_NAMES)))
     ep.close_episode(stats, 1, book, 7.5, 1.0)
     assert stats[0].tolist() == [0.0] * 8
-    assert stats[1].tolist() == pytest.approx([-18.5, 0.5, 7.5, 2.0, 0.1**2 + 0.3**2, 2.0, 3.25, 0.5], abs=1e-15)
+    expected = [-18.5, 0.5, 7.5, 2.0, 0.1**2 + 0.3**2, 2.0, 3.25, 0.5]
+    assert stats[1].tolist() == pytest.approx(expected, abs=1e-15)
     training = np.zeros((1, len(ep.TRAINING_STAT_NAMES)))  # a training run's leading columns only
     ep.close_episode(training, 0, book, 7.5, 2.0)
     np.testing.assert_array_equal(training[0], [-18.5, 0.5, 7.5, 4.0])

@@ -10,14 +10,16 @@ first point, so its progress (the farthest arc length reached) is the length of 
   its poses at decision ends), capped by the pipe's length: the progress it would have made had
   every metre gone along the pipe;
 * **progress share**: progress / reachable (1 with the end reached, or nothing covered);
-* **followed forward**: the end reached, or a progress share ≥ :data:`SUCCESS_PROGRESS`;
-* **success**: the pipe in view at ≥ :data:`SUCCESS_IN_VIEW` of the decisions and followed forward;
 * **turned back**: the progress lost in decisions that ended with the pipe in view (``back_m``)
-  ≥ :data:`TURNED_BACK_M`: the AUV followed the pipe backwards for more than its camera's
-  footprint is long. Such an episode can keep the pipe in view all along.
+  ≥ :data:`TURNED_BACK_M`: the AUV followed the pipe backwards for as far as its camera's
+  footprint is long. Such an episode can keep the pipe in view all along;
+* **followed forward**: the end reached or a progress share ≥ :data:`SUCCESS_PROGRESS`, and not
+  turned back;
+* **success**: the pipe in view at ≥ :data:`SUCCESS_IN_VIEW` of the decisions and followed forward.
 
 Why half: every metre an AUV follows the pipe backwards, or circles over it, counts in the reachable
-distance and not in the progress, so such an episode scores near 0. A controller that follows the
+distance and not in the progress, so such an episode scores low (one that goes back as far as it came
+scores ½ at best: hence the turned-back test beside it). A controller that follows the
 pipe forward loses some of its travel in bends (it swings wide of a corner and comes back): on the
 held-out suites (60 s) the heuristic's share is ≥ 0.66 on every pipe, line-of-sight guidance's ≥ 0.55
 (docs/decisions.md). A threshold of 0.9 would judge how tightly a controller takes its bends, which
@@ -68,8 +70,8 @@ def progress_share(stats, lengths) -> np.ndarray:
 
 
 def followed_forward(stats, lengths) -> np.ndarray:
-    """Per episode: the end reached, or a progress share ≥ :data:`SUCCESS_PROGRESS`."""
-    return progress_share(stats, lengths) >= SUCCESS_PROGRESS
+    """Per episode: the end reached or a progress share ≥ :data:`SUCCESS_PROGRESS`, and not turned back."""
+    return (progress_share(stats, lengths) >= SUCCESS_PROGRESS) & ~turned_back(stats)
 
 
 def turned_back(stats) -> np.ndarray:
