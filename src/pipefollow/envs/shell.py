@@ -68,6 +68,8 @@ _INFO_INDEX = tuple(
 
 # The summary added to the info of an episode's last step.
 SUMMARY_KEYS = ("episode_pipe_in_view", "episode_progress_m", "episode_rms_e_dist")
+# What only the info of an episode's last step holds: the summary and how the episode ended.
+LAST_STEP_KEYS = (*SUMMARY_KEYS, "end_reason")
 
 
 @dataclass(frozen=True)

@@ -46,14 +46,15 @@ def _array_infos(env):
     """``env`` with infos Minari can store: the keys every step has (each already an array).
 
     Minari keeps the infos as arrays with one row per step (the reset's included), so the episode
-    summary that only the last step has (:data:`~pipefollow.envs.shell.SUMMARY_KEYS`) is left out.
+    summary and end reason that only the last step has (:data:`~pipefollow.envs.shell.LAST_STEP_KEYS`)
+    are left out.
     """
     import gymnasium as gym
 
-    from pipefollow.envs.shell import SUMMARY_KEYS
+    from pipefollow.envs.shell import LAST_STEP_KEYS
 
     def per_step(info):
-        return {k: v for k, v in info.items() if k not in SUMMARY_KEYS}
+        return {k: v for k, v in info.items() if k not in LAST_STEP_KEYS}
 
     class ArrayInfos(gym.Wrapper):
         def reset(self, **kwargs):
