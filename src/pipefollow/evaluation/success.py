@@ -43,8 +43,7 @@ def _rows(stats) -> np.ndarray:
 
 
 def _lengths(lengths, n: int) -> np.ndarray:
-    out = np.broadcast_to(np.asarray(lengths, dtype=np.float64), (n,))
-    return out
+    return np.broadcast_to(np.asarray(lengths, dtype=np.float64), (n,))
 
 
 def reached_end(stats, lengths) -> np.ndarray:

@@ -153,10 +153,10 @@ def record_pose(poses, e, t, s):
 
 @njit(cache=True)
 def hold_poses(poses, e, book):
-    """After an episode that ended early (at the pipe's end), its last pose in the rows of ``poses[e]`` left.
+    """The last pose of episode ``e`` in the rows of ``poses[e]`` after its last decision, if any are left.
 
-    The AUV stays where its inspection ended, so a recorded track keeps its shape (and no row
-    holds zeros).
+    An episode that ended at the pipe's end made fewer decisions than the rows hold: the AUV stays
+    where its inspection ended, so a recorded track keeps its shape and no row holds zeros.
     """
     if poses.shape[0] > 0:
         last = int(book[DECISIONS])
