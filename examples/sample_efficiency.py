@@ -10,6 +10,10 @@ the return of a pipe is the mean over seeds; the 95 % intervals are BCa bootstra
     python examples/sample_efficiency.py --out runs/sample-efficiency            # everything
     python examples/sample_efficiency.py --out runs/sample-efficiency --variants ppo --seeds 0 1
     python examples/sample_efficiency.py --out runs/sample-efficiency --table --plot curves.png
+    python examples/sample_efficiency.py --out runs/tuning --judge-on tuning --variants ...  # choose
+
+Options are chosen with ``--judge-on tuning`` (the first 100 pipes of the training family, seeds
+5–9) and only then judged on `heldout` with seeds 0–4.
 
 Each (variant, budget, seed) writes one JSON file under OUT/runs/ with its per-pipe returns
 (resumable: done runs are skipped).
@@ -40,6 +44,7 @@ from pipefollow.training.random_pipes import train_random_compiled
 
 TRAIN_FAMILY, EPISODE_S, TEST_SUITE, TEST_S = "mixed", 90.0, "heldout", 60.0
 BUDGETS, SEEDS = (10_000, 30_000, 100_000), (0, 1, 2, 3, 4)
+TUNING_PIPES, TUNING_SEEDS = 100, (5, 6, 7, 8, 9)  # where options are chosen (judge_pipes)
 CONDITIONS = {
     "calm": PAPER_SIM,
     "disturbed": PAPER_SIM._replace(disturbance=make_disturbance(0.1, 45.0, camera_noise=0.05)),
@@ -94,14 +99,47 @@ VARIANTS: dict[str, tuple[str, Callable[[int, int], tuple[object, int]]]] = {
     "supervised-cacla-td0.9": ("supervised CACLA, critic TD(0.9)", _paper(True, {"critic_lambda": 0.9})),
     "cacla-td1": ("CACLA, critic TD(1)", _paper(False, {"critic_lambda": 1.0})),
     "supervised-cacla-td1": ("supervised CACLA, critic TD(1)", _paper(True, {"critic_lambda": 1.0})),
+    # the recipe: the trace with a faster actor and a longer horizon, chosen on the tuning pipes (below)
+    "supervised-cacla-recipe": (
+        "supervised CACLA, TD(0.9), α_π 0.8, α_V 0.6, γ_d 0.9",
+        _paper(True, {"critic_lambda": 0.9, "alpha_pi": 0.8, "alpha_v": 0.6, "discount": 0.9}),
+    ),
+    "supervised-cacla-recipe-td0": (
+        "supervised CACLA, TD(0), α_π 0.8, α_V 0.6, γ_d 0.9",
+        _paper(True, {"alpha_pi": 0.8, "alpha_v": 0.6, "discount": 0.9}),
+    ),
+    "supervised-cacla-td0.9-actor0.8": (
+        "supervised CACLA, TD(0.9), α_π 0.8",
+        _paper(True, {"critic_lambda": 0.9, "alpha_pi": 0.8}),
+    ),
+    "supervised-cacla-td0.9-discount0.9": (
+        "supervised CACLA, TD(0.9), γ_d 0.9",
+        _paper(True, {"critic_lambda": 0.9, "discount": 0.9}),
+    ),
+    "cacla-recipe": (
+        "CACLA, TD(0.9), α_π 0.8, α_V 0.6, γ_d 0.9",
+        _paper(False, {"critic_lambda": 0.9, "alpha_pi": 0.8, "alpha_v": 0.6, "discount": 0.9}),
+    ),
     "ppo": ("PPO", _deep("ppo")),
     "sac": ("SAC", _deep("sac")),
 }
 
 
-def judge(agent) -> dict:
-    """Per-pipe returns and in-view shares on the held-out suite, per condition."""
-    pipes = get_suite(TEST_SUITE).pipes(None, min_length_for(TEST_S))
+def judge_pipes(judge_on: str = TEST_SUITE) -> list:
+    """The pipes a policy is judged on: the held-out suite, or the tuning pipes.
+
+    ``tuning`` is the first 100 pipes of the training family (training draws its pipe indices
+    uniformly from [0, 2**62), so it meets none of them in practice); options are chosen there, with
+    seeds other than the table's, and only then judged on ``heldout``.
+    """
+    if judge_on == "tuning":
+        return get_suite(TRAIN_FAMILY).pipes(TUNING_PIPES, min_length_for(TEST_S))
+    return get_suite(judge_on).pipes(None, min_length_for(TEST_S))
+
+
+def judge(agent, judge_on: str = TEST_SUITE) -> dict:
+    """Per-pipe returns and in-view shares on the held-out suite (or the tuning pipes), per condition."""
+    pipes = judge_pipes(judge_on)
     out = {}
     for name, params in CONDITIONS.items():
         res = run_episodes(agent, pipes, TEST_S, params)[0]
@@ -109,12 +147,16 @@ def judge(agent) -> dict:
     return out
 
 
-def run_all(out: Path, variants, budgets, seeds) -> None:
+def run_all(out: Path, variants, budgets, seeds, judge_on: str = TEST_SUITE) -> None:
     """Train and judge every missing (variant, budget, seed); one JSON file each."""
     (out / "runs").mkdir(parents=True, exist_ok=True)
+    config = out / "judged-on.txt"  # one folder, one set of pipes: never mixed
+    if config.exists() and config.read_text().strip() != judge_on:
+        raise SystemExit(f"{out}: its runs were judged on {config.read_text().strip()!r}, not {judge_on!r}")
+    write_text_atomic(config, judge_on + "\n")
     heuristic = out / "runs" / "heuristic.json"
     if not heuristic.exists():
-        write_text_atomic(heuristic, json.dumps({"variant": "heuristic", **judge(Heuristic())}))
+        write_text_atomic(heuristic, json.dumps({"variant": "heuristic", **judge(Heuristic(), judge_on)}))
     for budget in budgets:
         for variant in variants:
             for seed in seeds:
@@ -125,7 +167,7 @@ def run_all(out: Path, variants, budgets, seeds) -> None:
                 agent, steps = VARIANTS[variant][1](budget, seed)
                 wall = time.perf_counter() - t0
                 result = {"variant": variant, "budget": budget, "seed": seed, "steps": steps, "wall_s": wall}
-                result |= judge(agent)
+                result |= judge(agent, judge_on)
                 write_text_atomic(path, json.dumps(result))
                 print(f"{variant:24s} {budget:>7} seed {seed}: {wall:6.1f} s, calm "
                       f"{np.mean(result['calm']['returns']):7.2f}, disturbed "
@@ -136,23 +178,32 @@ def summaries(out: Path) -> list[dict]:
     """One row per (variant, budget, condition): pooled over seeds (module docstring)."""
     runs = [json.loads(p.read_text()) for p in sorted((out / "runs").glob("*.json"))]
     h = next(r for r in runs if r["variant"] == "heuristic")
+
+    def per_pipe(variant: str, budget: int, cond: str) -> np.ndarray | None:
+        rs = [r for r in runs if r["variant"] == variant and r["budget"] == budget]
+        return np.array([r[cond]["returns"] for r in rs]).mean(axis=0) if rs else None
+
     rows = []
     for variant in VARIANTS:
         for budget in sorted({r["budget"] for r in runs if r["variant"] == variant}):
             rs = [r for r in runs if r["variant"] == variant and r["budget"] == budget]
             for cond in CONDITIONS:
-                per_seed = np.array([r[cond]["returns"] for r in rs])
-                per_pipe = per_seed.mean(axis=0)
+                returns = per_pipe(variant, budget, cond)
                 success = np.mean(np.array([r[cond]["in_view"] for r in rs]) >= SUCCESS_IN_VIEW)
-                lo, hi = bootstrap_ci(per_pipe)
-                d = paired_difference(per_pipe, h[cond]["returns"])
-                rows.append({
-                    "variant": variant, "budget": budget, "steps": rs[0]["steps"], "seeds": len(rs),
-                    "condition": cond, "mean_return": float(per_pipe.mean()), "ci95": [lo, hi],
-                    "success_rate": float(success),
+                lo, hi = bootstrap_ci(returns)
+                d = paired_difference(returns, h[cond]["returns"])
+                row = {
+                    "variant": variant, "label": VARIANTS[variant][0], "budget": budget,
+                    "steps": rs[0]["steps"], "seeds": len(rs), "condition": cond,
+                    "mean_return": float(returns.mean()), "ci95": [lo, hi], "success_rate": float(success),
                     "vs_heuristic": d["mean_diff"], "vs_heuristic_ci95": d["ci95_diff"],
                     "wall_s": float(np.mean([r["wall_s"] for r in rs])),
-                })  # fmt: skip
+                }  # fmt: skip
+                ppo = per_pipe("ppo", budget, cond)  # paired per pipe against PPO at the same budget
+                if ppo is not None and variant != "ppo":
+                    d = paired_difference(returns, ppo)
+                    row |= {"vs_ppo": d["mean_diff"], "vs_ppo_ci95": d["ci95_diff"]}
+                rows.append(row)
     return rows
 
 
@@ -214,12 +265,20 @@ def main() -> None:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--variants", nargs="+", default=["cacla", "supervised-cacla", "ppo"], choices=VARIANTS)
     ap.add_argument("--budgets", nargs="+", type=int, default=list(BUDGETS))
-    ap.add_argument("--seeds", nargs="+", type=int, default=list(SEEDS))
+    seeds_help = f"default {SEEDS}, with --judge-on tuning {TUNING_SEEDS}"
+    ap.add_argument("--seeds", nargs="+", type=int, default=None, help=seeds_help)
+    ap.add_argument(
+        "--judge-on",
+        choices=[TEST_SUITE, "tuning"],
+        default=TEST_SUITE,
+        help=f"the held-out suite, or the first {TUNING_PIPES} pipes of the training family",
+    )
     ap.add_argument("--table", action="store_true", help="print the table of the finished runs and stop")
     ap.add_argument("--plot", type=Path, default=None, help="also draw the learning curves to this file")
     args = ap.parse_args()
     if not args.table:
-        run_all(args.out, args.variants, args.budgets, args.seeds)
+        seeds = args.seeds or list(TUNING_SEEDS if args.judge_on == "tuning" else SEEDS)
+        run_all(args.out, args.variants, args.budgets, seeds, args.judge_on)
     rows = summaries(args.out)
     write_text_atomic(args.out / "summary.json", json.dumps(rows, indent=1) + "\n")
     print(table(rows, args.out))

@@ -139,3 +139,11 @@ def test_version_is_the_package_attribute_that_pyproject_reads():
     assert data["tool"]["setuptools"]["dynamic"]["version"] == {"attr": "pipefollow.__version__"}
     out = CliRunner().invoke(cli.main, ["--version"]).output
     assert out.strip() == f"pipefollow, version {pipefollow.__version__}"
+
+
+def test_python_dash_m_pipefollow_is_the_command():
+    """``python -m pipefollow`` runs the same command line as the console script."""
+    out = subprocess.run(
+        [sys.executable, "-m", "pipefollow", "--version"], capture_output=True, text=True, check=True
+    )
+    assert out.stdout.strip().startswith("pipefollow, version ")

@@ -42,8 +42,10 @@ def test_every_layer_is_a_folder_of_the_design_table():
     assert layers[:2] == ["files", "sim"] and layers[-1] == "cli"
     folders = {p.name for p in ROOT.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
     assert folders == set(layers)
-    loose = {p.name for p in ROOT.glob("*.py")} - {"__init__.py"}
+    loose = {p.name for p in ROOT.glob("*.py")} - {"__init__.py", "__main__.py"}
     assert loose == set(), f"modules outside a layer folder: {sorted(loose)}"
+    # `python -m pipefollow` is the command line's entry point and imports nothing else
+    assert [m for _, m, _ in imports(ROOT / "__main__.py")] == ["pipefollow.cli"]
 
 
 def test_no_import_goes_up_a_layer_or_takes_a_private_name_across_folders():

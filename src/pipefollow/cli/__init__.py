@@ -19,6 +19,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "pipefollow.cli.compare:compare",
         "Compare learners over training seeds × pipes: IQM, mean, probability of improvement.",
     ),
+    "docs": (
+        "pipefollow.cli.docs:docs",
+        "The documentation site's generated pages: results pages rendered from the stored outputs.",
+    ),
     "evaluate": (
         "pipefollow.cli.evaluate:evaluate",
         "Evaluate a controller deterministically (σ = 0) on a pipeline.",

@@ -172,6 +172,15 @@ def inert_readings(ids) -> list[str]:
     ]
 
 
+def camera_text(camera, prefix: str = "\n") -> str:
+    """The camera and its water in one line for the head of a text report; ``""`` for the ideal camera."""
+    if not camera:
+        return ""
+    from pipefollow.perception.water import describe
+
+    return f"{prefix}camera {camera['camera']}, {describe(camera['water'])}"
+
+
 def disturbance_text(d, prefix: str = "; disturbances: ") -> str:
     """The disturbances of a run in words, for the head of a text report; ``""`` without any."""
     from pipefollow.sim import disturbance as dist

@@ -8,6 +8,7 @@ import click
 
 from pipefollow.cli.common import (
     apply_readings,
+    camera_text,
     check_plot_path,
     disturbance_text,
     echo_result,
@@ -112,7 +113,7 @@ def evaluate(
     if animate_path:
         run.write_animation(animate_path)
         result["animation"] = str(animate_path)
-    echo_result(result, as_json, lambda: _text(result, episodes, disturbance))
+    echo_result(result, as_json, lambda: _text(result, episodes, disturbance, camera))
 
 
 def _check_figure_paths(plot_path: str | None, animate_path: str | None) -> None:
@@ -137,11 +138,11 @@ def _settings(disturbance, camera, warnings: list[str]) -> dict:
     return out
 
 
-def _text(result: dict, episodes: int, disturbance) -> str:
+def _text(result: dict, episodes: int, disturbance, camera=None) -> str:
     """The result as a table of the episodes with their mean, and the files written."""
     lines = [
         f"{result['controller']} on {result['pipeline']}, {episodes} episode(s) of {result['seconds']:g} s"
-        f"{disturbance_text(disturbance)}",
+        f"{disturbance_text(disturbance)}{camera_text(camera)}",
         f"{'episode':>7} {'return':>9} {'in view':>8} {'progress':>9} {'of reach':>8} {'success':>7}  end",
     ]
     for i, row in enumerate(result["episodes"]):

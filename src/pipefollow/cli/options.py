@@ -238,7 +238,13 @@ def camera_options(fn):
             help="ideal: the exact visible piece (the paper's); vision: a pipe detector on the camera image.",
         ),
         click.option(
-            "--water", default=None, metavar="PRESET", help="Water preset: clear, moderate, turbid [clear]."
+            "--water",
+            default=None,
+            metavar="PRESET",
+            # the presets and the fields they set are perception.water's WATER_PRESETS and PRESET_FIELDS
+            # (not imported here: it loads numba); tests/test_results_pages.py checks that this names them
+            help="Water preset: clear, moderate, turbid [clear]. A preset sets turbidity, blur, noise and "
+            "snow (marine snow) together; --turbidity, --burial and --growth change it.",
         ),
         click.option(
             "--turbidity",

@@ -6,6 +6,7 @@ import click
 
 from pipefollow.cli.common import (
     apply_readings,
+    camera_text,
     check_plot_path,
     disturbance_text,
     echo_result,
@@ -162,6 +163,13 @@ def benchmark(
         run.summary["plot"] = str(plot_path)
     echo_result(
         run.summary, as_json,
-        lambda: format_summary(run.summary, seconds) + disturbance_text(disturbance, "\n  disturbances   ")
+        lambda: _with_camera(format_summary(run.summary, seconds), camera)
+        + disturbance_text(disturbance, "\n  disturbances   ")
         + (f"\nplot: {plot_path}" if plot_path else ""),
     )  # fmt: skip
+
+
+def _with_camera(summary: str, camera) -> str:
+    """The benchmark's text with the camera and water line under its head line."""
+    head, _, rest = summary.partition("\n")
+    return head + camera_text(camera, "\n  ") + ("\n" + rest if rest else "")

@@ -1,4 +1,4 @@
-"""How good the pipe detector is, and a camera model calibrated from it (issue 15, items 4 and 5).
+"""How good the pipe detector is, and a camera model calibrated from it.
 
 * :func:`detector_report` renders frames at poses taken along the held-out suite's trajectories
   (the heuristic on the ideal camera, one 60-s episode per pipe), for each turbidity and burial

@@ -1,4 +1,4 @@
-"""A classical pipe detector on grey camera images (issue 15, item 2), with OpenCV.
+"""A classical pipe detector on grey camera images, with OpenCV.
 
 The steps of the underwater pipeline-tracking literature: Canny edges, the probabilistic Hough
 transform, the dominant direction of the line segments (a length-weighted angle histogram), the

@@ -1,4 +1,4 @@
-"""The downward camera's grey image of the footprint (issue 15, item 1).
+"""The downward camera's grey image of the footprint (a rendered seabed, pipe and water).
 
 Pixel conventions, which tests and users rely on (written once, in
 :mod:`pipefollow.perception.pixels`): the image covers the footprint ``x ∈ [−hw, hw]`` (columns,

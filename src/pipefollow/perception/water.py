@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from types import MappingProxyType
 from typing import Any, NamedTuple
 
 
@@ -46,12 +47,57 @@ _RANGES = {
     "altitude": (0.5, 10.0, True),
 }
 
+# every field's range as (low, high, low included), for tables of the settings
+RANGES: Mapping[str, tuple[float, float, bool]] = MappingProxyType(_RANGES)
+
 CLEAR = Water()
 WATER_PRESETS = {
     "clear": CLEAR,
     "moderate": Water(turbidity=0.2, blur=0.9, noise=5.0, snow=12.0),
     "turbid": Water(turbidity=0.25, blur=1.2, noise=7.0, snow=25.0),
 }
+
+
+# the fields a preset sets (the others stay at the defaults of :class:`Water`), in --help and describe()
+PRESET_FIELDS = tuple(
+    f for f in Water._fields if any(getattr(w, f) != getattr(CLEAR, f) for w in WATER_PRESETS.values())
+)
+# how describe() words a field: (name before the value or "", unit after it)
+_WORDS = {
+    "turbidity": ("turbidity ", "/m"),
+    "blur": ("blur ", " px"),
+    "noise": ("noise ", " grey levels"),
+    "snow": ("", " snow particles/frame"),
+    "burial": ("", " of the width buried"),
+    "growth": ("", " of the surface grown over"),
+    "light_falloff": ("light falloff ", ""),
+    "pipe_diameter": ("pipe ", " m"),
+    "altitude": ("altitude ", " m"),
+}
+
+
+def describe(w: Water) -> str:
+    """One line: the preset whose fields ``w`` has (or ``custom``) and the settings that make the image.
+
+    The preset fields (:data:`PRESET_FIELDS`) always, the others where they differ from the default
+    record, e.g. ``water moderate: turbidity 0.2/m, blur 0.9 px, noise 5 grey levels, snow 12 snow
+    particles/frame``.
+    """
+    name = next(
+        (k for k, p in WATER_PRESETS.items() if all(getattr(p, f) == getattr(w, f) for f in PRESET_FIELDS)),
+        "custom",
+    )
+    parts = []
+    for f in Water._fields:
+        v = getattr(w, f)
+        if f in PRESET_FIELDS or v != getattr(CLEAR, f):
+            if f in ("width", "height"):
+                continue
+            before, after = _WORDS[f]
+            parts.append(f"{before}{v:g}{after}")
+    if (w.width, w.height) != (CLEAR.width, CLEAR.height):
+        parts.append(f"{w.width}×{w.height} px image")
+    return f"water {name}: " + ", ".join(parts)
 
 
 def make_water(**fields: Any) -> Water:

@@ -1,0 +1,75 @@
+"""``pipefollow docs``: the documentation site's generated pages."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from pipefollow.cli.common import UserError, guard
+
+
+@click.group()
+def docs() -> None:
+    """The documentation site's generated pages: results pages rendered from the stored outputs."""
+
+
+@docs.command()
+@click.option(
+    "--docs",
+    "docs_dir",
+    default="docs",
+    show_default=True,
+    type=click.Path(file_okay=False),
+    help="The documentation folder whose stored outputs (reproduction/, readings/, vision/, ...) are read.",
+)
+@click.option(
+    "--out",
+    "out_dir",
+    default=None,
+    type=click.Path(file_okay=False),
+    help="Folder the pages are written to [default: DOCS/results, the committed pages: the one "
+    "command whose default output is inside docs/, since regenerating them is its purpose].",
+)
+@click.option(
+    "--page",
+    "names",
+    multiple=True,
+    metavar="NAME",
+    help="Only this page (repeatable): reproduction, readings, reference-learners, generalization, "
+    "deep-vs-paper, robustness, sample-efficiency, perception [default: all].",
+)
+@click.option(
+    "--check",
+    is_flag=True,
+    help="Write nothing; list the pages that differ from what the stored outputs give "
+    "and exit with status 1 if any.",
+)
+@guard
+def results(docs_dir, out_dir, names, check):
+    """Write one results page per result from the stored outputs under DOCS.
+
+    Tables are rendered from the stored CSV/JSON files and every number in a page's text is filled
+    from them; the output depends on the stored outputs only (no date, no machine), so a page that
+    differs from its regeneration is stale (--check; tests/test_results_pages.py).
+    """
+    from pipefollow.experiments import results_pages
+
+    for n in names:
+        if n not in results_pages.PAGES:
+            raise click.BadParameter(
+                f"unknown page {n!r} (choose from {', '.join(results_pages.PAGES)})", param_hint="--page"
+            )
+    if not Path(docs_dir).is_dir():
+        raise UserError(f"--docs '{docs_dir}': no such folder")
+    out = Path(out_dir) if out_dir else Path(docs_dir) / "results"
+    if check:
+        stale = results_pages.stale_pages(docs_dir, out, names or None)
+        for n in stale:
+            click.echo(f"stale: {out / (n + '.md')}")
+        if stale:
+            raise SystemExit(1)
+        click.echo(f"up to date: {len(names or results_pages.PAGES)} page(s) in {out}")
+        return
+    for path in results_pages.write_pages(docs_dir, out, names or None):
+        click.echo(f"wrote {path}")

@@ -1,0 +1,224 @@
+"""The sample-efficiency results page: the paper's family and PPO at 10,000-100,000 decisions.
+
+Sources: ``docs/sample-efficiency/summary.json`` (``examples/sample_efficiency.py``: per variant,
+budget and condition the mean return with its interval, the paired difference to the heuristic,
+the success rate and the training's wall time), and the paired tables of
+``docs/sample-efficiency/cacla-var.md`` and ``critic-td-lambda.md``.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from pipefollow.experiments.results_pages.markdown import (
+    PageError,
+    ci,
+    count,
+    fill,
+    minus,
+    num,
+    page,
+    pct,
+    read_json,
+    report_table,
+    table,
+)
+
+TITLE = "Results: sample efficiency"
+SOURCES = (
+    "sample-efficiency/summary.json",
+    "sample-efficiency/cacla-var.md",
+    "sample-efficiency/critic-td-lambda.md",
+)
+
+TEXT = """\
+Regenerate the stored outputs with `python examples/sample_efficiency.py --out FOLDER --variants ...`
+(the how-to: [Sample efficiency](../guides/sample-efficiency.md)) and copy `summary.json` to
+`docs/sample-efficiency/`.
+
+## Every variant at every budget
+
+Trained on a new `random:mixed` pipe every episode, {seeds} seeds, judged on `heldout` calm and
+disturbed; per (variant, budget) a pipe's return is the mean over the seeds, intervals are BCa
+bootstraps over the pipes. Training wall times as stored (a shared machine: compare orders of
+magnitude only). The heuristic scores {h_calm} calm and {h_dist} disturbed.
+
+{table}
+
+![Held-out return against training decisions](../sample-efficiency/learning-curves.png)
+
+## What helped and what did not, at equal budgets
+
+* **Supervision is the first large gain**: supervised CACLA against the heuristic in calm water
+  {sup_mid_vs} at {mid} decisions and {sup_big_vs} at {big}, where CACLA alone is {cacla_big_vs};
+  disturbed, supervised CACLA is {sup_mid_dist_vs} at {mid} and {sup_big_dist_vs} at {big}.
+* **Exploration starting at σ = 0.3**: CACLA {s03_big} against {cacla_big} at {big} calm;
+  supervised CACLA {ss03_big} against {sup_big}.
+* **Training under `mild` randomization**, judged disturbed at {big}: supervised CACLA {smild_big}
+  against {sup_big_dist}, CACLA {cmild_big} against {cacla_big_dist}.
+* **CACLA+Var**, paired per pipe against the same learner without it (CACLA+Var − CACLA, 95 % CI
+  over the pipes, `cacla-var.md`):
+
+{var_table}
+
+* **An eligibility trace on the critic, TD(λ)**, paired per pipe against TD(0)
+  (`critic-td-lambda.md`):
+
+{td_table}
+
+  Supervised CACLA with λ = 0.9 is {std9_mid_vs} over the heuristic in calm water at {mid}
+  decisions and {std9_mid_dist_vs} disturbed; at {big} it scores {std9_big} calm against PPO's
+  {ppo_big}. CACLA with λ = 0.9 is {ctd9_big_vs} over the heuristic at {big} calm.
+* **The paper's family against PPO**: the best of the family at {big} decisions in calm water is
+  {best_name} ({best_big}), {best_gap} below PPO ({ppo_big}); within {mid} decisions the variants
+  whose interval of the difference to the heuristic lies above 0 in both conditions: {both_mid}.
+"""
+
+
+def label(variant: str) -> str:
+    """``supervised-cacla-td0.9`` → ``supervised CACLA, critic TD(0.9)``."""
+    base, rest = variant, ""
+    for stem, name in (("supervised-cacla", "supervised CACLA"), ("cacla", "CACLA"), ("ppo", "PPO")):
+        if variant == stem or variant.startswith(stem + "-"):
+            base, rest = name, variant[len(stem) + 1 :]
+            break
+    if not rest:
+        return base
+    if rest == "var":
+        return base + "+Var"
+    if m := re.fullmatch(r"sigma([\d.]+)", rest):
+        return f"{base}, σ from {m.group(1)}"
+    if m := re.fullmatch(r"td([\d.]+)", rest):
+        return f"{base}, critic TD({m.group(1)})"
+    return f"{base}, trained under {rest}"
+
+
+def _ci(lo_hi, sign=False) -> str:
+    return ci(lo_hi[0], lo_hi[1], sign=sign)
+
+
+def render(docs: Path) -> str:
+    """The page's Markdown from the stored outputs under ``docs``."""
+    folder = docs / "sample-efficiency"
+    rows = read_json(folder / "summary.json")
+    cell = {(r["variant"], r["budget"], r["condition"]): r for r in rows}
+    variants = list(dict.fromkeys(r["variant"] for r in rows))
+    budgets = sorted({r["budget"] for r in rows})
+    small, mid, big = budgets[0], budgets[len(budgets) // 2], budgets[-1]
+
+    def get(v: str, b: int, c: str) -> dict:
+        try:
+            return cell[v, b, c]
+        except KeyError:
+            raise PageError(f"summary.json: no row for {v} at {b} ({c})") from None
+
+    # the heuristic's return: mean return minus the paired difference (the same on every row)
+    heur = {
+        c: get("cacla", small, c)["mean_return"] - get("cacla", small, c)["vs_heuristic"]
+        for c in ("calm", "disturbed")
+    }
+    out = []
+    for v in variants:
+        for b in budgets:
+            if (v, b, "calm") not in cell:
+                continue
+            c, d = get(v, b, "calm"), get(v, b, "disturbed")
+            out.append(
+                (
+                    label(v),
+                    count(c["steps"]),
+                    c["seeds"],
+                    f"{num(c['mean_return'])} {_ci(c['ci95'])}",
+                    f"{num(c['vs_heuristic'], 1, True)} {_ci(c['vs_heuristic_ci95'], True)}",
+                    pct(c["success_rate"]),
+                    f"{num(d['mean_return'])} {_ci(d['ci95'])}",
+                    f"{num(d['vs_heuristic'], 1, True)} {_ci(d['vs_heuristic_ci95'], True)}",
+                    pct(d["success_rate"]),
+                    f"{c['wall_s']:.1f} s",
+                )
+            )
+
+    def vs(v, b, c="calm"):
+        r = get(v, b, c)
+        return f"{num(r['vs_heuristic'], 1, True)} {_ci(r['vs_heuristic_ci95'], True)}"
+
+    def ret(v, b, c="calm"):
+        return num(get(v, b, c)["mean_return"])
+
+    family = [v for v in variants if not v.startswith("ppo")]
+    best = max(family, key=lambda v: get(v, big, "calm")["mean_return"])
+    both = [
+        label(v)
+        for v in family
+        if (v, mid, "calm") in cell
+        and all(get(v, mid, c)["vs_heuristic_ci95"][0] > 0 for c in ("calm", "disturbed"))
+    ]
+
+    def paired(path: Path, heading: str) -> str:
+        t = report_table(path, heading)
+        return "\n".join(
+            "  " + line
+            for line in table(list(t[0]), ([minus(x) for x in r.values()] for r in t)).splitlines()
+        )
+
+    var_heading = next(iter(_headings(folder / "cacla-var.md")))
+    td_heading = next(iter(_headings(folder / "critic-td-lambda.md")))
+    body = fill(
+        TEXT,
+        seeds=get("cacla", small, "calm")["seeds"],
+        h_calm=num(heur["calm"]),
+        h_dist=num(heur["disturbed"]),
+        table=table(
+            (
+                "variant",
+                "decisions",
+                "seeds",
+                "calm: mean return [95 % CI]",
+                "vs heuristic [95 % CI]",
+                "success",
+                "disturbed: mean return [95 % CI]",
+                "vs heuristic [95 % CI]",
+                "success",
+                "train wall time per seed",
+            ),
+            out,
+        ),
+        mid=count(mid),
+        big=count(big),
+        sup_mid_vs=vs("supervised-cacla", mid),
+        sup_big_vs=vs("supervised-cacla", big),
+        cacla_big_vs=vs("cacla", big),
+        sup_mid_dist_vs=vs("supervised-cacla", mid, "disturbed"),
+        sup_big_dist_vs=vs("supervised-cacla", big, "disturbed"),
+        s03_big=ret("cacla-sigma0.3", big),
+        cacla_big=ret("cacla", big),
+        ss03_big=ret("supervised-cacla-sigma0.3", big),
+        sup_big=ret("supervised-cacla", big),
+        smild_big=ret("supervised-cacla-mild", big, "disturbed"),
+        sup_big_dist=ret("supervised-cacla", big, "disturbed"),
+        cmild_big=ret("cacla-mild", big, "disturbed"),
+        cacla_big_dist=ret("cacla", big, "disturbed"),
+        var_table=paired(folder / "cacla-var.md", var_heading),
+        td_table=paired(folder / "critic-td-lambda.md", td_heading),
+        std9_mid_vs=vs("supervised-cacla-td0.9", mid),
+        std9_mid_dist_vs=vs("supervised-cacla-td0.9", mid, "disturbed"),
+        std9_big=ret("supervised-cacla-td0.9", big),
+        ppo_big=ret("ppo", big),
+        ctd9_big_vs=vs("cacla-td0.9", big),
+        best_name=label(best),
+        best_big=ret(best, big),
+        best_gap=num(get("ppo", big, "calm")["mean_return"] - get(best, big, "calm")["mean_return"]),
+        both_mid=", ".join(both) or "none",
+    )
+    provenance = [(s, "not recorded") for s in SOURCES]
+    return page(TITLE, __name__, SOURCES, provenance, body)
+
+
+def _headings(path: Path) -> list[str]:
+    from pipefollow.experiments.results_pages.markdown import markdown_tables, read_text
+
+    tables = markdown_tables(read_text(path))
+    if not tables:
+        raise PageError(f"{path}: no table")
+    return list(tables)

@@ -1,0 +1,346 @@
+"""The generated results pages (docs/results/): stale pages fail, the numbers come from the data.
+
+Each committed page must equal what ``pipefollow docs results`` renders from the stored outputs
+under docs/; a number changed in a copy of the stored outputs must show up in the page; the water
+presets' table on the perception page must say what the code's presets set.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from pipefollow.cli import main
+from pipefollow.experiments import results_pages
+from pipefollow.experiments.results_pages.markdown import (
+    MINUS,
+    PageError,
+    fill,
+    markdown_tables,
+    minus,
+    num,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+RESULTS = DOCS / "results"
+
+
+@pytest.mark.parametrize("name", list(results_pages.PAGES))
+def test_the_committed_page_is_what_its_stored_outputs_give(name):
+    committed = (RESULTS / f"{name}.md").read_text(encoding="utf-8")
+    assert committed == results_pages.render(name, DOCS), (
+        f"docs/results/{name}.md is stale: run `pipefollow docs results`"
+    )
+
+
+def test_every_page_is_in_the_site_nav_and_says_how_to_regenerate_it():
+    nav = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
+    for name in results_pages.PAGES:
+        assert f"results/{name}.md" in nav
+        text = (RESULTS / f"{name}.md").read_text(encoding="utf-8")
+        assert "`pipefollow docs results`" in text and "where and with what it was computed" in text
+
+
+def _result_rows(text: str) -> list[str]:
+    """The table rows of ``text`` with at least two measured numbers (decimals) in their cells."""
+    number = re.compile(r"^[+\N{MINUS SIGN}-]?\d+\.\d+")
+    rows = []
+    for line in text.splitlines():
+        if line.lstrip().startswith("|"):
+            cells = [c.strip() for c in line.strip().strip("|").split("|")]
+            if sum(bool(number.match(c)) for c in cells) >= 2:
+                rows.append(line)
+    return rows
+
+
+def test_the_guides_hold_no_table_of_results():
+    guides = sorted((DOCS / "guides").glob("*.md"))
+    found = [f"{p.name}: {r}" for p in guides for r in _result_rows(p.read_text(encoding="utf-8"))]
+    assert found == []
+    # a results row as the guides had them is found; a table of options is not
+    m = "\N{MINUS SIGN}"
+    assert _result_rows(f"| calm | heuristic | {m}41.3 | [{m}49.8, {m}32.8] | +2.4 |")
+    assert not _result_rows("| `--seconds` | 20 | episode length (s) |\n| `turbidity` | 1/m | [0, 3] |")
+
+
+def test_rendering_twice_gives_the_same_bytes():
+    for name in results_pages.PAGES:
+        assert results_pages.render(name, DOCS) == results_pages.render(name, DOCS)
+
+
+# ---------------------------------------------------------------------------------------------
+# The filling: a changed stored number shows up in the page
+
+
+@pytest.fixture
+def docs_copy(tmp_path) -> Path:
+    """A copy of the stored outputs (docs/ without the pages and images)."""
+    out = tmp_path / "docs"
+    for sub in ("reproduction", "repeats", "readings", "skew-centred", "reference-learners", "generalize",
+                "deep-vs-paper", "robustness", "sample-efficiency", "vision"):  # fmt: skip
+        shutil.copytree(DOCS / sub, out / sub, ignore=shutil.ignore_patterns("*.png"))
+    return out
+
+
+def _rewrite_csv(path: Path, change) -> None:
+    with open(path, newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    fields = list(rows[0])
+    for r in rows:
+        change(r)
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, fields)
+        w.writeheader()
+        w.writerows(rows)
+
+
+def test_a_changed_heuristic_return_moves_the_generalization_table(docs_copy):
+    def change(r):
+        if r["scenario"] == "calm" and r["controller"] == "heuristic":
+            r["mean_return"] = "-12.3456"
+
+    _rewrite_csv(docs_copy / "generalize" / "heldout.csv", change)
+    page = results_pages.render("generalization", docs_copy)
+    row = next(line for line in page.splitlines() if line.startswith("| calm | heuristic |"))
+    assert f"| {MINUS}12.3 |" in row
+    assert f"{MINUS}41.3" not in row
+
+
+def test_a_changed_validation_return_moves_table_1_and_its_prose(docs_copy):
+    # one repeat's learned return on the validation pipe beats the heuristic: mean, sd, wins change
+    path = docs_copy / "reproduction" / "evaluation.csv"
+    with open(path, newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    learned = [r for r in rows if r["trial"] == "validation" and r["controller"] == "learned"]
+    heuristic = next(
+        float(r["return"]) for r in rows if r["trial"] == "validation" and r["controller"] == "heuristic"
+    )
+    values = [float(r["return"]) for r in learned]
+    values[0] = -50.0
+    def change(r):
+        if (r["trial"], r["controller"], r["seed"]) == ("validation", "learned", learned[0]["seed"]):
+            r["return"] = "-50.0"
+
+    _rewrite_csv(path, change)
+    page = results_pages.render("reproduction", docs_copy)
+    mean, sd = statistics.fmean(values), statistics.stdev(values)
+    assert f"{num(mean, 2)} ± {num(sd, 2)}" in page
+    assert f"beats the heuristic in {sum(v > heuristic for v in values)} of {len(values)} repeats" in page
+    assert f"{num((mean - heuristic) / abs(heuristic) * 100, 1, sign=True)} %" in page
+
+
+def test_a_changed_verdict_moves_the_readings_page(docs_copy):
+    def change(r):
+        if (r["reading"], r["claim"]) == ("default", "4a"):
+            r["passed"], r["verdict"] = "10", "confirmed"
+
+    _rewrite_csv(docs_copy / "readings" / "readings.csv", change)
+    page = results_pages.render("readings", docs_copy)
+    row = "| `default` | 6/10 ✗ | 10/10 ✓ | 10/10 ✓ | 30/40 ✗ | 27/30 ✓ | 18/20 ✗ | 2/10 ✗ | 10/10 ✓ | 2/10 ✗ |"  # noqa: E501
+    assert row in page.splitlines()
+    assert "**Claims that fail under every reading**: none." in page  # 4a no longer fails everywhere
+    assert "4 of 9 parts hold (1b, 1c, 2b, 4a)" in page
+
+
+def test_a_changed_run_file_moves_the_deep_vs_paper_page(docs_copy):
+    path = docs_copy / "deep-vs-paper" / "heuristic.json"
+    run = json.loads(path.read_text())
+    run["calm"]["success_rate"] = 0.37
+    path.write_text(json.dumps(run))
+    page = results_pages.render("deep-vs-paper", docs_copy)
+    row = next(line for line in page.splitlines() if line.startswith("| heuristic |"))
+    assert row.split(" | ")[4] == "37%"
+
+
+def test_a_changed_summary_moves_the_sample_efficiency_prose(docs_copy):
+    path = docs_copy / "sample-efficiency" / "summary.json"
+    rows = json.loads(path.read_text())
+    for r in rows:
+        if (r["variant"], r["budget"], r["condition"]) == ("cacla-sigma0.3", 100000, "calm"):
+            r["mean_return"] = -77.77
+    path.write_text(json.dumps(rows))
+    page = results_pages.render("sample-efficiency", docs_copy)
+    assert f"CACLA {MINUS}77.8 against" in page
+
+
+def test_a_changed_closed_loop_row_moves_the_perception_prose(docs_copy):
+    def change(r):
+        if (r["water"], r["controller"]) == ("clear", "heuristic"):
+            r["mean_return"] = "-99.5"
+
+    _rewrite_csv(docs_copy / "vision" / "closed_loop.csv", change)
+    page = results_pages.render("perception", docs_copy)
+    assert f"**The heuristic pays more**: {MINUS}99.5 in clear water" in page
+
+
+def test_a_missing_stored_output_is_a_one_line_error_naming_it(docs_copy):
+    (docs_copy / "robustness" / "curve.csv").unlink()
+    with pytest.raises(PageError, match=r"robustness/curve\.csv: cannot be read"):
+        results_pages.render("robustness", docs_copy)
+
+
+# ---------------------------------------------------------------------------------------------
+# The pieces
+
+
+def test_fill_refuses_a_missing_and_an_unused_field():
+    assert fill("{a} and {b}", a=1, b="x") == "1 and x"
+    with pytest.raises(PageError, match="'b' has no value"):
+        fill("{a} and {b}", a=1)
+    with pytest.raises(PageError, match=r"\['c'\] not used"):
+        fill("{a}", a=1, c=2)
+
+
+def test_numbers_are_written_with_the_minus_sign_and_no_negative_zero():
+    assert num(-41.31569) == f"{MINUS}41.3"
+    assert num(2.25, 1, sign=True) == "+2.2"  # round half to even, as Python formats
+    assert num(-0.04) == "0.0" and num(-0.04, 1, sign=True) == "+0.0"
+    assert num(float("nan")) == "—"
+    assert minus("last-50 return -9.3, [-1.2, 3]") == f"last-50 return {MINUS}9.3, [{MINUS}1.2, 3]"
+
+
+def test_markdown_tables_are_read_by_their_heading():
+    text = "# A\n\n| x | y |\n|---|---|\n| 1 | 2 |\n| 3 | 4 |\n\n## B\n\n| z |\n|---|\n| 5 |\n"
+    assert markdown_tables(text) == {"A": [[{"x": "1", "y": "2"}, {"x": "3", "y": "4"}]], "B": [[{"z": "5"}]]}
+
+
+# ---------------------------------------------------------------------------------------------
+# The water presets: the table, the --water help and the one-line description
+
+
+def test_the_presets_table_says_what_the_code_sets():
+    from pipefollow.perception.water import WATER_PRESETS, Water
+
+    page = (RESULTS / "perception.md").read_text(encoding="utf-8")
+    (rows,) = markdown_tables(page)["The water presets"]
+    assert [r["field"].strip("`") for r in rows] == list(Water._fields)
+    for r in rows:
+        for name, preset in WATER_PRESETS.items():
+            assert float(r[f"`{name}`"].strip("*")) == getattr(preset, r["field"].strip("`"))
+        assert float(r["default"]) == getattr(Water(), r["field"].strip("`"))
+
+
+def test_the_presets_change_blur_noise_and_snow_with_the_turbidity():
+    from pipefollow.perception.water import PRESET_FIELDS, WATER_PRESETS
+
+    assert set(PRESET_FIELDS) == {"turbidity", "blur", "noise", "snow"}
+    order = sorted(WATER_PRESETS.values(), key=lambda w: w.turbidity)
+    for field in PRESET_FIELDS:
+        values = [getattr(w, field) for w in order]
+        assert values == sorted(values) and values[0] < values[-1]
+
+
+def test_the_water_help_names_every_preset_and_every_field_a_preset_sets():
+    from pipefollow.perception.water import PRESET_FIELDS, WATER_PRESETS
+
+    for command in ("benchmark", "evaluate"):
+        res = CliRunner().invoke(main, [command, "--help"], terminal_width=400)
+        assert res.exit_code == 0
+        line = " ".join(res.output.split())
+        water = line[line.index("--water PRESET") : line.index("--turbidity C")]
+        for word in (*WATER_PRESETS, *PRESET_FIELDS):
+            assert word in water, (command, word)
+
+
+def test_describe_names_the_preset_and_its_settings():
+    from pipefollow.perception.water import describe, water_from
+
+    assert describe(water_from("moderate")) == (
+        "water moderate: turbidity 0.2/m, blur 0.9 px, noise 5 grey levels, 12 snow particles/frame"
+    )
+    buried = describe(water_from({"preset": "turbid", "burial": 0.25}))
+    assert buried.startswith("water turbid: turbidity 0.25/m,")
+    assert buried.endswith(", 0.25 of the width buried")
+    murky = describe(water_from({"preset": "clear", "turbidity": 0.3}))
+    assert murky == "water custom: turbidity 0.3/m, blur 0.6 px, noise 3 grey levels, 4 snow particles/frame"
+
+
+def test_evaluate_prints_the_camera_and_water_in_one_line_under_its_head():
+    pytest.importorskip("cv2")
+    args = ["evaluate", "--controller", "heuristic", "--pipeline", "paper-left", "--seconds", "3",
+            "--camera", "vision", "--water", "turbid"]  # fmt: skip
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    lines = res.output.splitlines()
+    assert lines[1] == (
+        "camera vision, water turbid: turbidity 0.25/m, blur 1.2 px, noise 7 grey levels, "
+        "25 snow particles/frame"
+    )
+
+
+def test_benchmark_prints_the_camera_and_water_in_one_line_under_its_head():
+    pytest.importorskip("cv2")
+    args = ["benchmark", "--controller", "heuristic", "--pipes", "2", "--seconds", "3",
+            "--camera", "vision", "--water", "moderate", "--burial", "0.2"]  # fmt: skip
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    lines = res.output.splitlines()
+    assert lines[0].startswith("heuristic on 'heldout': 2 pipes")
+    assert lines[1] == (
+        "  camera vision, water moderate: turbidity 0.2/m, blur 0.9 px, noise 5 grey levels, "
+        "12 snow particles/frame, 0.2 of the width buried"
+    )
+    assert lines[2].startswith("  mean return")
+
+
+# ---------------------------------------------------------------------------------------------
+# The command
+
+
+def test_the_command_writes_the_committed_pages_and_checks_them(tmp_path):
+    out = tmp_path / "results"
+    res = CliRunner().invoke(main, ["docs", "results", "--docs", str(DOCS), "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in out.iterdir()) == sorted(f"{n}.md" for n in results_pages.PAGES)
+    for p in out.iterdir():
+        assert p.read_bytes() == (RESULTS / p.name).read_bytes()
+    ok = CliRunner().invoke(main, ["docs", "results", "--docs", str(DOCS), "--out", str(out), "--check"])
+    assert ok.exit_code == 0 and "up to date: 8 page(s)" in ok.output
+    (out / "robustness.md").write_text("old\n")
+    stale = CliRunner().invoke(main, ["docs", "results", "--docs", str(DOCS), "--out", str(out), "--check"])
+    assert stale.exit_code == 1 and stale.output.strip() == f"stale: {out / 'robustness.md'}"
+    assert (out / "robustness.md").read_text() == "old\n"  # --check writes nothing
+
+
+def test_the_command_refuses_an_unknown_page_and_a_missing_folder(tmp_path):
+    res = CliRunner().invoke(main, ["docs", "results", "--page", "nope", "--out", str(tmp_path)])
+    assert res.exit_code == 2 and "unknown page 'nope'" in res.output
+    missing = str(tmp_path / "none")
+    res = CliRunner().invoke(main, ["docs", "results", "--docs", missing, "--out", str(tmp_path)])
+    assert res.exit_code == 2 and "no such folder" in res.output
+    assert list(tmp_path.iterdir()) == []
+
+
+# ---------------------------------------------------------------------------------------------
+# From scratch: the reproduction's stored outputs and page
+
+
+@pytest.mark.slow
+def test_the_reproduction_regenerates_to_the_committed_outputs_and_page(tmp_path):
+    run = tmp_path / "run"
+    cmd = [sys.executable, "-m", "pipefollow.cli"]
+    subprocess.run([*cmd, "reproduce", "--out", str(run), "--no-figures"], check=True, capture_output=True)
+    assert (run / "evaluation.csv").read_bytes() == (DOCS / "reproduction" / "evaluation.csv").read_bytes()
+    subprocess.run([*cmd, "plot", str(run)], check=True, capture_output=True)
+    docs = tmp_path / "docs"
+    (docs / "reproduction").mkdir(parents=True)
+    for name in ("REPORT.md", "evaluation.csv"):
+        shutil.copy(run / name, docs / "reproduction" / name)
+    shutil.copytree(DOCS / "repeats", docs / "repeats", ignore=shutil.ignore_patterns("*.png", "*.csv"))
+
+    def body(text: str) -> list[str]:  # the provenance names the machine of the run: not compared
+        machine = "| `docs/reproduction/REPORT.md` |"
+        return [line for line in text.splitlines() if not line.startswith(machine)]
+
+    fresh = results_pages.render("reproduction", docs)
+    assert body(fresh) == body((RESULTS / "reproduction.md").read_text(encoding="utf-8"))
