@@ -56,7 +56,8 @@ def vertex_in_view(points, pose, half_width, depth) -> bool:
 def trace(seed: int, n_pipes: int, water: str) -> tuple[Counter, float]:
     """Counts of the classes over the first ``n_pipes`` held-out episodes and their success rate."""
     from pipefollow.envs.env import PipelineFollowingEnv
-    from pipefollow.evaluation.benchmark import SUCCESS_IN_VIEW, _noise_rng
+    from pipefollow.evaluation.benchmark import _noise_rng
+    from pipefollow.evaluation.success import SUCCESS_IN_VIEW
     from pipefollow.learners.heuristic import Heuristic
     from pipefollow.perception.camera import VisionCamera
     from pipefollow.sim import decision as sim

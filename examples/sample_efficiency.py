@@ -36,8 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
-from pipefollow.evaluation.benchmark import SUCCESS_IN_VIEW, run_episodes
+from pipefollow.evaluation.benchmark import run_episodes
 from pipefollow.evaluation.stats import bootstrap_ci, paired_difference
+from pipefollow.evaluation.success import SUCCESS_IN_VIEW
 from pipefollow.files.atomic import write_text_atomic
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim.decision import PAPER_SIM

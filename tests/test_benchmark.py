@@ -20,6 +20,7 @@ from pipefollow.training.policy_files import save_policy
 KEYS = {
     "controller", "suite", "n_episodes", "mean_return", "ci95_mean", "iqm_return", "ci95_iqm",
     "success_rate", "mean_pipe_in_view", "rms_e_dist", "mean_progress_m", "episodes",
+    "in_view_rate", "mean_progress_share", "reached_end", "turned_back",
 }  # fmt: skip
 
 
@@ -59,7 +60,16 @@ def test_summary_matches_an_independent_computation():
     assert s["mean_return"] == pytest.approx(ret.mean(), abs=1e-12)
     assert s["iqm_return"] == pytest.approx(sps.trim_mean(ret, 0.25), abs=1e-12)
     assert s["iqm_return"] == pytest.approx(np.sort(ret)[7:23].mean(), abs=1e-12)  # the middle 16 of 30
-    assert s["success_rate"] == np.mean(view >= 0.95)
+    # success: in view at ≥ 95 % and progress ≥ half the distance covered (the straight lines between
+    # the recorded poses), capped by the pipe's length; none of these pipes is short enough to end
+    swum = np.hypot(*np.diff(run.poses[:, :, :2], axis=1).transpose(2, 0, 1)).sum(axis=1)
+    progress = np.array([e["progress_m"] for e in eps])
+    lengths = np.array([p.length for p in run.pipes])
+    share = progress / np.minimum(swum, lengths)
+    np.testing.assert_allclose([e["progress_share"] for e in eps], share, rtol=1e-12)
+    assert s["success_rate"] == np.mean((view >= 0.95) & (share >= 0.5))
+    assert s["in_view_rate"] == np.mean(view >= 0.95) and s["reached_end"] == 0
+    assert s["mean_progress_share"] == pytest.approx(share.mean(), rel=1e-12)
     assert s["mean_pipe_in_view"] == pytest.approx(view.mean())
     n_seen = view * 40
     rms = np.array([e["rms_e_dist"] for e in eps], dtype=float)
@@ -119,7 +129,8 @@ def test_cli_benchmark_json_and_plot(tmp_path):
     assert set(out) == KEYS | {"vs_heuristic", "readings", "plot"} and out["readings"] == "default"
     assert out["plot"] == str(plot)
     assert set(out["vs_heuristic"]) == {"mean_diff", "ci95_diff", "win_rate"}
-    assert set(out["episodes"][0]) == {"name", "return", "pipe_in_view", "progress_m", "rms_e_dist"}
+    assert set(out["episodes"][0]) == {"name", "return", "pipe_in_view", "progress_m", "rms_e_dist",
+                                       "progress_share", "reached_end", "turned_back", "success"}  # fmt: skip
     assert out["controller"] == str(policy) and out["suite"] == "heldout-easy" and out["n_episodes"] == 5
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     res = CliRunner().invoke(main, ["benchmark", "--pipes", "3", "--json"])

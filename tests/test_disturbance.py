@@ -45,7 +45,9 @@ ZERO = Disturbance(current_speed=0.0, current_direction=1.3)  # a direction, but
 @pytest.mark.parametrize("pipeline", ["paper-left", "paper-validation"])
 @pytest.mark.parametrize("disturbance", [None, ZERO])
 def test_no_disturbance_reproduces_the_earlier_numbers(pipeline, disturbance):
-    env = PipelineFollowingEnv(pipeline, 60, disturbance=disturbance)
+    # pinned before episodes ended at the pipe's end (60 s reach past paper-left's): the paper's protocol
+    paper = sim.PAPER_SIM._replace(end_at_pipe_end=False)
+    env = PipelineFollowingEnv(pipeline, 60, params=paper, disturbance=disturbance)
     ep = run_episode(env, Heuristic(), seed=0)
     assert ep.ret == float.fromhex(BEFORE[pipeline])
 

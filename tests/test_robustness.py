@@ -15,7 +15,7 @@ from pipefollow.evaluation.benchmark import run_episodes
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.learners.los import LOS
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance, DisturbanceError, check
-from pipefollow.sim.episode import STAT_IN_VIEW, STAT_PROGRESS, STAT_RETURN
+from pipefollow.sim.episode import STAT_BACK, STAT_IN_VIEW, STAT_NAMES, STAT_PROGRESS, STAT_RETURN, STAT_SWUM
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.suites import get_suite, min_length_for
 from pipefollow.training.compiled import run_episode
@@ -113,18 +113,23 @@ def test_a_current_along_a_straight_pipe_carries_the_auv_but_less_than_its_speed
 
 def test_summarize_by_hand():
     def rows(returns, in_view):
-        out = np.zeros((len(returns), 5))
+        out = np.zeros((len(returns), len(STAT_NAMES)))
         out[:, STAT_RETURN], out[:, STAT_IN_VIEW] = returns, in_view
+        out[:, STAT_PROGRESS] = out[:, STAT_SWUM] = 20.0  # every metre covered along the pipe
         return out
 
     a = rows([1.0, 3.0, -5.0], [1.0, 0.96, 0.5])
     b = rows([3.0, 5.0, -1.0], [1.0, 0.9, 1.0])
+    b[2, STAT_PROGRESS], b[2, STAT_BACK] = 4.0, 8.0  # in view, but 4 m of 20 m forward: it turned back
     h = rows([0.0, 0.0, 0.0], [1.0, 1.0, 1.0])
-    r = rb.summarize("x", [a, b], h)
+    r = rb.summarize("x", [a, b], h, lengths=[50.0, 50.0, 50.0])
     # per pipe, the mean over the two policies: 2, 4, −3; mean 1
     assert r["mean_return"] == pytest.approx(1.0)
     assert r["seed_returns"] == [pytest.approx(-1 / 3), pytest.approx(7 / 3)]
-    assert r["success_rate"] == pytest.approx(4 / 6)  # 0.9 and 0.5 miss the 95 %
+    assert r["in_view_rate"] == pytest.approx(4 / 6)  # 0.9 and 0.5 miss the 95 %
+    assert r["success_rate"] == pytest.approx(3 / 6)  # and b's third did not follow the pipe forward
+    assert r["mean_progress_share"] == pytest.approx((5 + 4 / 20) / 6)
+    assert r["turned_back"] == 1
     assert r["vs_heuristic"] == pytest.approx(1.0)
     assert r["ci95_low"] < 1.0 < r["ci95_high"]
     assert (r["policies"], r["episodes"]) == (2, 6)

@@ -212,6 +212,7 @@ def non_default_params():
         progress_ahead=4.5,
         disturbance=dist,
         start_speed=0.3,
+        end_at_pipe_end=False,
     )
 
 
@@ -226,14 +227,14 @@ def test_pack_unpack_round_trip():
     start = sim.OFFSETS["disturbance"]
     slots = sim.pack_params(p)[start : start + PACKED_SIZE]
     assert len(set(slots)) == PACKED_SIZE == 17  # no two disturbance slots alike
-    assert p.start_speed != defaults.start_speed
+    assert p.start_speed != defaults.start_speed and p.end_at_pipe_end != defaults.end_at_pipe_end
     packed = sim.pack_params(p)
-    assert packed.dtype == np.float64 and packed.shape == (sim.OFFSETS["start_speed"] + 1,)
+    assert packed.dtype == np.float64 and packed.shape == (sim.OFFSETS["end_at_pipe_end"] + 1,)
     for name in ("dt", "substeps", "lost_reward", "progress_back", "progress_ahead", "start_speed"):
         assert packed[sim.OFFSETS[name]] == getattr(p, name)  # each scalar where its name says
     back = sim.unpack_params(packed)
     assert back == p
-    assert isinstance(back.substeps, int)
+    assert isinstance(back.substeps, int) and back.end_at_pipe_end is False
     assert tuple(back.auv) == tuple(p.auv) and tuple(back.controller) == tuple(p.controller)
 
 

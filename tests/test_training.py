@@ -7,6 +7,7 @@ from pipefollow import readings as rd
 from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.sim import decision as sim
 from pipefollow.sim.disturbance import make_disturbance
+from pipefollow.sim.episode import new_book
 from pipefollow.sim.pipeline import builtin
 from pipefollow.training.agents import make_agent
 from pipefollow.training.compiled import train, train_compiled
@@ -103,6 +104,7 @@ class ScriptedEnv:
         self.unwrapped = self
         self.params = type("P", (), {"dt": 0.05, "substeps": 20})()
         self.trail = []
+        self.book = new_book()  # the environment's book: no distances travelled
 
     def reset(self, seed=None, options=None):
         self.t = 0

@@ -70,6 +70,7 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
 
     from pipefollow.evaluation.benchmark import run_episodes
     from pipefollow.evaluation.compare import compare as run_compare
+    from pipefollow.evaluation.success import summary_of_runs
     from pipefollow.readings import parse, sim_params
     from pipefollow.sim.episode import STAT_RETURN
     from pipefollow.sim.pipe_names import resolve_suite
@@ -87,13 +88,18 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
     if not labels:  # the learner and options each policy was trained with
         labels = tuple(getattr(agent, "name", spec) for spec, agent in zip(policies, agents, strict=True))
     rows: dict[str, list] = {}
+    stats: dict[str, list] = {}  # every episode's statistics, for the success and the turned-back count
     for spec, agent, label in zip(policies, agents, labels, strict=True):
         reading = parse(getattr(agent, "readings", "default"), source=f"policy '{spec}' readings")
         params = sim_params(reading)._replace(disturbance=disturbance)
         res, _ = run_episodes(agent, pipe_list, seconds, params, noise_seed=seed)
         rows.setdefault(label, []).append(res[:, STAT_RETURN])
+        stats.setdefault(label, []).append(res)
     result = run_compare({k: np.stack(v) for k, v in rows.items()}, reps=reps, seed=seed)
     summary = {"suite": suite.name, "seconds": seconds, **result.summary}
+    lengths = [p.length for p in pipe_list]
+    for label, runs in stats.items():
+        summary["learners"][label].update(summary_of_runs(runs, lengths))
     pairs = list(zip(policies, labels, strict=True))
     summary["policies"] = {label: [p for p, q in pairs if q == label] for label in rows}
     # rliable's layout: {learner: (runs, tasks) array}, here the runs × pipes returns compare judged
@@ -117,14 +123,20 @@ def _format(s: dict) -> str:
     lines = [
         f"{len(s['learners'])} learners on '{s['suite']}': {s['pipes']} pipes, {s['seconds']:g} s each; "
         f"95 % stratified-bootstrap intervals over runs ({s['reps']} replicates)",
-        f"{'learner':<34} {'runs':>4} {'IQM':>8} {'95 % CI':>19} {'mean':>8} {'95 % CI':>19}",
+        f"{'learner':<34} {'runs':>4} {'IQM':>8} {'95 % CI':>19} {'mean':>8} {'95 % CI':>19} "
+        f"{'success':>7} {'progress':>8} {'back':>4}",
     ]
     for label, r in s["learners"].items():
         iq, mn = r["ci95_iqm"], r["ci95_mean"]
         lines.append(
             f"{label[:34]:<34} {r['runs']:>4} {r['iqm']:>8.2f} {iq[0]:>9.2f}–{iq[1]:<9.2f} "
-            f"{r['mean']:>8.2f} {mn[0]:>9.2f}–{mn[1]:<9.2f}"
+            f"{r['mean']:>8.2f} {mn[0]:>9.2f}–{mn[1]:<9.2f} "
+            f"{r['success_rate']:>7.0%} {r['mean_progress_share']:>8.0%} {r['turned_back']:>4d}"
         )
+    lines.append(
+        "success: pipe in view ≥ 95 % of the decisions and followed forward; progress: of the reachable; "
+        "back: episodes that followed the pipe backwards ≥ 3 m"
+    )
     if s["probability_of_improvement"]:
         lines.append("probability of improvement P(X > Y), per pipe over runs, averaged over pipes:")
         for p in s["probability_of_improvement"]:

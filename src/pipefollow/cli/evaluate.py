@@ -143,13 +143,23 @@ def _text(result: dict, episodes: int, disturbance, camera=None) -> str:
     lines = [
         f"{result['controller']} on {result['pipeline']}, {episodes} episode(s) of {result['seconds']:g} s"
         f"{disturbance_text(disturbance)}{camera_text(camera)}",
-        f"{'episode':>7} {'return':>9} {'in view':>8} {'progress':>9}",
+        f"{'episode':>7} {'return':>9} {'in view':>8} {'progress':>9} {'of reach':>8} {'success':>7}  end",
     ]
     for i, row in enumerate(result["episodes"]):
-        lines.append(f"{i:>7} {row['return']:>9.3f} {row['pipe_in_view']:>8.1%} {row['progress_m']:>8.2f}m")
+        notes = "reached the end " if row["reached_end"] else ""
+        notes += "turned back" if row["turned_back"] else ""
+        lines.append(
+            f"{i:>7} {row['return']:>9.3f} {row['pipe_in_view']:>8.1%} {row['progress_m']:>8.2f}m "
+            f"{row['progress_share']:>8.0%} {'yes' if row['success'] else 'no':>7}  {notes}".rstrip()
+        )
     lines.append(
         f"{'mean':>7} {result['mean_return']:>9.3f} {result['mean_pipe_in_view']:>8.1%} "
-        f"{result['mean_progress_m']:>8.2f}m"
+        f"{result['mean_progress_m']:>8.2f}m {result['mean_progress_share']:>8.0%} "
+        f"{result['success_rate']:>7.0%}"
+    )
+    lines.append(
+        "success: pipe in view ≥ 95 % of the decisions and followed forward (progress ≥ half the reachable, "
+        f"or the end reached); turned back: {result['turned_back']} episode(s)"
     )
     lines += [f"{k}: {result[k]}" for k in ("plot", "animation") if k in result]
     return "\n".join(lines)

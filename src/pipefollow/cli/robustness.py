@@ -128,7 +128,7 @@ def robustness(controllers, suite_specs, pipes, seconds, speeds, sets, seed, out
     if as_json:
         click.echo(json.dumps(result))
         return
-    cell = "mean return [95 % CI], success rate"
+    cell = "mean return [95 % CI], success rate (pipe in view ≥ 95 % and followed forward)"
     if curve:
         click.echo(f"current speed (m/s) — {cell}:\n" + rb.markdown(curve, "current_speed", "speed (m/s)"))
     if table:

@@ -121,8 +121,9 @@ def benchmark(
     """Run a controller deterministically on every pipe of a suite, beside the heuristic.
 
     Reports the mean return with a bootstrap 95 % confidence interval, the interquartile mean,
-    the success rate (pipe in view at ≥ 95 % of the decisions) and, for a controller other than
-    the heuristic, the paired per-pipe difference to the heuristic with its confidence interval.
+    the success rate (pipe in view at ≥ 95 % of the decisions and followed forward), the episodes
+    that turned back and, for a controller other than the heuristic, the paired per-pipe difference
+    to the heuristic with its confidence interval.
     With --camera vision the controller sees through the pipe detector (the pipe in view is still
     the exact camera's) and is compared with the heuristic on the ideal camera.
     """

@@ -13,6 +13,7 @@ from gymnasium.error import ResetNeeded
 
 from pipefollow.envs.shell import (
     MAX_EPISODE_SECONDS,
+    end_info,
     episode_summary,
     image_space,
     make_setup,
@@ -95,14 +96,19 @@ class PipelineFollowingEnv(gym.Env):
     ## Episode End
 
     The episode is truncated after ``episode_seconds`` (one decision per second; 20 in the
-    paper's training), at most :data:`MAX_EPISODE_SECONDS`. There is no terminal state: agents
-    should bootstrap from the last state. Each registered id's ``max_episode_steps`` is its own
-    episode's decisions (:data:`pipefollow.ENV_IDS`), so ``gym.make``'s ``TimeLimit`` wrapper ends an
-    episode at the same step as the environment; an ``episode_seconds`` longer than the id's needs
+    paper's training), at most :data:`MAX_EPISODE_SECONDS`; agents should bootstrap from the last
+    state. Each registered id's ``max_episode_steps`` is its own episode's decisions
+    (:data:`pipefollow.ENV_IDS`), so ``gym.make``'s ``TimeLimit`` wrapper ends an episode at the same
+    step as the environment; an ``episode_seconds`` longer than the id's needs
     ``gym.make(ID, episode_seconds=S, max_episode_steps=S)`` (``gym.make_vec`` refuses it without).
-    ``step`` before the first ``reset`` raises :class:`gymnasium.error.ResetNeeded`. After the
-    episode's last decision it carries on as Gymnasium's own environments do: a warning (once until
-    the next reset), the simulation goes on and every further step is ``truncated``, without a
+    The episode is terminated when the AUV reaches the pipe's far end (its progress within 0.5 m of
+    the pipe's length, :func:`pipefollow.sim.episode.reached_end`), a terminal state; under the
+    paper's reading ``pipe_end=continue`` (``params.end_at_pipe_end=False``) it goes on there, the
+    pipe lost (−10 a decision). ``info["end_reason"]`` says which: ``"time_limit"`` or
+    ``"pipe_end"`` (``""`` while the episode goes on). ``step`` before the first ``reset`` raises
+    :class:`gymnasium.error.ResetNeeded`. After the episode's last decision it carries on as
+    Gymnasium's own environments do: a warning (once until the next reset), the simulation goes on
+    and every further step ends as the last one did (``truncated`` or ``terminated``), without a
     second summary; ``strict_reset=True`` raises ``ResetNeeded`` there instead.
 
     ## Arguments
@@ -161,7 +167,9 @@ class PipelineFollowingEnv(gym.Env):
     last step (``terminated or truncated``) the whole episode's, which clients that log per episode
     read there; steps past the end repeat them. With the vision camera also ``detected``,
     ``detection_confidence``, ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the
-    exact camera's); the episode's summary is then the exact camera's too.
+    exact camera's); the episode's summary is then the exact camera's too. ``end_reason`` (a 0-d
+    string array) is in every info too: ``""`` while the episode goes on, then ``"time_limit"`` or
+    ``"pipe_end"``.
 
     ## Registered ids
 
@@ -178,7 +186,8 @@ class PipelineFollowingEnv(gym.Env):
 
     * v0: the first release. Before it (unreleased): the episode's summary joined every step's
       info (it was at the last step only); ``observation="image"`` became ``(H, W, 1)`` (was
-      ``(1, H, W)``); the ids got their episodes' ``max_episode_steps`` (was 86,400 for one id).
+      ``(1, H, W)``); the ids got their episodes' ``max_episode_steps`` (was 86,400 for one id); reaching
+      a finite pipe's far end terminates the episode (``end_reason``).
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 2}
@@ -236,6 +245,7 @@ class PipelineFollowingEnv(gym.Env):
         self._needs_reset = True  # before the first reset
         self.strict_reset = bool(strict_reset)
         self._warned_after_end = False  # stepping past the end warns once per episode
+        self._end = ep.GOES_ON  # how the episode ended (pipefollow.sim.episode.end_of), once it has
         self.trail: list[tuple[float, float, float]] = []
         self.last_reward: float | None = None  # shown by render()
         self.episode_return = 0.0  # the rewards returned, summed (the book counts the decisions)
@@ -255,7 +265,8 @@ class PipelineFollowingEnv(gym.Env):
             opts.lateral_offset, opts.heading_offset_deg,
         )  # fmt: skip
         self._book[:] = 0.0
-        self._summary = episode_summary(self._book, self.state)
+        self._end = ep.GOES_ON
+        self._summary = episode_summary(self._book, self.state) | end_info(self._end)
         self._needs_reset = False
         self._warned_after_end = False
         s = self.state
@@ -271,15 +282,15 @@ class PipelineFollowingEnv(gym.Env):
         """One 1-s decision; see the class docstring."""
         if self._needs_reset:
             raise ResetNeeded("call reset() before the first step()")
-        past_end = bool(ep.ended.py_func(self._book, self.max_decisions))  # in Python: no dispatch
+        past_end = self._end != ep.GOES_ON
         if past_end:
             if self.strict_reset:
                 raise ResetNeeded("the episode has ended: call reset() before step()")
             if not self._warned_after_end:
                 self._warned_after_end = True
                 gym.logger.warn(
-                    "step() after the episode's end (truncated=True was returned): the episode goes on, "
-                    "but call reset() to start a new one"
+                    "step() after the episode's end (truncated or terminated was returned): the episode goes "
+                    "on, but call reset() to start a new one"
                 )
         arr = np.asarray(action, dtype=np.float64)
         if arr.shape not in ((1,), ()):  # a wrong shape is a caller's bug, not an action
@@ -292,7 +303,7 @@ class PipelineFollowingEnv(gym.Env):
         if z.size:
             self.np_random.standard_normal(out=z)
         a_prev = s[sim.A_PREV]
-        r, truncated = ep.decide_packed(
+        r, end = ep.decide_packed(
             s, a, pipe.points, pipe.cumulative, self.episode_setup.packed, z, book, self.max_decisions
         )
         self.trail.append((s[sim.X], s[sim.Y], s[sim.PSI]))
@@ -304,10 +315,17 @@ class PipelineFollowingEnv(gym.Env):
             self.render()
         if past_end:  # the episode's summary again, in arrays of its own (no object shared between infos)
             self._summary = {key: value.copy() for key, value in self._summary.items()}
-        else:  # the summary of the episode so far
-            self._summary = episode_summary(book, s)
+            end = self._end
+        else:  # the summary of the episode so far, and how it ended if it did
+            self._end = end
+            self._summary = episode_summary(book, s) | end_info(end)
         info = self._info()
-        return self._observation(), r, False, truncated or past_end, info
+        return self._observation(), r, end == ep.PIPE_END, end == ep.TIME_LIMIT, info
+
+    @property
+    def book(self) -> np.ndarray:
+        """A copy of the episode's book (:mod:`pipefollow.sim.episode`): its counts so far."""
+        return self._book.copy()
 
     def _observation(self) -> np.ndarray:
         if self._vision is None:

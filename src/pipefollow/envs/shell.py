@@ -294,6 +294,15 @@ def state_infos(states: np.ndarray) -> dict[str, np.ndarray]:
     return {key: (flags if boolean else snap)[index] for key, _, boolean, index in _INFO_INDEX}
 
 
+def end_info(ends) -> dict[str, np.ndarray]:
+    """``end_reason`` of episodes from their end codes (:func:`pipefollow.sim.episode.end_of`).
+
+    ``"time_limit"`` (truncated), ``"pipe_end"`` (terminated at the pipe's far end), ``""`` (going on);
+    one code gives a 0-d array, a batch an array of the batch's length.
+    """
+    return {"end_reason": np.asarray(np.array(ep.END_REASONS)[np.asarray(ends, dtype=np.int64)])}
+
+
 def episode_summary(book: np.ndarray, states: np.ndarray) -> dict[str, np.ndarray]:
     """The summary of episodes so far from their books (:mod:`pipefollow.sim.episode`) and states.
 

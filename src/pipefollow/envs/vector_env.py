@@ -31,9 +31,10 @@ single environment draws them.
   ``"async"``, whose wrappers take ``autoreset_mode`` the same way).
 * **Infos**: the single environment's keys, each an array with the batch dimension first
   (``pose`` (N, 3), ``current`` (N, 2), ...), with Gymnasium's ``_key`` masks, the episode
-  summary (``episode_pipe_in_view``, ``episode_progress_m``, ``episode_rms_e_dist``) included:
-  each sub-environment's episode so far, its whole episode's where ``terminated | truncated``
-  (in ``final_info`` under same-step autoreset).
+  summary (``episode_pipe_in_view``, ``episode_progress_m``, ``episode_rms_e_dist``) and
+  ``end_reason`` included: each sub-environment's episode so far (``""`` while it goes on), its
+  whole episode's where ``terminated | truncated`` (in ``final_info`` under same-step autoreset):
+  truncated at its time limit, or terminated at the pipe's far end.
 * **Observations**: float64 by default, ``obs_dtype="float32"`` as in the single environment.
 * **Disturbances**: supported, as in the single environment (each sub-environment draws its
   camera reading's normals from its own generator).
@@ -60,6 +61,7 @@ from numba import njit
 from pipefollow.envs.shell import (
     CAMERA_ARGUMENTS,
     SHARED_ARGUMENTS,
+    end_info,
     episode_summary,
     image_space,
     make_setup,
@@ -79,27 +81,28 @@ from pipefollow.sim.randomization import resolve as resolve_randomization
 
 
 @njit(cache=True)
-def step_batch(states, actions, points, cum, n_points, packed, z, skip, rewards, books, max_n, ended):
+def step_batch(states, actions, points, cum, n_points, packed, z, skip, rewards, books, max_n, ends):
     """One decision of every sub-environment not in ``skip``, counted in its book.
 
     ``packed[i]`` is sub-environment i's packed parameters (its own disturbances under a
     randomization), ``books[i]`` its episode's book (:mod:`pipefollow.sim.episode`).
 
     Actions are clipped to [-1, 1]; returns False (stepping nothing) if one is NaN. Writes the
-    rewards and marks in ``ended`` the sub-environments whose episode this decision ends.
+    rewards and, in ``ends``, how each sub-environment's episode stands (``pipefollow.sim.episode.end_of``:
+    0 going on, or the code of the end this decision reached).
     """
     for i in range(states.shape[0]):
         if math.isnan(actions[i]):
             return False
     for i in range(states.shape[0]):
-        ended[i] = False
+        ends[i] = ep.GOES_ON
         if skip[i]:
             rewards[i] = 0.0
             continue
         n = n_points[i]
         a = min(1.0, max(-1.0, actions[i]))
         pts, cm = points[i, :n], cum[i, :n]
-        rewards[i], ended[i] = ep.decide_packed(states[i], a, pts, cm, packed[i], z[i], books[i], max_n)
+        rewards[i], ends[i] = ep.decide_packed(states[i], a, pts, cm, packed[i], z[i], books[i], max_n)
     return True
 
 
@@ -235,7 +238,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self._started = False
         self._rewards = np.zeros(n)
         self._no_skip = np.zeros(n, dtype=bool)
-        self._ended = np.zeros(n, dtype=bool)
+        self._ends = np.zeros(n, dtype=np.int64)
         # the vision camera renders and detects per sub-environment after the batched decision
         self._cams = None
         if self.camera_settings.renders:
@@ -352,11 +355,11 @@ class PipelineFollowingVectorEnv(VectorEnv):
                 if not resetting[i]:
                     rngs[i].standard_normal(out=self._z[i, : self._counts[i]])
         skip = resetting if any_reset else self._no_skip
-        rewards, ended = self._rewards, self._ended
+        rewards, ends = self._rewards, self._ends
         a_prev = self.states[:, sim.A_PREV].copy() if self._cams is not None else None
         ok = step_batch(
             self.states, a, self._points, self._cum, self._n_points, self._packed, self._z, skip,
-            rewards, self._books, self.max_decisions, ended,
+            rewards, self._books, self.max_decisions, ends,
         )  # fmt: skip
         if not ok:
             raise ValueError("action is NaN")
@@ -369,24 +372,25 @@ class PipelineFollowingVectorEnv(VectorEnv):
         if any_reset:  # next-step autoreset
             for i in np.flatnonzero(resetting):
                 self._reset_one(int(i))
-        truncated = ended.copy()
-        terminated = np.zeros(self.num_envs, dtype=bool)  # no terminal states: only truncations end episodes
+        truncated = ends == ep.TIME_LIMIT
+        terminated = ends == ep.PIPE_END  # the pipe's far end reached
+        done = truncated | terminated
         every = np.ones(self.num_envs, dtype=bool)
-        if mode == AutoresetMode.SAME_STEP and truncated.any():
+        if mode == AutoresetMode.SAME_STEP and done.any():
             final_obs = np.full(self.num_envs, None, dtype=object)
             last = self._observations()
-            for i in np.flatnonzero(truncated):
+            for i in np.flatnonzero(done):
                 final_obs[i] = last[i]
-            final_info = self._infos(truncated)
-            for i in np.flatnonzero(truncated):
+            final_info = self._infos(done, ends)
+            for i in np.flatnonzero(done):
                 self._reset_one(int(i))
             infos = self._infos(every)
-            infos["final_obs"], infos["_final_obs"] = final_obs, truncated.copy()
-            infos["final_info"], infos["_final_info"] = final_info, truncated.copy()
+            infos["final_obs"], infos["_final_obs"] = final_obs, done.copy()
+            infos["final_info"], infos["_final_info"] = final_info, done.copy()
             self._ended_before = np.zeros(self.num_envs, dtype=bool)
         else:
-            infos = self._infos(every)
-            self._ended_before = truncated.copy()
+            infos = self._infos(every, ends)
+            self._ended_before = done.copy()
         return self._observations(), rewards.copy(), terminated, truncated, infos
 
     def reset_done(self) -> np.ndarray:
@@ -409,8 +413,12 @@ class PipelineFollowingVectorEnv(VectorEnv):
         cams = zip(self._cams, self.states, strict=True)
         return np.stack([c.observation(s, dtype, slots) for c, s in cams])
 
-    def _infos(self, present: np.ndarray) -> dict[str, np.ndarray]:
-        """The infos of all sub-environments, ``_key`` masks ``present``, with the episodes' summaries."""
+    def _infos(self, present: np.ndarray, ends: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """The infos of all sub-environments, ``_key`` masks ``present``, with the episodes' summaries.
+
+        ``ends``: the end codes of the step (``pipefollow.sim.episode.end_of``) for ``end_reason``;
+        none: every episode goes on.
+        """
         infos: dict[str, np.ndarray] = {}
         for key, value in state_infos(self.states).items():
             infos[key], infos["_" + key] = value, present.copy()
@@ -423,4 +431,6 @@ class PipelineFollowingVectorEnv(VectorEnv):
         for key, value in episode_summary(self._books, self.states).items():
             infos[key] = np.where(present, value, 0.0)  # 0 where masked out, as Gymnasium's SyncVectorEnv
             infos["_" + key] = present.copy()
+        infos.update(end_info(np.full(self.num_envs, ep.GOES_ON) if ends is None else ends))
+        infos["_end_reason"] = present.copy()
         return infos

@@ -10,11 +10,16 @@ function. All give the same numbers (tested). The summary has bootstrap confiden
 
 Definitions:
 
-* ``pipe_in_view``: share of decisions that end with the pipe in view; an episode is a
-  *success* when it is ≥ :data:`SUCCESS_IN_VIEW` (95 %).
+* ``pipe_in_view``: share of decisions that end with the pipe in view.
+* ``success_rate``: share of episodes with the pipe in view at ≥ 95 % of the decisions *and* followed
+  forward: the pipe's end reached, or a progress of at least half the distance covered
+  (:mod:`pipefollow.evaluation.success`); ``in_view_rate`` the share with the pipe in view alone;
+  ``mean_progress_share`` the mean of progress / reachable; ``reached_end`` and ``turned_back``
+  (followed the pipe backwards for ≥ 3 m) counts of episodes.
 * ``rms_e_dist``: root mean square of ``e_dist`` over the decisions that end with the pipe in
   view (per episode; pooled over all episodes for the summary); ``None`` without such decisions.
-* ``progress_m``: arc length reached along the pipe.
+* ``progress_m``: arc length reached along the pipe. An episode ends at the pipe's far end
+  (reading ``pipe_end``), which the held-out suites' pipes are too long to reach.
 * ``ci95_mean``: BCa bootstrap interval of the mean return over pipes; ``ci95_iqm``: the
   percentile interval of the IQM, the pipes resampled as rliable resamples runs
   (:mod:`pipefollow.evaluation.compare`).
@@ -37,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from pipefollow.evaluation import success as sc
 from pipefollow.evaluation.compare import aggregate_intervals
 from pipefollow.evaluation.stats import bootstrap_ci, iqm, paired_difference
 from pipefollow.files.paper_training import TEST_EPISODE_SECONDS
@@ -51,7 +57,6 @@ from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.suites import Suite, min_length_for
 from pipefollow.training.compiled import run_episode
 
-SUCCESS_IN_VIEW = 0.95
 HEURISTIC, MLP, LOS_KIND = 0, 1, 2  # fixed controllers of the compiled episodes
 
 # Built-in controllers by name: a factory of an agent with ``act``/``begin_episode``. A controller
@@ -105,6 +110,9 @@ def _controller_episodes(kind, tracks, run, net, lookahead, z_all, out, poses):
                 else:  # LOS from the observation alone, as the LOS agent (y_near = 0)
                     a = los_action(s[sim.X1], s[sim.Y1], s[sim.X2], 0.0, lookahead)
             ep.decide(s, a, pts, cum, ps, z_all[e, t + 1], book, poses, e)
+            if ep.end_of(book, s, cum, ps, run.n_decisions) == ep.PIPE_END:
+                break
+        ep.hold_poses(poses, e, book)
         ep.close_episode(out, e, book, s[sim.PROGRESS_MAX], decision_s)
 
 
@@ -187,7 +195,9 @@ def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0
         env.np_random = _noise_rng(noise_seed, i)
         stats = run_episode(env, agent)
         out[i] = stats.as_full_row()
-        poses[i] = stats.poses
+        k = len(stats.poses)  # fewer than the decisions if the episode ended at the pipe's end
+        poses[i, :k] = stats.poses
+        poses[i, k:] = stats.poses[-1]
 
 
 @dataclass(frozen=True)
@@ -241,6 +251,7 @@ def benchmark(
     else:
         h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params, noise_seed)
     ret = res[:, ep.STAT_RETURN]
+    lengths = np.array([p.length for p in pipes])
     lo, hi = bootstrap_ci(ret, seed)
     # the pipes as the runs of one task, in rliable's terms: its percentile interval of the IQM
     iqm_ci = aggregate_intervals(ret[:, None], seed=seed)["ci95_iqm"]
@@ -252,7 +263,7 @@ def benchmark(
         "ci95_mean": [lo, hi],
         "iqm_return": iqm(ret),
         "ci95_iqm": iqm_ci,
-        "success_rate": float(np.mean(res[:, ep.STAT_IN_VIEW] >= SUCCESS_IN_VIEW)),
+        **sc.summary(res, lengths),
         "mean_pipe_in_view": float(res[:, ep.STAT_IN_VIEW].mean()),
         "rms_e_dist": _rms(float(res[:, ep.STAT_SUM_E2].sum()), float(res[:, ep.STAT_N_SEEN].sum())),
         "mean_progress_m": float(res[:, ep.STAT_PROGRESS].mean()),
@@ -272,6 +283,7 @@ def benchmark(
             "pipe_in_view": float(row[ep.STAT_IN_VIEW]),
             "progress_m": float(row[ep.STAT_PROGRESS]),
             "rms_e_dist": _rms(row[ep.STAT_SUM_E2], row[ep.STAT_N_SEEN]),
+            **sc.episode_fields(row, pipe.length),
         }
         for pipe, row in zip(pipes, res, strict=True)
     ]
@@ -287,10 +299,13 @@ def format_summary(r: dict, seconds: float) -> str:
         f"{r['controller']} on '{r['suite']}': {r['n_episodes']} pipes, {seconds:g} s each, σ = 0",
         f"  mean return    {r['mean_return']:9.2f}  (95 % CI {lo:.2f} to {hi:.2f})",
         f"  IQM return     {r['iqm_return']:9.2f}  (95 % CI {ilo:.2f} to {ihi:.2f})",
-        f"  success rate   {r['success_rate']:9.1%}  (pipe in view ≥ 95 % of the decisions)",
+        f"  success rate   {r['success_rate']:9.1%}  (pipe in view ≥ 95 %, followed forward)",
+        f"  in view ≥ 95 % {r['in_view_rate']:9.1%}  (of the episodes)",
         f"  pipe in view   {r['mean_pipe_in_view']:9.1%}",
         f"  rms e_dist     {rms:>9}",
-        f"  progress       {r['mean_progress_m']:7.2f} m",
+        f"  progress       {r['mean_progress_m']:7.2f} m  ({r['mean_progress_share']:.0%} of the reachable)",
+        f"  reached end    {r['reached_end']:>9d}  (episodes)",
+        f"  turned back    {r['turned_back']:>9d}  (episodes that followed the pipe backwards ≥ 3 m)",
     ]
     if "vs_heuristic" in r:
         v = r["vs_heuristic"]

@@ -15,6 +15,7 @@ import numpy as np
 
 from pipefollow import readings as rd
 from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.evaluation import success as sc
 from pipefollow.files.paper_training import EPISODE_SECONDS, TEST_EPISODE_SECONDS, TRAINING_PIPELINES
 from pipefollow.sim.disturbance import NO_DISTURBANCE, Disturbance, noise_count
 from pipefollow.sim.pipe_names import RANDOM_PREFIX
@@ -37,21 +38,27 @@ def episodes_alike(pipe, start_noise: float, heading_noise: float, disturbance: 
     return not (start_noise or heading_noise or isinstance(pipe, Suite)) and not noise_count(disturbance)
 
 
-def summary(stats) -> dict:
-    """Mean return, pipe in view and progress over the episodes, and every episode's."""
+def summary(stats, lengths) -> dict:
+    """Mean return, pipe in view, progress and success over the episodes, and every episode's.
+
+    ``lengths``: each episode's pipe length (m), for the success (:mod:`pipefollow.evaluation.success`).
+    """
+    full = np.array([s.as_full_row() for s in stats])
     rows = [
         {
             "return": s.ret,
             "pipe_in_view": s.pipe_in_view,
             "progress_m": s.progress_m,
             "time_lost_s": s.time_lost_s,
+            **sc.episode_fields(row, length),
         }
-        for s in stats
+        for s, row, length in zip(stats, full, lengths, strict=True)
     ]
     return {
         "mean_return": float(np.mean([r["return"] for r in rows])),
         "mean_pipe_in_view": float(np.mean([r["pipe_in_view"] for r in rows])),
         "mean_progress_m": float(np.mean([r["progress_m"] for r in rows])),
+        **sc.summary(full, np.asarray(lengths, dtype=np.float64)),
         "episodes": rows,
     }
 
@@ -67,6 +74,7 @@ class Evaluation:
         seconds: the episode length (s).
         params: the simulated system.
         frames: the first episode's states, for :meth:`write_animation` (empty unless recorded).
+        lengths: every episode's pipe length (m).
     """
 
     stats: list
@@ -74,10 +82,11 @@ class Evaluation:
     seconds: float
     params: Any
     frames: list = field(default_factory=list, repr=False)
+    lengths: list = field(default_factory=list)
 
     def summary(self) -> dict:
         """:func:`summary` of the episodes."""
-        return summary(self.stats)
+        return summary(self.stats, self.lengths)
 
     def write_plot(self, path: str | Path, name: str) -> None:
         """The first episode's trajectory on its pipe, the controller called ``name``."""
@@ -139,7 +148,7 @@ def evaluate(
         state=getattr(agent, "state", "paper"),  # what a learner observes (sim.observation)
         **(camera or {}),
     )
-    stats, frames = [], []
+    stats, frames, lengths = [], [], []
     for e in range(episodes):
         if e == 0 and record:
             from pipefollow.envs.animation import Recorder
@@ -149,6 +158,7 @@ def evaluate(
             frames = recorder.frames
         else:
             stats.append(run_episode(env, agent, seed=seed if e == 0 else None))
+        lengths.append(env.pipeline.length)
         if e == 0:
             pipe = env.pipeline  # the first episode's pipe, for the plot and the animation
-    return Evaluation(stats, pipe, env.episode_seconds, env.params, frames)
+    return Evaluation(stats, pipe, env.episode_seconds, env.params, frames, lengths)

@@ -27,7 +27,9 @@ at every speed of the curve.
 Each controller is a label with one or more policies (training seeds): per scenario its return is
 the mean over its policies, the confidence interval a bootstrap over the pipes of those means
 (:mod:`pipefollow.evaluation.stats`), and its success rate the share of (policy, pipe) episodes with
-the pipe in view at ≥ 95 % of the decisions. The heuristic is always run, for the paired difference.
+the pipe in view at ≥ 95 % of the decisions and followed forward (:mod:`pipefollow.evaluation.success`),
+beside the share with the pipe in view alone (``in_view_rate``), the mean progress share and the
+count of episodes that turned back. The heuristic is always run, for the paired difference.
 """
 
 from __future__ import annotations
@@ -38,7 +40,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipefollow.evaluation.benchmark import SUCCESS_IN_VIEW, run_episodes
+from pipefollow.evaluation import success as sc
+from pipefollow.evaluation.benchmark import run_episodes
 from pipefollow.evaluation.stats import bootstrap_ci, iqm, paired_difference
 from pipefollow.files.paper_training import TEST_EPISODE_SECONDS
 from pipefollow.learners.heuristic import Heuristic
@@ -187,9 +190,18 @@ def params_for(agent) -> sim.SimParams:
     return sim_params(parse(getattr(agent, "readings", "default"), source="policy readings"))
 
 
-def summarize(label: str, results: Sequence[np.ndarray], heuristic: np.ndarray | None, seed: int = 0) -> dict:
-    """One row: ``results`` has a (pipes, 6) array per policy of ``label``; ``heuristic`` the reference."""
-    stacked = np.stack(results)  # (policies, pipes, 6)
+def summarize(label: str, results: Sequence[np.ndarray], heuristic: np.ndarray | None, seed: int = 0,
+              lengths=None) -> dict:  # fmt: skip
+    """One row: ``results`` has a statistics array (pipes, columns) per policy of ``label``.
+
+    ``heuristic``: the heuristic's array, the reference of the paired difference (None for itself).
+
+    ``lengths``: the pipes' lengths (m), for the success (:mod:`pipefollow.evaluation.success`);
+    None: pipes longer than any episode reaches.
+    """
+    stacked = np.stack(results)  # (policies, pipes, columns)
+    lengths = np.full(stacked.shape[1], np.inf) if lengths is None else np.asarray(lengths, dtype=np.float64)
+    judged = sc.summary(stacked.reshape(-1, stacked.shape[2]), np.tile(lengths, stacked.shape[0]))
     per_pipe = stacked[:, :, STAT_RETURN].mean(axis=0)
     lo, hi = bootstrap_ci(per_pipe, seed)
     row = {
@@ -200,7 +212,10 @@ def summarize(label: str, results: Sequence[np.ndarray], heuristic: np.ndarray |
         "ci95_low": lo,
         "ci95_high": hi,
         "iqm_return": iqm(per_pipe),
-        "success_rate": float(np.mean(stacked[:, :, STAT_IN_VIEW] >= SUCCESS_IN_VIEW)),
+        "success_rate": judged["success_rate"],
+        "in_view_rate": judged["in_view_rate"],
+        "mean_progress_share": judged["mean_progress_share"],
+        "turned_back": judged["turned_back"],
         "mean_pipe_in_view": float(stacked[:, :, STAT_IN_VIEW].mean()),
         "seed_returns": [float(r[:, STAT_RETURN].mean()) for r in results],
     }
@@ -220,7 +235,8 @@ def evaluate(
 ) -> list[dict]:
     """Rows of :func:`summarize` for the heuristic and each labelled controller on ``cases``."""
     h = run_scenarios(Heuristic(), cases, seconds)
-    rows = [summarize(HEURISTIC_LABEL, [h], None, seed)]
+    lengths = [c.pipe.length for c in cases]
+    rows = [summarize(HEURISTIC_LABEL, [h], None, seed, lengths)]
     for label, agents in controllers.items():
         if label == HEURISTIC_LABEL:
             continue
@@ -229,7 +245,7 @@ def evaluate(
             results.append(run_scenarios(agent, cases, seconds, params_for(agent)))
             if progress:
                 progress()
-        rows.append(summarize(label, results, h, seed))
+        rows.append(summarize(label, results, h, seed, lengths))
     return rows
 
 
@@ -277,6 +293,9 @@ COLUMNS = (
     "policies",
     "episodes",
     "success_rate",
+    "in_view_rate",
+    "mean_progress_share",
+    "turned_back",
     "mean_return",
     "ci95_low",
     "ci95_high",
@@ -306,7 +325,10 @@ def _cell(v):
 
 
 def markdown(rows: Sequence[dict], first: str, header: str) -> str:
-    """A Markdown table: one row per ``first`` value, one column per controller (mean return, success)."""
+    """A Markdown table: one row per ``first`` value, one column per controller (mean return, success).
+
+    A cell names the episodes that turned back, where any did.
+    """
     labels = list(dict.fromkeys(r["controller"] for r in rows))
     keys = list(dict.fromkeys(r[first] for r in rows))
     cell = {(r[first], r["controller"]): r for r in rows}
@@ -315,8 +337,10 @@ def markdown(rows: Sequence[dict], first: str, header: str) -> str:
         cells = []
         for lab in labels:
             r = cell[(k, lab)]
+            back = r.get("turned_back", 0)
             cells.append(
                 f"{r['mean_return']:.1f} [{r['ci95_low']:.1f}, {r['ci95_high']:.1f}], {r['success_rate']:.0%}"
+                + (f", {back} turned back" if back else "")
             )
         lines.append(f"| {k:g} | " if isinstance(k, float) else f"| {k} | ")
         lines[-1] += " | ".join(cells) + " |"
@@ -338,7 +362,7 @@ def plot_curve(rows: Sequence[dict], path, title: str = "") -> None:
         ax_r.plot(v, [r["mean_return"] for r in rs], marker="o", ms=3, color=line.get_color(), label=name)
         ax_r.fill_between(v, [r["ci95_low"] for r in rs], [r["ci95_high"] for r in rs],
                           color=line.get_color(), alpha=0.18, lw=0)  # fmt: skip
-    ax_s.set_ylabel("success rate (%): pipe in view ≥ 95 % of the time")
+    ax_s.set_ylabel("success rate (%): pipe in view ≥ 95 %, followed forward")
     ax_r.set_ylabel("mean return per 60-s episode (95 % CI)")
     for ax in (ax_s, ax_r):
         ax.set_xlabel("current speed (m/s); the AUV cruises at 0.48 m/s")

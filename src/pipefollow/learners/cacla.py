@@ -371,21 +371,25 @@ def episodes(w, hp, rule, var, trace, tracks, run, grid, rng, env_rng, dz, stats
                 a, a_rl = act(w, phi, sigma, z0, z1, a_sup, p, heads)
             have_phi = False
             r = ep.draw_and_decide(s, a, points, cum, ps, env_rng, dz, book, poses, e)
-            if not run.learn:
-                continue
-            ep.carry(book, visible, r, p.discount)
-            if visible:
-                phi, phi_pend = phi_pend, phi  # keep φ(s) for the update; no copy
-                heads, heads_pend = heads_pend, heads
-                a_rl_p, a_sup_p = a_rl, a_sup
-            if ep.due(book, s[sim.IN_VIEW] != 0.0, ep.ended(book, n)):
-                observe(s, grid.slots, obs)
-                grid_features(obs, grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
-                update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], book[ep.DISC], phi_next, p, rule, var,
-                       trace, heads_pend)  # fmt: skip
-                book[ep.PENDING] = 0.0
-                phi, phi_next = phi_next, phi  # φ(s') is the next decision's φ(s)
-                have_phi = True
+            end = ep.end_of(book, s, cum, ps, n)
+            if run.learn:
+                ep.carry(book, visible, r, p.discount)
+                if visible:
+                    phi, phi_pend = phi_pend, phi  # keep φ(s) for the update; no copy
+                    heads, heads_pend = heads_pend, heads
+                    a_rl_p, a_sup_p = a_rl, a_sup
+                if ep.due(book, s[sim.IN_VIEW] != 0.0, end != ep.GOES_ON):
+                    observe(s, grid.slots, obs)
+                    grid_features(obs, grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
+                    disc = ep.bootstrap(book, end)
+                    update(w, phi_pend, a_rl_p, a_sup_p, book[ep.ACC], disc, phi_next, p, rule, var, trace,
+                           heads_pend)  # fmt: skip
+                    book[ep.PENDING] = 0.0
+                    phi, phi_next = phi_next, phi  # φ(s') is the next decision's φ(s)
+                    have_phi = True
+            if end == ep.PIPE_END:
+                break
+        ep.hold_poses(poses, e, book)
         ep.close_episode(stats, e, book, s[sim.PROGRESS_MAX], decision_s)
 
 

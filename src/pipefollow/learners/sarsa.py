@@ -238,23 +238,27 @@ def episodes(W, alpha, discount, search, tracks, run, grid, rng, env_rng, dz, st
                     z = rng.standard_normal() if sigma > 0.0 else 0.0
                     a = choose(W, phi, search.actions, search.psi, sigma, z)
             r = ep.draw_and_decide(s, a, points, cum, ps, env_rng, dz, book, poses, e)
-            if not run.learn:
-                continue
-            ep.carry(book, visible, r, discount)
-            if visible:
-                phi_pend[:] = phi
-                a_p = a
-            if ep.due(book, s[sim.IN_VIEW] != 0.0, ep.ended(book, n)):
-                observe(s, grid.slots, obs)
-                grid_features(obs, grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
-                z = rng.standard_normal() if sigma > 0.0 else 0.0
-                # W φ(s') of choosing a' is the one the update needs: W has not moved in between
-                a_next, q_next = choose_with_q(W, phi_next, search.actions, search.psi, sigma, z)
-                has_next = True
-                dim_activations(a_p, search.centres, search.width, search.normalized, psi)
-                dim_activations(a_next, search.centres, search.width, search.normalized, psi_next)
-                update_on(W, phi_pend, psi, book[ep.ACC], book[ep.DISC], q_next, psi_next, alpha)
-                book[ep.PENDING] = 0.0
+            end = ep.end_of(book, s, cum, ps, n)
+            if run.learn:
+                ep.carry(book, visible, r, discount)
+                if visible:
+                    phi_pend[:] = phi
+                    a_p = a
+                if ep.due(book, s[sim.IN_VIEW] != 0.0, end != ep.GOES_ON):
+                    observe(s, grid.slots, obs)
+                    grid_features(obs, grid.centres, grid.offsets, grid.widths, grid.normalized, phi_next)
+                    z = rng.standard_normal() if sigma > 0.0 else 0.0
+                    # W φ(s') of choosing a' is the one the update needs: W has not moved in between
+                    a_next, q_next = choose_with_q(W, phi_next, search.actions, search.psi, sigma, z)
+                    has_next = True
+                    dim_activations(a_p, search.centres, search.width, search.normalized, psi)
+                    dim_activations(a_next, search.centres, search.width, search.normalized, psi_next)
+                    disc = ep.bootstrap(book, end)
+                    update_on(W, phi_pend, psi, book[ep.ACC], disc, q_next, psi_next, alpha)
+                    book[ep.PENDING] = 0.0
+            if end == ep.PIPE_END:
+                break
+        ep.hold_poses(poses, e, book)
         ep.close_episode(stats, e, book, s[sim.PROGRESS_MAX], decision_s)
 
 

@@ -125,12 +125,15 @@ def learner_inputs(algorithm: str, r: Readings = DEFAULT, **options) -> dict:
 
 # The readings the simulation reads (the keys :func:`sim_params` applies): the only ones that can
 # change a deterministic evaluation of a saved policy or a fixed controller.
-SIM_READINGS = ("start_speed",)
+SIM_READINGS = ("start_speed", "pipe_end")
 
 
 def sim_params(r: Readings = DEFAULT, base: SimParams = PAPER_SIM) -> SimParams:
-    """The simulation's parameters under the readings of :data:`SIM_READINGS` (``start_speed``)."""
-    return base._replace(start_speed=CRUISE_SPEED if r.start_speed == "cruise" else 0.0)
+    """The simulation's parameters under the readings of :data:`SIM_READINGS` (start speed, pipe end)."""
+    return base._replace(
+        start_speed=CRUISE_SPEED if r.start_speed == "cruise" else 0.0,
+        end_at_pipe_end=r.pipe_end == "end",
+    )
 
 
 def sigma_scale(r: Readings = DEFAULT) -> float:

@@ -86,6 +86,15 @@ OPEN_POINTS: tuple[OpenPoint, ...] = (
         f"rest: u = 0 at the start; cruise: u = {CRUISE_SPEED} m/s, the steady speed with action 0",
     ),
     OpenPoint(
+        "pipe_end",
+        ("end", "continue"),
+        "end",
+        "the paper's pipes are longer than its episodes; it does not say what happens at a pipe's end",
+        "end: reaching the pipe's far end (progress within 0.5 m of its length) ends the episode, a "
+        "terminal state; continue: the episode runs its time, and every decision past the end loses "
+        "the pipe (−10)",
+    ),
+    OpenPoint(
         "rbf",
         FORMS,
         "normalized",
@@ -153,6 +162,7 @@ class Readings:
     gamma_max: float = 1.0
     skew_unit: str = "deg45"
     start_speed: str = "rest"
+    pipe_end: str = "end"
     rbf: str = "normalized"
     rbf_width: str = "half-spacing"
     sigma_unit: str = "normalized"

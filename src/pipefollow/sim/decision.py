@@ -54,6 +54,7 @@ class SimParams(NamedTuple):
     progress_ahead: float = 1.5  # and ahead of it (m): ≥ 1 s of travel plus a corner cut (√2 × 1 m)
     disturbance: Disturbance = NO_DISTURBANCE  # current and camera faults; none by default
     start_speed: float = 0.0  # surge speed u (through the water) at the start (m/s): at rest (docs/design.md)
+    end_at_pipe_end: bool = True  # reaching the pipe's far end ends the episode (reading pipe_end)
 
 
 PAPER_SIM = SimParams()
@@ -274,6 +275,7 @@ _CAMERA, _N_CAMERA = OFFSETS["camera"], len(CameraParams._fields)
 _DT, _SUBSTEPS, _LOST_REWARD = OFFSETS["dt"], OFFSETS["substeps"], OFFSETS["lost_reward"]
 _BACK, _AHEAD = OFFSETS["progress_back"], OFFSETS["progress_ahead"]
 _DISTURBANCE, _START_SPEED = OFFSETS["disturbance"], OFFSETS["start_speed"]
+_END_AT_PIPE_END = OFFSETS["end_at_pipe_end"]
 
 
 def pack_params(p: SimParams) -> np.ndarray:
@@ -294,7 +296,8 @@ def unpack_params(a):
     cam = CameraParams(*to_fixed_tuple(a[_CAMERA : _CAMERA + _N_CAMERA], _N_CAMERA))
     dist = unpack_disturbance(a, _DISTURBANCE)
     return SimParams(
-        auv, ctrl, cam, a[_DT], int(a[_SUBSTEPS]), a[_LOST_REWARD], a[_BACK], a[_AHEAD], dist, a[_START_SPEED]
+        auv, ctrl, cam, a[_DT], int(a[_SUBSTEPS]), a[_LOST_REWARD], a[_BACK], a[_AHEAD], dist,
+        a[_START_SPEED], a[_END_AT_PIPE_END] != 0.0,
     )
 
 

@@ -12,10 +12,13 @@ statistics and the episode's end cannot drift apart.
   :func:`start` clears the book;
 * :func:`decide` runs one decision and keeps its totals (:func:`tally`); the environments'
   :func:`decide_packed` counts it without its reward, which may come from the vision camera;
-  :func:`ended` says when the episode ends (its decisions run out: a time limit, no terminal state);
+  :func:`end_of` says whether and why the episode ends: its decisions run out (a time limit,
+  ``truncated``) or the AUV has reached the pipe's far end (:func:`reached_end`, a terminal state,
+  ``terminated``; not under the paper's reading ``pipe_end=continue``);
 * :func:`carry` keeps the pending transition: a decision taken with the pipe in view starts one
   (its reward, bootstrap factor γ_d); while the pipe is lost the rewards add up discounted;
-  :func:`due` says when the one semi-Markov update is made (pipe back in view, or the last decision);
+  :func:`due` says when the one semi-Markov update is made (pipe back in view, or the last decision),
+  :func:`bootstrap` with which factor (none from the pipe's end, which is terminal);
 * :func:`close_episode` writes a row of the statistics, whose columns are :data:`STAT_NAMES`.
 
 The compiled loops take grouped arguments: :class:`Tracks` (the pipes) and :class:`Run` (how the
@@ -24,6 +27,7 @@ episodes run), each a ``NamedTuple`` that numba passes as one argument.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -33,7 +37,9 @@ from pipefollow.sim import decision as sim
 
 # The per-episode statistics: one row an episode, its columns these, in this order. Training runs
 # return (and write) the leading columns up to the time lost, :data:`TRAINING_STAT_NAMES`.
-STAT_NAMES = ("return", "pipe_in_view", "progress_m", "time_lost_s", "sum_e_dist2", "n_in_view")
+STAT_NAMES = (
+    "return", "pipe_in_view", "progress_m", "time_lost_s", "sum_e_dist2", "n_in_view", "swum_m", "back_m",
+)  # fmt: skip
 STAT_COLUMN = {name: i for i, name in enumerate(STAT_NAMES)}
 STAT_RETURN = STAT_COLUMN["return"]  # accumulated reward
 STAT_IN_VIEW = STAT_COLUMN["pipe_in_view"]  # share of decisions that ended with the pipe in view
@@ -41,10 +47,12 @@ STAT_PROGRESS = STAT_COLUMN["progress_m"]  # arc length reached along the pipe (
 STAT_TIME_LOST = STAT_COLUMN["time_lost_s"]  # time with the pipe out of view at decision ends (s)
 STAT_SUM_E2 = STAT_COLUMN["sum_e_dist2"]  # Σ e_dist² over the decisions that ended in view (m²)
 STAT_N_SEEN = STAT_COLUMN["n_in_view"]  # the number of those decisions
+STAT_SWUM = STAT_COLUMN["swum_m"]  # distance covered over ground, decision end to decision end (m)
+STAT_BACK = STAT_COLUMN["back_m"]  # progress lost in decisions that ended in view: following backwards (m)
 TRAINING_STAT_NAMES = STAT_NAMES[: STAT_TIME_LOST + 1]
 
 # The slots of an episode's book: its running totals, then the pending transition of :func:`carry`.
-BOOK_SLOTS = ("decisions", "return", "seen", "sum_e2", "pending", "acc", "disc")
+BOOK_SLOTS = ("decisions", "return", "seen", "sum_e2", "pending", "acc", "disc", "swum", "back")
 BOOK_SLOT = {name: i for i, name in enumerate(BOOK_SLOTS)}
 DECISIONS = BOOK_SLOT["decisions"]  # decisions made
 TOTAL = BOOK_SLOT["return"]  # Σ r
@@ -53,7 +61,19 @@ E2 = BOOK_SLOT["sum_e2"]  # Σ e_dist² over those
 PENDING = BOOK_SLOT["pending"]  # 1 while a transition waits for its update
 ACC = BOOK_SLOT["acc"]  # its discounted reward Σ γ^j r_j
 DISC = BOOK_SLOT["disc"]  # its bootstrap factor γ^n
+SWUM = BOOK_SLOT["swum"]  # Σ of the straight distances between the poses at decision ends (m)
+BACK = BOOK_SLOT["back"]  # Σ of the progress lost in decisions that ended with the pipe in view (m)
 BOOK_SIZE = len(BOOK_SLOTS)
+
+# How an episode ends (:func:`end_of`): it goes on, its decisions ran out (a time limit: Gymnasium's
+# ``truncated``), or the AUV reached the pipe's far end (a terminal state: ``terminated``).
+GOES_ON, TIME_LIMIT, PIPE_END = 0, 1, 2
+END_REASONS = ("", "time_limit", "pipe_end")  # by code: the environments' info["end_reason"]
+# The far end is reached when the progress along the pipe is within this distance of the pipe's
+# length (m): a decision's travel at cruise speed (0.476 m/s), so that the decision that reaches it
+# ends with the pipe's end still ahead in the camera's footprint (which starts at the AUV's centre),
+# not with the pipe lost behind the AUV (−10).
+END_MARGIN_M = 0.5
 
 
 class Tracks(NamedTuple):
@@ -132,12 +152,38 @@ def record_pose(poses, e, t, s):
 
 
 @njit(cache=True)
+def hold_poses(poses, e, book):
+    """The last pose of episode ``e`` in the rows of ``poses[e]`` after its last decision, if any are left.
+
+    An episode that ended at the pipe's end made fewer decisions than the rows hold: the AUV stays
+    where its inspection ended, so a recorded track keeps its shape and no row holds zeros.
+    """
+    if poses.shape[0] > 0:
+        last = int(book[DECISIONS])
+        for t in range(last + 1, poses.shape[1]):
+            poses[e, t, :] = poses[e, last, :]
+
+
+@njit(cache=True)
 def count(book, in_view, e_dist):
     """Count a decision, and whether it ended with the pipe ``in_view`` (with its ``e_dist``²)."""
     book[DECISIONS] += 1.0
     if in_view:
         book[SEEN] += 1.0
         book[E2] += e_dist * e_dist
+
+
+@njit(cache=True)
+def travel(book, s, x0, y0, progress0):
+    """Add a decision's move from ``(x0, y0)`` at ``progress0`` to the state ``s`` after it to the book.
+
+    ``swum``: the straight distance between the two poses; ``back``: the progress (the state's
+    ``PROGRESS``, the arc length of the AUV's place on the pipe) lost, if the decision ended with
+    the pipe in view: a vehicle that follows the pipe backwards.
+    """
+    book[SWUM] += math.hypot(s[sim.X] - x0, s[sim.Y] - y0)
+    if s[sim.IN_VIEW] != 0.0 and s[sim.PROGRESS] < progress0:
+        book[BACK] += progress0 - s[sim.PROGRESS]
 
 
 @njit(cache=True)
@@ -150,8 +196,10 @@ def tally(book, r, in_view, e_dist):
 @njit(cache=True)
 def decide(s, a, points, cum, ps, z, book, poses, e):
     """One decision with action ``a`` and the disturbances' normals ``z``, tallied. Returns r."""
+    x0, y0, progress0 = s[sim.X], s[sim.Y], s[sim.PROGRESS]
     r = sim.decide(s, a, points, cum, ps, z)
     tally(book, r, s[sim.IN_VIEW] != 0.0, s[sim.E_DIST])
+    travel(book, s, x0, y0, progress0)
     record_pose(poses, e, int(book[DECISIONS]), s)
     return r
 
@@ -165,21 +213,44 @@ def draw_and_decide(s, a, points, cum, ps, env_rng, dz, book, poses, e):
 
 @njit(cache=True)
 def decide_packed(s, a, points, cum, packed, z, book, n_decisions):
-    """The environments' decision (packed parameters), counted; returns its reward and :func:`ended`.
+    """The environments' decision (packed parameters), counted; returns its reward and :func:`end_of`.
 
     The reward is not added to the book: an environment sums the rewards it returns itself (the
     vision camera's when it has one), in Python, where a float costs less than an array's entry.
     What the book counts in view is the simulation's exact camera, before any detection.
     """
-    r = sim.decide(s, a, points, cum, sim.unpack_params(packed), z)
+    ps = sim.unpack_params(packed)
+    x0, y0, progress0 = s[sim.X], s[sim.Y], s[sim.PROGRESS]
+    r = sim.decide(s, a, points, cum, ps, z)
     count(book, s[sim.IN_VIEW] != 0.0, s[sim.E_DIST])
-    return r, ended(book, n_decisions)
+    travel(book, s, x0, y0, progress0)
+    return r, end_of(book, s, cum, ps, n_decisions)
 
 
 @njit(cache=True)
-def ended(book, n_decisions):
-    """Whether the episode has ended: its ``n_decisions`` decisions are made (a time limit)."""
-    return book[DECISIONS] >= n_decisions
+def reached_end(progress_m, length_m):
+    """Whether an AUV at ``progress_m`` along a pipe ``length_m`` long has reached its far end.
+
+    Reached: the progress (the farthest arc length reached) is within :data:`END_MARGIN_M` of the
+    length. The AUV starts on the pipe's first point, so a pipe shorter than the margin ends at
+    its first decision.
+    """
+    return progress_m >= length_m - END_MARGIN_M
+
+
+@njit(cache=True)
+def end_of(book, s, cum, ps, n_decisions):
+    """How the episode stands after a decision: :data:`GOES_ON`, :data:`TIME_LIMIT` or :data:`PIPE_END`.
+
+    :data:`PIPE_END` when the AUV has reached the pipe's far end (:func:`reached_end`) and ``ps``
+    ends episodes there (``end_at_pipe_end``, the reading ``pipe_end=end``); this comes first when
+    the same decision also makes the ``n_decisions``-th, the time limit.
+    """
+    if ps.end_at_pipe_end and reached_end(s[sim.PROGRESS_MAX], cum[cum.shape[0] - 1]):
+        return PIPE_END
+    if book[DECISIONS] >= n_decisions:
+        return TIME_LIMIT
+    return GOES_ON
 
 
 @njit(cache=True)
@@ -203,10 +274,21 @@ def due(book, now_visible, last):
 
 
 @njit(cache=True)
+def bootstrap(book, end):
+    """The pending transition's bootstrap factor after a decision that left the episode at ``end``.
+
+    γ^n (the book's) while the episode goes on or at its time limit, which is no state of the task;
+    0 at the pipe's end, a terminal state: nothing follows it.
+    """
+    return 0.0 if end == PIPE_END else book[DISC]
+
+
+@njit(cache=True)
 def close_episode(stats, e, book, progress_m, decision_s):
     """Row ``e`` of the statistics (:data:`STAT_NAMES`, or their leading columns) from the book.
 
-    ``progress_m`` is the arc length the episode reached (the state's ``PROGRESS_MAX``).
+    ``progress_m`` is the arc length the episode reached (the state's ``PROGRESS_MAX``). The rates
+    are over the decisions made: fewer than the episode's if it ended at the pipe's end.
     """
     n = book[DECISIONS]
     stats[e, STAT_RETURN] = book[TOTAL]
@@ -216,6 +298,9 @@ def close_episode(stats, e, book, progress_m, decision_s):
     if stats.shape[1] > STAT_SUM_E2:
         stats[e, STAT_SUM_E2] = book[E2]
         stats[e, STAT_N_SEEN] = book[SEEN]
+    if stats.shape[1] > STAT_SWUM:
+        stats[e, STAT_SWUM] = book[SWUM]
+        stats[e, STAT_BACK] = book[BACK]
 
 
 def statistics_row(book: np.ndarray, progress_m: float, decision_s: float) -> np.ndarray:

@@ -7,7 +7,8 @@ Both paths follow the same protocol (docs/design.md):
 * a decision whose next state sees the pipe gives an ordinary one-step update; while the pipe is
   lost no update is made, and when it is back in view (or the episode ends) one semi-Markov
   update ``δ = Σ γ^j r_j + γ^n V(s_reacq) − V(s)`` is made from the last state in view;
-* the 20-s end is a time limit: agents bootstrap from the last state;
+* the 20-s end is a time limit: agents bootstrap from the last state; the pipe's far end (reading
+  ``pipe_end=end``, :func:`pipefollow.sim.episode.end_of`) is a terminal state: nothing to bootstrap;
 * exploration σ falls linearly from ``sigma_start`` to ``sigma_end`` over the episodes.
 
 The compiled path (:func:`train_compiled`) runs the agent's learner's own compiled loop
@@ -48,6 +49,8 @@ class EpisodeStats:
         poses: (decisions + 1, 3) poses (x, y, ψ) if recorded, else None.
         sum_e_dist2: Σ e_dist² over the decisions that ended with the pipe in view (m²).
         n_in_view: number of those decisions.
+        swum_m: distance covered over ground, decision end to decision end (m).
+        back_m: progress lost in decisions that ended with the pipe in view (m): following backwards.
     """
 
     ret: float
@@ -57,13 +60,15 @@ class EpisodeStats:
     poses: np.ndarray | None = None
     sum_e_dist2: float = 0.0
     n_in_view: int = 0
+    swum_m: float = 0.0
+    back_m: float = 0.0
 
     @classmethod
     def from_row(cls, row: np.ndarray, poses: np.ndarray | None = None) -> EpisodeStats:
         """The statistics of a row of :data:`pipefollow.sim.episode.STAT_NAMES`, and the poses."""
         return cls(float(row[ep.STAT_RETURN]), float(row[ep.STAT_IN_VIEW]), float(row[ep.STAT_PROGRESS]),
                    float(row[ep.STAT_TIME_LOST]), poses, float(row[ep.STAT_SUM_E2]),
-                   int(row[ep.STAT_N_SEEN]))  # fmt: skip
+                   int(row[ep.STAT_N_SEEN]), float(row[ep.STAT_SWUM]), float(row[ep.STAT_BACK]))  # fmt: skip
 
     def as_full_row(self) -> tuple[float, ...]:
         """The columns of :data:`pipefollow.sim.episode.STAT_NAMES`."""
@@ -71,6 +76,7 @@ class EpisodeStats:
         row[ep.STAT_RETURN], row[ep.STAT_IN_VIEW] = self.ret, self.pipe_in_view
         row[ep.STAT_PROGRESS], row[ep.STAT_TIME_LOST] = self.progress_m, self.time_lost_s
         row[ep.STAT_SUM_E2], row[ep.STAT_N_SEEN] = self.sum_e_dist2, float(self.n_in_view)
+        row[ep.STAT_SWUM], row[ep.STAT_BACK] = self.swum_m, self.back_m
         return tuple(row)
 
     def as_row(self) -> tuple[float, ...]:
@@ -118,6 +124,8 @@ def run_episode(
                 book[ep.PENDING] = 0.0
         obs = next_obs
     trail = np.array(env.unwrapped.trail)
+    travelled = env.unwrapped.book  # the distances the environment's decisions measured
+    book[ep.SWUM], book[ep.BACK] = travelled[ep.SWUM], travelled[ep.BACK]
     return EpisodeStats.from_row(ep.statistics_row(book, info["progress_m"], decision_s), trail)
 
 
