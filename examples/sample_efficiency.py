@@ -267,8 +267,20 @@ def table(rows: list[dict], out: Path) -> str:
     return "\n".join(lines)
 
 
+# the curves drawn: the paper's learners, the critic's trace, the recipe and PPO (the table has every row)
+PLOT_VARIANTS = (
+    "cacla", "supervised-cacla", "supervised-cacla-td0.9",
+    "cacla-recipe", "supervised-cacla-recipe", "ppo", "sac",
+)  # fmt: skip
+
+
 def plot(rows: list[dict], out: Path, path: Path) -> None:
-    """Held-out mean return (95 % CI band) against training decisions, calm and disturbed."""
+    """Held-out mean return (95 % CI band) against training decisions, calm and disturbed.
+
+    Only :data:`PLOT_VARIANTS` among the rows, unless none of them is there (then every row).
+    """
+    if any(r["variant"] in PLOT_VARIANTS for r in rows):
+        rows = [r for r in rows if r["variant"] in PLOT_VARIANTS]
     from pipefollow.envs.render import new_figure, save_figure
 
     h = json.loads((out / "runs" / "heuristic.json").read_text())

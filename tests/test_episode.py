@@ -81,7 +81,6 @@ def test_end_of_by_hand_the_pipe_end_within_half_a_metre_and_before_the_time_lim
     book[ep.DECISIONS] = 5  # the time limit in the same decision: the end of the pipe comes first
     assert ep.end_of(book, s, cum, ends, 5) == ep.PIPE_END
     assert ep.end_of(book, s, cum, paper, 5) == ep.TIME_LIMIT
-    assert ep.END_REASONS[ep.PIPE_END] == "pipe_end" and ep.END_REASONS[ep.TIME_LIMIT] == "time_limit"
 
 
 def test_bootstrap_is_none_from_the_pipe_end_and_the_books_factor_otherwise():

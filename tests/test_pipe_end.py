@@ -46,7 +46,7 @@ def heuristic_episode(env):
 def test_reaching_the_far_end_of_a_pipe_file_ends_the_episode(pipe_file):
     length = SHORT.length
     rewards, progress, (terminated, truncated, info) = heuristic_episode(PipelineFollowingEnv(pipe_file, 60))
-    assert terminated and not truncated and str(info["end_reason"]) == "pipe_end"
+    assert terminated and not truncated and bool(info["reached_pipe_end"])
     assert 15 < len(rewards) < 60  # well before the time limit
     # reached: within half a metre of the end, and not one decision before
     assert length - ep.END_MARGIN_M <= progress[-1] <= length and progress[-2] < length - ep.END_MARGIN_M
@@ -56,7 +56,7 @@ def test_reaching_the_far_end_of_a_pipe_file_ends_the_episode(pipe_file):
     rewards_p, progress_p, (terminated, truncated, info) = heuristic_episode(
         PipelineFollowingEnv(pipe_file, 60, params=PAPER)
     )
-    assert truncated and not terminated and str(info["end_reason"]) == "time_limit" and len(rewards_p) == 60
+    assert truncated and not terminated and not info["reached_pipe_end"] and len(rewards_p) == 60
     np.testing.assert_array_equal(rewards_p[: len(rewards)], rewards)  # the same until the end
     assert progress_p[-1] == length and np.sum(rewards_p == -10.0) >= 3
     assert rewards_p[len(rewards) :].sum() < 0
@@ -127,8 +127,8 @@ def test_the_vector_environment_terminates_with_the_single_one():
         np.testing.assert_allclose(obs[0], o1, rtol=0, atol=1e-12)
         assert (r[0], terminated[0], truncated[0]) == (r1, te1, tr1)
         if te1:
-            assert terminated.all() and infos["end_reason"].tolist() == ["pipe_end", "pipe_end"]
-            assert infos["_end_reason"].all()
+            assert terminated.all() and infos["reached_pipe_end"].tolist() == [True, True]
+            assert infos["_reached_pipe_end"].all()
             assert infos["episode_progress_m"][0] == pytest.approx(float(info1["episode_progress_m"]))
             break
     else:
@@ -145,7 +145,7 @@ def test_stepping_past_the_pipe_end_warns_and_keeps_terminating():
     assert terminated
     with pytest.warns(UserWarning, match="after the episode's end"):
         _, _, terminated, truncated, info = env.step([0.0])
-    assert terminated and not truncated and "end_reason" not in info
+    assert terminated and not truncated and bool(info["reached_pipe_end"])
     strict = PipelineFollowingEnv(SHORT, 60, strict_reset=True)
     heuristic_episode(strict)
     from gymnasium.error import ResetNeeded

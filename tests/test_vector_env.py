@@ -171,7 +171,7 @@ def assert_same_infos(native, reference):
         else:
             mask = reference["_" + key]
             assert (native[key].dtype, native[key].shape) == (value.dtype, value.shape), key
-            if value.dtype == bool or value.dtype.kind == "U":  # flags, end_reason
+            if value.dtype == bool:  # flags
                 np.testing.assert_array_equal(native[key][mask], value[mask], err_msg=key)
             else:
                 np.testing.assert_allclose(native[key][mask], value[mask], rtol=0, atol=1e-12, err_msg=key)

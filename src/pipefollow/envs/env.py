@@ -104,8 +104,8 @@ class PipelineFollowingEnv(gym.Env):
     The episode is terminated when the AUV reaches the pipe's far end (its progress within 0.5 m of
     the pipe's length, :func:`pipefollow.sim.episode.reached_end`), a terminal state; under the
     paper's reading ``pipe_end=continue`` (``params.end_at_pipe_end=False``) it goes on there, the
-    pipe lost (−10 a decision). ``info["end_reason"]`` says which: ``"time_limit"`` or
-    ``"pipe_end"`` (``""`` while the episode goes on). ``step`` before the first ``reset`` raises
+    pipe lost (−10 a decision). ``info["reached_pipe_end"]`` says which: True at the far end,
+    False at a time limit (and while the episode goes on). ``step`` before the first ``reset`` raises
     :class:`gymnasium.error.ResetNeeded`. After the episode's last decision it carries on as
     Gymnasium's own environments do: a warning (once until the next reset), the simulation goes on
     and every further step ends as the last one did (``truncated`` or ``terminated``), without a
@@ -167,9 +167,8 @@ class PipelineFollowingEnv(gym.Env):
     last step (``terminated or truncated``) the whole episode's, which clients that log per episode
     read there; steps past the end repeat them. With the vision camera also ``detected``,
     ``detection_confidence``, ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the
-    exact camera's); the episode's summary is then the exact camera's too. ``end_reason`` (a 0-d
-    string array) is in every info too: ``""`` while the episode goes on, then ``"time_limit"`` or
-    ``"pipe_end"``.
+    exact camera's); the episode's summary is then the exact camera's too. ``reached_pipe_end`` (a 0-d
+    bool) is in every info too: True once the episode has ended at the pipe's far end.
 
     ## Registered ids
 
@@ -187,7 +186,7 @@ class PipelineFollowingEnv(gym.Env):
     * v0: the first release. Before it (unreleased): the episode's summary joined every step's
       info (it was at the last step only); ``observation="image"`` became ``(H, W, 1)`` (was
       ``(1, H, W)``); the ids got their episodes' ``max_episode_steps`` (was 86,400 for one id); reaching
-      a finite pipe's far end terminates the episode (``end_reason``).
+      a finite pipe's far end terminates the episode (``reached_pipe_end``).
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 2}

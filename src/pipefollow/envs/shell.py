@@ -295,12 +295,14 @@ def state_infos(states: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def end_info(ends) -> dict[str, np.ndarray]:
-    """``end_reason`` of episodes from their end codes (:func:`pipefollow.sim.episode.end_of`).
+    """``reached_pipe_end`` of episodes from their end codes (:func:`pipefollow.sim.episode.end_of`).
 
-    ``"time_limit"`` (truncated), ``"pipe_end"`` (terminated at the pipe's far end), ``""`` (going on);
-    one code gives a 0-d array, a batch an array of the batch's length.
+    True where the episode ended at the pipe's far end (``terminated``); False while it goes on and
+    after a time limit (``truncated``). A flag, not a string, so that every client that turns infos
+    into tensors or HDF5 datasets (TorchRL, Minari) takes it. One code gives a 0-d array, a batch an
+    array of the batch's length.
     """
-    return {"end_reason": np.asarray(np.array(ep.END_REASONS)[np.asarray(ends, dtype=np.int64)])}
+    return {"reached_pipe_end": np.asarray(np.asarray(ends) == ep.PIPE_END)}
 
 
 def episode_summary(book: np.ndarray, states: np.ndarray) -> dict[str, np.ndarray]:

@@ -32,7 +32,7 @@ single environment draws them.
 * **Infos**: the single environment's keys, each an array with the batch dimension first
   (``pose`` (N, 3), ``current`` (N, 2), ...), with Gymnasium's ``_key`` masks, the episode
   summary (``episode_pipe_in_view``, ``episode_progress_m``, ``episode_rms_e_dist``) and
-  ``end_reason`` included: each sub-environment's episode so far (``""`` while it goes on), its
+  ``reached_pipe_end`` included: each sub-environment's episode so far (False while it goes on), its
   whole episode's where ``terminated | truncated`` (in ``final_info`` under same-step autoreset):
   truncated at its time limit, or terminated at the pipe's far end.
 * **Observations**: float64 by default, ``obs_dtype="float32"`` as in the single environment.
@@ -416,7 +416,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
     def _infos(self, present: np.ndarray, ends: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """The infos of all sub-environments, ``_key`` masks ``present``, with the episodes' summaries.
 
-        ``ends``: the end codes of the step (``pipefollow.sim.episode.end_of``) for ``end_reason``;
+        ``ends``: the end codes of the step (``pipefollow.sim.episode.end_of``) for ``reached_pipe_end``;
         none: every episode goes on.
         """
         infos: dict[str, np.ndarray] = {}
@@ -432,5 +432,5 @@ class PipelineFollowingVectorEnv(VectorEnv):
             infos[key] = np.where(present, value, 0.0)  # 0 where masked out, as Gymnasium's SyncVectorEnv
             infos["_" + key] = present.copy()
         infos.update(end_info(np.full(self.num_envs, ep.GOES_ON) if ends is None else ends))
-        infos["_end_reason"] = present.copy()
+        infos["_reached_pipe_end"] = present.copy()
         return infos

@@ -68,7 +68,6 @@ BOOK_SIZE = len(BOOK_SLOTS)
 # How an episode ends (:func:`end_of`): it goes on, its decisions ran out (a time limit: Gymnasium's
 # ``truncated``), or the AUV reached the pipe's far end (a terminal state: ``terminated``).
 GOES_ON, TIME_LIMIT, PIPE_END = 0, 1, 2
-END_REASONS = ("", "time_limit", "pipe_end")  # by code: the environments' info["end_reason"]
 # The far end is reached when the progress along the pipe is within this distance of the pipe's
 # length (m): a decision's travel at cruise speed (0.476 m/s), so that the decision that reaches it
 # ends with the pipe's end still ahead in the camera's footprint (which starts at the AUV's centre),
