@@ -1,0 +1,335 @@
+r"""A downward-looking multibeam profiler: a fan of beams across track, ranges to seabed and pipe.
+
+The camera of the paper fails in murky water; inspection AUVs track pipelines with sonar instead
+(HUGIN's pipeline tracking with a multibeam echosounder, Midtgaard, Krogstad & Hagen 2011; SeeByte
+AUTOTRACKER), whose ranges do not depend on turbidity. This module renders one *ping* of such a
+profiler; :mod:`pipefollow.perception.sonar_detect` finds the pipe in it.
+
+Geometry. The fan is the vertical plane across track at the forward position ``along`` (camera
+metres, default 0: under the AUV's centre) of the camera frame of :mod:`pipefollow.sim.camera`
+(``x`` lateral, positive to starboard; ``y`` forward). Beam ``i`` points at the angle ``θ_i``
+from the vertical, positive to starboard, the angles evenly spaced over ``±swath/2``. A point at
+range ``r`` of a ray at angle ``φ`` lies at lateral ``x = r sin φ`` and depth ``r cos φ`` below
+the transducer, which flies at ``altitude`` above the mean seabed.
+
+* **Seabed**: the height ``g(x) = x·tan(slope) + roughness(x)`` above the mean seabed; the
+  roughness is a sum of :data:`ROUGHNESS_WAVES` cosines of random phase and wavelengths between
+  :data:`ROUGHNESS_WAVELENGTHS`, scaled to an RMS of ``roughness`` (m), drawn per ping.
+* **Pipe**: a cylinder of ``diameter`` whose axis lies ``R(1 − 2b)`` above the seabed under it
+  (``R`` the radius, ``b`` the burial: the share of the diameter below the seabed; 0 = lying on
+  it, ½ = top half above, 1 = the top flush with the seabed: invisible). Where a segment of the
+  pipeline polyline crosses the fan at angle ``α`` to the track, the fan cuts the cylinder in the
+  ellipse ``((x − x_c) cos α)² + (z − z_axis)² = R²``. A stretch in ``buried_from``/``buried_to``
+  (the disturbance's buried stretches, :mod:`pipefollow.sim.disturbance`) is fully buried.
+* **A beam's range**: the mean of ``sub_rays`` rays spread evenly over the beam's −3 dB width
+  (the beam width smooths the profile over its footprint), each ray's range the nearer of the
+  seabed and the pipe; then Gaussian range noise of s.d. ``range_noise`` (from the caller's
+  ``numpy.random.Generator``), then quantised to ``range_resolution``. A beam without a bottom
+  detection (probability ``dropout``) reads NaN. On a flat seabed with ``beam_width = 0`` a beam
+  reads exactly ``altitude / cos θ`` before noise and quantisation.
+
+Parameters and their sources (docs/decisions.md, "Sonar"):
+
+=================  ===========  ==============================================================
+field              default      source
+=================  ===========  ==============================================================
+altitude           2.0 m        the camera's: the renderer's light path assumes 2 m
+                                (``Water.altitude``); a 2 m wide footprint at 2 m is a ±26.6°
+                                lateral field of view, a plausible camera
+n_beams            128          R2Sonic 2024 / Norbit WBMS form 256 beams (R2Sonic operation
+                                manual); every second one keeps the render cheap
+swath              120°         R2Sonic 2024: opening angle 10°–160° selectable; ±60° at 2 m
+                                covers 6.9 m across, 3.5× the camera's 2 m
+beam_width         1.0°         across-track receive beam at 400 kHz: 0.5° R2Sonic 2024,
+                                0.9° Norbit WBMS, 0.4°–0.7° Kongsberg EM 2040 (datasheets)
+range_resolution   0.01 m       c / 2B = 1500 / (2 · 80 kHz) = 9.4 mm for the WBMS's 80 kHz
+                                bandwidth (Norbit manual); R2Sonic quotes 1.25 cm
+range_noise        0.01 m       of the order of the range resolution (conservative at 2 m)
+frequency          400 kHz      all three at 400 kHz (documentation only: nothing here depends
+                                on it, attenuation at 2 m being negligible)
+pipe diameter      0.25 m       the renderer's pipe (``Water.pipe_diameter``); subsea lines
+                                range from 6–12 in (0.15–0.3 m) flowlines to 42–44 in trunk
+                                lines (Langeled, ≈1.1 m)
+=================  ===========  ==============================================================
+
+Randomness: :func:`render_ping` draws, in this order, ``n_beams`` standard normals (range noise,
+if ``range_noise > 0``), ``n_beams`` uniforms (dropouts, if ``dropout > 0``) and
+``2·ROUGHNESS_WAVES`` uniforms (roughness, if ``roughness > 0``) from the generator it is given.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from pipefollow.sim.disturbance import NO_BURIAL
+
+ROUGHNESS_WAVES = 8  # cosines of the seabed's roughness per ping
+ROUGHNESS_WAVELENGTHS = (0.3, 4.0)  # m: shortest and longest wavelength (log-uniform)
+MIN_COS = 0.1  # |cos α| floor: a pipe almost in the fan's plane is a 10×-wide ridge, not a wall
+MAX_CROSSINGS = 16  # crossings of the fan by the pipeline that one ping renders
+
+
+class SonarError(ValueError):
+    """A sonar setting that cannot be used; the message names the field."""
+
+
+class Sonar(NamedTuple):
+    """A multibeam profiler's settings (units in the comments; sources in the module docstring)."""
+
+    n_beams: int = 128  # beams across track, [8, 1024]
+    swath_deg: float = 120.0  # total opening angle (°), (0, 160]
+    beam_width_deg: float = 1.0  # across-track −3 dB beam width (°), [0, 10]
+    sub_rays: int = 3  # rays averaged over a beam's width, [1, 32]
+    altitude: float = 2.0  # transducer height above the mean seabed (m), (0.2, 50]
+    along: float = 0.0  # forward position of the fan in camera metres, [-5, 5]
+    range_resolution: float = 0.01  # range quantisation step (m), [0, 0.5]; 0 = none
+    range_noise: float = 0.01  # Gaussian range noise s.d. (m), [0, 0.5]
+    dropout: float = 0.0  # probability that a beam has no bottom detection (NaN), [0, 0.5]
+    roughness: float = 0.0  # RMS seabed roughness (m), [0, 0.2]
+    seabed_slope_deg: float = 0.0  # across-track seabed slope (°, rising to starboard), [-20, 20]
+    frequency_khz: float = 400.0  # documentation only, (0, 2000]
+
+
+_RANGES = {  # field: (low, high, low end closed)
+    "n_beams": (8, 1024, True),
+    "swath_deg": (0.0, 160.0, False),
+    "beam_width_deg": (0.0, 10.0, True),
+    "sub_rays": (1, 32, True),
+    "altitude": (0.2, 50.0, False),
+    "along": (-5.0, 5.0, True),
+    "range_resolution": (0.0, 0.5, True),
+    "range_noise": (0.0, 0.5, True),
+    "dropout": (0.0, 0.5, True),
+    "roughness": (0.0, 0.2, True),
+    "seabed_slope_deg": (-20.0, 20.0, True),
+    "frequency_khz": (0.0, 2000.0, False),
+}
+_WHOLE = ("n_beams", "sub_rays")
+
+PAPER_SONAR = Sonar()
+
+
+def check_sonar(s: Sonar) -> Sonar:
+    """``s`` with whole-number fields as ints if every field is in range; else a one-line :class:`SonarError`."""
+    if not isinstance(s, Sonar):
+        raise SonarError(f"sonar must be a Sonar record, got {type(s).__name__}")
+    for name, (lo, hi, closed) in _RANGES.items():
+        value = getattr(s, name)
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise SonarError(f"sonar setting {name} must be a number, got {value!r}")
+        if name in _WHOLE and value != int(value):
+            raise SonarError(f"sonar setting {name} must be a whole number, got {value}")
+        low_ok = value >= lo if closed else value > lo
+        if not (math.isfinite(value) and low_ok and value <= hi):
+            raise SonarError(f"sonar setting {name} must be in {'[' if closed else '('}{lo}, {hi}], got {value}")
+    return s._replace(n_beams=int(s.n_beams), sub_rays=int(s.sub_rays))
+
+
+def make_sonar(**fields) -> Sonar:
+    """A checked :class:`Sonar` from keyword fields (the others at their defaults)."""
+    unknown = sorted(set(fields) - set(Sonar._fields))
+    if unknown:
+        raise SonarError(f"unknown sonar setting(s) {unknown}; allowed: {', '.join(Sonar._fields)}")
+    return check_sonar(Sonar(**fields))
+
+
+def check_pipe(diameter: float, burial: float) -> None:
+    """A one-line ``ValueError`` naming ``diameter`` or ``burial`` when out of range."""
+    if not (isinstance(diameter, int | float) and math.isfinite(diameter) and 0.02 <= diameter <= 2.0):
+        raise ValueError(f"diameter must be a pipe diameter in [0.02, 2] m, got {diameter!r}")
+    if not (isinstance(burial, int | float) and math.isfinite(burial) and 0.0 <= burial <= 1.0):
+        raise ValueError(f"burial must be the buried share of the diameter in [0, 1], got {burial!r}")
+
+
+def beam_angles(sonar: Sonar = PAPER_SONAR) -> np.ndarray:
+    """The beams' angles from the vertical (rad, positive to starboard), port to starboard."""
+    half = 0.5 * math.radians(sonar.swath_deg)
+    return np.linspace(-half, half, sonar.n_beams)
+
+
+class Ping(NamedTuple):
+    """One rendered profile: the beams' angles and ranges (NaN: no bottom detection), and the truth."""
+
+    angles: np.ndarray  # rad from the vertical, positive to starboard
+    ranges: np.ndarray  # slant ranges (m)
+    pipe_x: np.ndarray  # lateral positions (camera metres) where the pipe crosses the fan ...
+    pipe_visible: np.ndarray  # ... and whether it stands above the seabed there (not fully buried)
+
+
+def render_ping(
+    points: np.ndarray,
+    cum: np.ndarray,
+    pose: tuple[float, float, float],
+    rng: np.random.Generator,
+    sonar: Sonar = PAPER_SONAR,
+    diameter: float = 0.25,
+    burial: float = 0.0,
+    buried_from=NO_BURIAL,
+    buried_to=NO_BURIAL,
+    angles: np.ndarray | None = None,
+    out: np.ndarray | None = None,
+) -> Ping:
+    """One ping of ``sonar`` from pose ``(x, y, ψ)`` over the pipeline ``points``/``cum``.
+
+    ``sonar`` is taken as checked (:func:`make_sonar`); ``angles`` (from :func:`beam_angles`) and
+    ``out`` (float64 of ``n_beams``) may be passed in to save their allocation in a loop. An
+    empty ``points`` (shape ``(0, 2)``) is a seabed without a pipe.
+    """
+    n = sonar.n_beams
+    if angles is None:
+        angles = beam_angles(sonar)
+    if out is None:
+        out = np.empty(n)
+    z = rng.standard_normal(n) if sonar.range_noise > 0.0 else _NONE
+    u = rng.random(n) if sonar.dropout > 0.0 else _NONE
+    waves = rng.random(2 * ROUGHNESS_WAVES) if sonar.roughness > 0.0 else _NONE
+    xc = np.empty(MAX_CROSSINGS)
+    seen = np.zeros(MAX_CROSSINGS, dtype=np.bool_)
+    x, y, psi = pose
+    k = _render(
+        points, cum, float(x), float(y), float(psi), angles, _settings(sonar), float(diameter), float(burial),
+        np.asarray(buried_from, dtype=np.float64), np.asarray(buried_to, dtype=np.float64), z, u, waves, out, xc, seen,
+    )  # fmt: skip
+    return Ping(angles, out, xc[:k].copy(), seen[:k].copy())
+
+
+_NONE = np.zeros(0)
+
+
+def _settings(s: Sonar) -> np.ndarray:
+    """The settings the compiled render reads, as a float array (a record costs µs to pass)."""
+    return np.array(
+        [
+            math.radians(s.beam_width_deg), s.sub_rays, s.altitude, s.along, s.range_resolution,
+            s.range_noise, s.dropout, s.roughness, math.tan(math.radians(s.seabed_slope_deg)),
+        ]
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def seabed_height(x, slope, roughness, waves):
+    """Seabed height (m) above the mean at lateral ``x``: slope plus the roughness's cosines."""
+    h = x * slope
+    if roughness > 0.0:
+        nw = waves.shape[0] // 2
+        lo, hi = math.log(ROUGHNESS_WAVELENGTHS[0]), math.log(ROUGHNESS_WAVELENGTHS[1])
+        amp = roughness * math.sqrt(2.0 / nw)  # RMS of a cosine of amplitude A is A/√2
+        for k in range(nw):
+            wavelength = math.exp(lo + (hi - lo) * waves[2 * k])
+            h += amp * math.cos(2.0 * math.pi * (x / wavelength + waves[2 * k + 1]))
+    return h
+
+
+@njit(cache=True)
+def seabed_range(s, c, altitude, slope, roughness, waves):
+    """Range (m) to the seabed along the ray of direction ``(sin φ, cos φ) = (s, c)``.
+
+    A plane (no roughness) exactly: ``altitude − r s·tan β = r c``; with roughness, a fixed-point
+    iteration from there (the roughness's slopes are small).
+    """
+    r = altitude / (c + s * slope)
+    if roughness > 0.0:
+        for _ in range(6):
+            r = (altitude - seabed_height(r * s, slope, roughness, waves)) / c
+    return r
+
+
+@njit(cache=True)
+def cylinder_range(s, c, altitude, xc, cos_a, axis_height, radius):
+    """Range (m) along the ray ``(s, c) = (sin φ, cos φ)`` to the near side of the pipe's section, or inf.
+
+    The section is ``((x − xc)·cos_a)² + (z − axis_height)² = radius²`` with heights ``z``
+    above the mean seabed; the transducer is at height ``altitude`` above it.
+    """
+    k = cos_a * cos_a
+    d = altitude - axis_height  # the axis's depth below the transducer
+    a = s * s * k + c * c
+    b = -2.0 * (xc * s * k + d * c)
+    cc = xc * xc * k + d * d - radius * radius
+    disc = b * b - 4.0 * a * cc
+    if disc < 0.0:
+        return math.inf
+    r = (-b - math.sqrt(disc)) / (2.0 * a)
+    return r if r > 0.0 else math.inf
+
+
+@njit(cache=True)
+def fan_crossings(points, cum, x, y, psi, along, buried_from, buried_to, xc, cos_a, arc, open_):
+    """Where the pipeline crosses the fan (the camera frame's line ``forward = along``).
+
+    Fills ``xc`` (lateral position), ``cos_a`` (|cos| of the angle to the track), ``arc`` (arc
+    length) and ``open_`` (False inside a buried stretch) for up to ``len(xc)`` crossings;
+    returns how many.
+    """
+    cs, sn = math.cos(psi), math.sin(psi)
+    n = 0
+    if points.shape[0] < 2:
+        return 0
+    dx, dy = points[0, 0] - x, points[0, 1] - y
+    al, af = -sn * dx + cs * dy, cs * dx + sn * dy
+    for i in range(points.shape[0] - 1):
+        dx, dy = points[i + 1, 0] - x, points[i + 1, 1] - y
+        bl, bf = -sn * dx + cs * dy, cs * dx + sn * dy
+        ta, tb = af - along, bf - along
+        # a half-open test, so a vertex on the fan counts once
+        if (ta < 0.0 <= tb) or (tb < 0.0 <= ta):
+            t = ta / (ta - tb)
+            s = cum[i] + t * (cum[i + 1] - cum[i])
+            buried = False
+            for j in range(buried_from.shape[0]):
+                if buried_from[j] <= s <= buried_to[j]:
+                    buried = True
+            if n < xc.shape[0]:
+                length = math.hypot(bl - al, bf - af)
+                xc[n] = al + t * (bl - al)
+                cos_a[n] = abs(bf - af) / length if length > 0.0 else 1.0
+                arc[n] = s
+                open_[n] = not buried
+                n += 1
+        al, af = bl, bf
+    return n
+
+
+@njit(cache=True)
+def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, buried_to, z, u, waves, out, xc, seen):
+    width, sub, altitude, along = st[0], int(st[1]), st[2], st[3]
+    resolution, noise, dropout, roughness, slope = st[4], st[5], st[6], st[7], st[8]
+    cos_a = np.empty(xc.shape[0])
+    arc = np.empty(xc.shape[0])
+    n = fan_crossings(points, cum, x, y, psi, along, buried_from, buried_to, xc, cos_a, arc, seen)
+    radius = 0.5 * diameter
+    visible = burial < 1.0  # at 1 the top is flush with the seabed
+    axis = np.empty(n)
+    for k in range(n):
+        # the pipe rests on the seabed under its axis
+        axis[k] = seabed_height(xc[k], slope, roughness, waves) + radius * (1.0 - 2.0 * burial)
+        cos_a[k] = max(cos_a[k], MIN_COS)
+        seen[k] = seen[k] and visible
+    for i in range(angles.shape[0]):
+        total = 0.0
+        for j in range(sub):
+            phi = angles[i] + (width * ((j + 0.5) / sub - 0.5) if sub > 1 else 0.0)
+            sp, cp = math.sin(phi), math.cos(phi)
+            r = seabed_range(sp, cp, altitude, slope, roughness, waves)
+            for k in range(n):
+                if seen[k]:
+                    r = min(r, cylinder_range(sp, cp, altitude, xc[k], cos_a[k], axis[k], radius))
+            total += r
+        r = total / sub
+        if noise > 0.0:
+            r += noise * z[i]
+        if resolution > 0.0:
+            r = resolution * math.floor(r / resolution + 0.5)
+        if dropout > 0.0 and u[i] < dropout:
+            r = math.nan
+        out[i] = r
+    return n
+
+
+def profile_points(ranges: np.ndarray, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A ping's points as lateral position (m) and height above the transducer (m, negative)."""
+    return ranges * np.sin(angles), -ranges * np.cos(angles)

@@ -1,0 +1,309 @@
+r"""The pipe in a multibeam profile, and its line in the camera frame from successive profiles.
+
+:func:`detect_profile` finds a pipe in one ping of :mod:`pipefollow.perception.sonar`:
+
+1. the ping's points as lateral position ``x = r sin θ`` and height ``z = −r cos θ``;
+2. the seabed as a line ``z = a + b x``, fitted robustly (Tukey's biweight, iteratively
+   reweighted from the median height; the pipe is a minority of the beams) and the noise scale
+   ``σ`` as 1.4826 × the median absolute residual;
+3. a matched filter for the pipe's top: at each beam whose residual exceeds ``σ``, the template
+   ``t(u) = √(1 − (2u/D)²)`` over ``|u| < D/2`` (a pipe of diameter ``D`` lying across the fan)
+   is fitted to the residuals by least squares; its signal-to-noise ratio
+   ``SNR = Σ e t / (σ √Σ t²)`` is standard normal at each candidate on a pipe-free seabed with
+   Gaussian noise; the best candidate is a pipe when ``SNR ≥ threshold`` and its fitted height
+   is at least ``min_height``;
+4. the seabed refitted by least squares without the pipe's window and the beams more than 3σ
+   off it, and the lateral position as the vertex of a parabola fitted to the pipe's top (the
+   beams within the window above half the peak's residual); the centroid of the residuals if the
+   parabola is not concave or its vertex leaves the window.
+
+The confidence is ``min(1, SNR / (2 · threshold))``: ½ at the threshold, 1 at twice it.
+
+:class:`SonarTrack` remembers the detections of the last pings in the earth frame and fits a
+straight line through them in the current camera frame, which gives the camera's observation
+``(x1, y1, x2, y_near)`` (:mod:`pipefollow.sim.camera`): the line clipped to the camera's
+footprint. The direction comes from the pings behind the AUV, so at a bend it lags the camera
+(which sees 3 m ahead); with one ping only the pipe is taken parallel to the track.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from pipefollow.perception.sonar import Ping
+from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, clip_segment, to_camera
+
+THRESHOLD = 6.0  # SNR of the matched filter for a detection (false alarms: docs/decisions.md, "Sonar")
+MIN_HEIGHT_SHARE = 0.25  # the fitted top at least this share of the diameter above the seabed
+TUKEY_C = 4.685  # the biweight's tuning constant (95 % efficiency under Gaussian noise)
+MIN_SIGMA = 0.002  # m: the noise scale's floor (a noise-free, unquantised profile)
+MIN_BEAMS = 8  # valid beams a profile needs
+
+
+class SonarFix(NamedTuple):
+    """What :func:`detect_profile` found in one ping (camera metres; zeros when not found)."""
+
+    found: bool
+    lateral: float = 0.0  # the pipe's lateral position on the fan (m, positive to starboard)
+    height: float = 0.0  # its fitted top above the seabed (m)
+    snr: float = 0.0  # the matched filter's peak signal-to-noise ratio (also when not found)
+    confidence: float = 0.0  # in [0, 1]
+    seabed_depth: float = 0.0  # the fitted seabed's depth under the transducer (m): the altitude
+    sigma: float = 0.0  # the estimated height noise (m)
+
+
+def detect_profile(
+    ping: Ping | tuple,
+    diameter: float = 0.25,
+    threshold: float = THRESHOLD,
+    min_height: float | None = None,
+) -> SonarFix:
+    """The pipe in one ping (``Ping`` or ``(angles, ranges)``): see the module docstring."""
+    angles, ranges = ping[0], ping[1]
+    if not (math.isfinite(diameter) and diameter > 0.0):
+        raise ValueError(f"diameter must be a positive number of metres, got {diameter!r}")
+    if not (math.isfinite(threshold) and threshold > 0.0):
+        raise ValueError(f"threshold must be a positive signal-to-noise ratio, got {threshold!r}")
+    if min_height is None:
+        min_height = MIN_HEIGHT_SHARE * diameter
+    r = _detect(np.asarray(angles, np.float64), np.asarray(ranges, np.float64), diameter, threshold, min_height)
+    found, lateral, height, snr, depth, sigma = r
+    if not found:
+        return SonarFix(False, snr=snr, seabed_depth=depth, sigma=sigma)
+    return SonarFix(True, lateral, height, snr, min(1.0, snr / (2.0 * threshold)), depth, sigma)
+
+
+@njit(cache=True)
+def _line_fit(x, z, w):
+    """Weighted least squares ``z = a + b x``; ``(a, b)`` (b = 0 when x does not spread)."""
+    sw = sx = sz = sxx = sxz = 0.0
+    for i in range(x.shape[0]):
+        sw += w[i]
+        sx += w[i] * x[i]
+        sz += w[i] * z[i]
+        sxx += w[i] * x[i] * x[i]
+        sxz += w[i] * x[i] * z[i]
+    if sw <= 0.0:
+        return 0.0, 0.0
+    mx, mz = sx / sw, sz / sw
+    vxx = sxx / sw - mx * mx
+    if vxx <= 1e-12:
+        return mz, 0.0
+    b = (sxz / sw - mx * mz) / vxx
+    return mz - b * mx, b
+
+
+@njit(cache=True)
+def _scale(e):
+    """1.4826 × the median absolute value of ``e`` (a normal's σ), floored at MIN_SIGMA."""
+    return max(1.4826 * np.median(np.abs(e)), MIN_SIGMA)
+
+
+@njit(cache=True)
+def _seabed(x, z):
+    """The seabed line by Tukey's biweight from the median height: ``(a, b, σ)``."""
+    a, b = np.median(z), 0.0
+    w = np.empty(x.shape[0])
+    e = z - a
+    sigma = _scale(e)
+    for _ in range(8):
+        for i in range(x.shape[0]):
+            q = e[i] / (TUKEY_C * sigma)
+            w[i] = (1.0 - q * q) ** 2 if abs(q) < 1.0 else 0.0
+        a, b = _line_fit(x, z, w)
+        e = z - (a + b * x)
+        sigma = _scale(e)
+    return a, b, sigma
+
+
+@njit(cache=True)
+def _matched(x, e, sigma, half, lo_e):
+    """The best template fit: ``(snr, centre, height)`` over candidate centres with ``e > lo_e``."""
+    best, centre, height = -math.inf, 0.0, 0.0
+    n = x.shape[0]
+    for c in range(n):
+        if e[c] <= lo_e:
+            continue
+        xc = x[c]
+        set_ = stt = 0.0
+        for j in range(n):
+            u = (x[j] - xc) / half
+            if -1.0 < u < 1.0:
+                t = math.sqrt(1.0 - u * u)
+                set_ += e[j] * t
+                stt += t * t
+        if stt <= 0.0:
+            continue
+        snr = set_ / (sigma * math.sqrt(stt))
+        if snr > best:
+            best, centre, height = snr, xc, set_ / stt
+    return best, centre, height
+
+
+@njit(cache=True)
+def _vertex(x, e, centre, half, peak):
+    """The pipe's lateral position: the top's parabola vertex, else the residuals' centroid."""
+    n = 0
+    s0 = s1 = s2 = s3 = s4 = t0 = t1 = t2 = 0.0
+    cw = cx = 0.0
+    for j in range(x.shape[0]):
+        u = x[j] - centre
+        if abs(u) < half and e[j] > 0.0:
+            cw += e[j]
+            cx += e[j] * x[j]
+            if e[j] >= 0.5 * peak:
+                n += 1
+                s0 += 1.0
+                s1 += u
+                s2 += u * u
+                s3 += u * u * u
+                s4 += u * u * u * u
+                t0 += e[j]
+                t1 += e[j] * u
+                t2 += e[j] * u * u
+    fallback = cx / cw if cw > 0.0 else centre
+    if n < 3:
+        return fallback
+    # normal equations of e = c0 + c1 u + c2 u², solved by Cramer's rule
+    m = np.array([[s0, s1, s2], [s1, s2, s3], [s2, s3, s4]])
+    det = np.linalg.det(m)
+    if abs(det) < 1e-18:
+        return fallback
+    m1 = m.copy()
+    m1[:, 1] = (t0, t1, t2)
+    m2 = m.copy()
+    m2[:, 2] = (t0, t1, t2)
+    c1, c2 = np.linalg.det(m1) / det, np.linalg.det(m2) / det
+    if c2 >= 0.0:
+        return fallback
+    u = -c1 / (2.0 * c2)
+    if abs(u) >= half:
+        return fallback
+    return centre + u
+
+
+@njit(cache=True)
+def _detect(angles, ranges, diameter, threshold, min_height):
+    keep = np.isfinite(ranges)
+    m = int(keep.sum())
+    if m < MIN_BEAMS:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0
+    r, th = ranges[keep], angles[keep]
+    x, z = r * np.sin(th), -r * np.cos(th)
+    a, b, sigma = _seabed(x, z)
+    e = z - (a + b * x)
+    half = 0.5 * diameter
+    snr, centre, height = _matched(x, e, sigma, half, sigma)
+    depth = -a
+    if snr < threshold or height < min_height:
+        return False, 0.0, 0.0, max(snr, 0.0), depth, sigma
+    # refit the seabed without the pipe's window and the beams far off the line
+    w = np.empty(m)
+    for i in range(m):
+        w[i] = 0.0 if abs(x[i] - centre) < 1.5 * half or abs(e[i]) > 3.0 * sigma else 1.0
+    if w.sum() >= MIN_BEAMS:
+        a, b = _line_fit(x, z, w)
+        e = z - (a + b * x)
+    peak = 0.0
+    for i in range(m):
+        if abs(x[i] - centre) < half and e[i] > peak:
+            peak = e[i]
+    lateral = _vertex(x, e, centre, half, peak)
+    return True, lateral, peak, snr, -a, sigma
+
+
+class SonarView(NamedTuple):
+    """The camera's observation from the sonar track (camera metres; see :class:`SonarTrack`)."""
+
+    in_view: bool  # the current ping found the pipe and its line crosses the camera's footprint
+    x1: float  # the line's far end in the footprint ...
+    y1: float
+    x2: float  # ... and its near end
+    y_near: float
+    lateral: float  # the line's lateral offset at the AUV's centre (forward 0), even outside the footprint
+    angle: float  # its angle to the track (rad, positive turning to starboard ahead)
+    detected: bool  # the current ping found the pipe (anywhere in the swath)
+    pings: int  # detections the line was fitted to
+
+
+NO_VIEW = SonarView(False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, 0)
+
+
+class SonarTrack:
+    """The pipe's line from the detections of successive pings (earth-frame memory).
+
+    Each :meth:`update` stores the detection's earth position (from the pose of its ping and the
+    fan's ``along``); :meth:`view` fits ``lateral = c0 + c1·forward`` by least squares to the
+    stored detections that lie within ``memory_m`` behind the fan in the current camera frame
+    (at most ``memory`` of them) and clips the line from forward 0 to the footprint's depth to
+    the footprint, as :func:`pipefollow.sim.camera.observe` clips the pipe. With detections spread
+    less than ``min_spread`` m along the track the line is taken parallel to the track.
+    A ping without a detection keeps the memory but gives no view (the pipe counts as not seen).
+    """
+
+    def __init__(
+        self,
+        along: float = 0.0,
+        memory: int = 6,
+        memory_m: float = 4.0,
+        min_spread: float = 0.3,
+        camera: CameraParams = PAPER_CAMERA,
+    ) -> None:
+        if not (isinstance(memory, int) and memory >= 1):
+            raise ValueError(f"memory must be a whole number of pings ≥ 1, got {memory!r}")
+        if not (math.isfinite(memory_m) and memory_m > 0.0):
+            raise ValueError(f"memory_m must be a positive distance (m), got {memory_m!r}")
+        self.along, self.memory_m, self.min_spread, self.camera = along, memory_m, min_spread, camera
+        self._points: deque[tuple[float, float]] = deque(maxlen=memory)
+        self.last = NO_VIEW
+
+    def reset(self) -> None:
+        """Forget every detection (a new episode)."""
+        self._points.clear()
+        self.last = NO_VIEW
+
+    def update(self, pose: tuple[float, float, float], fix: SonarFix) -> SonarView:
+        """Add the ping's detection (if found) taken at ``pose``; returns :meth:`view` from ``pose``."""
+        x, y, psi = pose
+        if fix.found:
+            cs, sn = math.cos(psi), math.sin(psi)
+            fwd, lat = self.along, fix.lateral
+            self._points.append((x + cs * fwd - sn * lat, y + sn * fwd + cs * lat))
+        self.last = self.view(pose, fix.found)
+        return self.last
+
+    def view(self, pose: tuple[float, float, float], detected: bool = True) -> SonarView:
+        """The line through the remembered detections, in the camera frame of ``pose``."""
+        x, y, psi = pose
+        lat, fwd = [], []
+        for px, py in reversed(self._points):  # newest first
+            lc, fc = to_camera(px, py, x, y, psi)
+            if fc < self.along - self.memory_m or fc > self.along + 1e-9 + self.memory_m:
+                continue
+            lat.append(lc)
+            fwd.append(fc)
+        if not lat:
+            return NO_VIEW
+        la, fa = np.array(lat), np.array(fwd)
+        if fa.max() - fa.min() < self.min_spread:
+            c1 = 0.0
+            c0 = float(la[0])  # the newest detection
+        else:
+            c1, c0 = np.polyfit(fa, la, 1)
+            c0, c1 = float(c0), float(c1)
+        angle = math.atan(c1)
+        w, depth = self.camera.half_width, self.camera.depth
+        t0, t1 = clip_segment(c0, 0.0, c0 + c1 * depth, depth, -w, w, 0.0, depth)
+        if not detected or t0 > t1:
+            return SonarView(False, 0.0, 0.0, 0.0, 0.0, c0, angle, detected, len(lat))
+        x2, yn = c0 + t0 * c1 * depth, t0 * depth
+        x1, y1 = c0 + t1 * c1 * depth, t1 * depth
+        return SonarView(True, x1, y1, x2, yn, c0, angle, detected, len(lat))
+
+
+__all__ = ["NO_VIEW", "SonarFix", "SonarTrack", "SonarView", "THRESHOLD", "detect_profile"]
