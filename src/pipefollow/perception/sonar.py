@@ -114,7 +114,7 @@ PAPER_SONAR = Sonar()
 
 
 def check_sonar(s: Sonar) -> Sonar:
-    """``s`` with whole-number fields as ints if every field is in range; else a one-line :class:`SonarError`."""
+    """``s`` (whole-number fields as ints) if every field is in range; else a one-line :class:`SonarError`."""
     if not isinstance(s, Sonar):
         raise SonarError(f"sonar must be a Sonar record, got {type(s).__name__}")
     for name, (lo, hi, closed) in _RANGES.items():
@@ -125,7 +125,8 @@ def check_sonar(s: Sonar) -> Sonar:
             raise SonarError(f"sonar setting {name} must be a whole number, got {value}")
         low_ok = value >= lo if closed else value > lo
         if not (math.isfinite(value) and low_ok and value <= hi):
-            raise SonarError(f"sonar setting {name} must be in {'[' if closed else '('}{lo}, {hi}], got {value}")
+            bracket = "[" if closed else "("
+            raise SonarError(f"sonar setting {name} must be in {bracket}{lo}, {hi}], got {value}")
     return s._replace(n_beams=int(s.n_beams), sub_rays=int(s.sub_rays))
 
 
@@ -190,9 +191,10 @@ def render_ping(
     xc = np.empty(MAX_CROSSINGS)
     seen = np.zeros(MAX_CROSSINGS, dtype=np.bool_)
     x, y, psi = pose
+    buried = np.asarray(buried_from, dtype=np.float64), np.asarray(buried_to, dtype=np.float64)
     k = _render(
         points, cum, float(x), float(y), float(psi), angles, _settings(sonar), float(diameter), float(burial),
-        np.asarray(buried_from, dtype=np.float64), np.asarray(buried_to, dtype=np.float64), z, u, waves, out, xc, seen,
+        buried[0], buried[1], z, u, waves, out, xc, seen,
     )  # fmt: skip
     return Ping(angles, out, xc[:k].copy(), seen[:k].copy())
 
@@ -295,7 +297,9 @@ def fan_crossings(points, cum, x, y, psi, along, buried_from, buried_to, xc, cos
 
 
 @njit(cache=True)
-def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, buried_to, z, u, waves, out, xc, seen):
+def _render(
+    points, cum, x, y, psi, angles, st, diameter, burial, buried_from, buried_to, z, u, waves, out, xc, seen
+):
     width, sub, altitude, along = st[0], int(st[1]), st[2], st[3]
     resolution, noise, dropout, roughness, slope = st[4], st[5], st[6], st[7], st[8]
     cos_a = np.empty(xc.shape[0])

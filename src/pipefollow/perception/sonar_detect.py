@@ -71,8 +71,11 @@ def detect_profile(
         raise ValueError(f"threshold must be a positive signal-to-noise ratio, got {threshold!r}")
     if min_height is None:
         min_height = MIN_HEIGHT_SHARE * diameter
-    r = _detect(np.asarray(angles, np.float64), np.asarray(ranges, np.float64), diameter, threshold, min_height)
-    found, lateral, height, snr, depth, sigma = r
+    angles, ranges = np.asarray(angles, np.float64), np.asarray(ranges, np.float64)
+    if angles.shape != ranges.shape or angles.ndim != 1:
+        shapes = f"{angles.shape} and {ranges.shape}"
+        raise ValueError(f"angles and ranges must be 1-D arrays of one length, got {shapes}")
+    found, lateral, height, snr, depth, sigma = _detect(angles, ranges, diameter, threshold, min_height)
     if not found:
         return SonarFix(False, snr=snr, seabed_depth=depth, sigma=sigma)
     return SonarFix(True, lateral, height, snr, min(1.0, snr / (2.0 * threshold)), depth, sigma)
@@ -111,27 +114,46 @@ def _seabed(x, z):
     w = np.empty(x.shape[0])
     e = z - a
     sigma = _scale(e)
-    for _ in range(8):
+    for _ in range(10):
         for i in range(x.shape[0]):
             q = e[i] / (TUKEY_C * sigma)
             w[i] = (1.0 - q * q) ** 2 if abs(q) < 1.0 else 0.0
-        a, b = _line_fit(x, z, w)
+        a_new, b_new = _line_fit(x, z, w)
+        done = abs(a_new - a) < 1e-7 and abs(b_new - b) < 1e-7
+        a, b = a_new, b_new
         e = z - (a + b * x)
         sigma = _scale(e)
+        if done:
+            break
     return a, b, sigma
 
 
 @njit(cache=True)
 def _matched(x, e, sigma, half, lo_e):
-    """The best template fit: ``(snr, centre, height)`` over candidate centres with ``e > lo_e``."""
+    """The best template fit: ``(snr, centre, height)`` over candidate centres with ``e > lo_e``.
+
+    ``x`` is sorted but where the pipe bends a profile back on itself; the window's scan then
+    runs over every beam.
+    """
     best, centre, height = -math.inf, 0.0, 0.0
     n = x.shape[0]
+    ordered = True
+    for j in range(1, n):
+        if x[j] < x[j - 1]:
+            ordered = False
     for c in range(n):
         if e[c] <= lo_e:
             continue
         xc = x[c]
         set_ = stt = 0.0
-        for j in range(n):
+        lo, hi = 0, n
+        if ordered:  # the beams within the window only
+            lo, hi = c, c + 1
+            while lo > 0 and xc - x[lo - 1] < half:
+                lo -= 1
+            while hi < n and x[hi] - xc < half:
+                hi += 1
+        for j in range(lo, hi):
             u = (x[j] - xc) / half
             if -1.0 < u < 1.0:
                 t = math.sqrt(1.0 - u * u)
@@ -143,6 +165,12 @@ def _matched(x, e, sigma, half, lo_e):
         if snr > best:
             best, centre, height = snr, xc, set_ / stt
     return best, centre, height
+
+
+@njit(cache=True)
+def _det3(a, b, c, d, e, f, g, h, i):
+    """The determinant of the 3 × 3 matrix of rows (a, b, c), (d, e, f), (g, h, i)."""
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
 
 
 @njit(cache=True)
@@ -170,21 +198,57 @@ def _vertex(x, e, centre, half, peak):
     if n < 3:
         return fallback
     # normal equations of e = c0 + c1 u + c2 u², solved by Cramer's rule
-    m = np.array([[s0, s1, s2], [s1, s2, s3], [s2, s3, s4]])
-    det = np.linalg.det(m)
+    det = _det3(s0, s1, s2, s1, s2, s3, s2, s3, s4)
     if abs(det) < 1e-18:
         return fallback
-    m1 = m.copy()
-    m1[:, 1] = (t0, t1, t2)
-    m2 = m.copy()
-    m2[:, 2] = (t0, t1, t2)
-    c1, c2 = np.linalg.det(m1) / det, np.linalg.det(m2) / det
+    c1 = _det3(s0, t0, s2, s1, t1, s3, s2, t2, s4) / det
+    c2 = _det3(s0, s1, t0, s1, s2, t1, s2, s3, t2) / det
     if c2 >= 0.0:
         return fallback
     u = -c1 / (2.0 * c2)
     if abs(u) >= half:
         return fallback
     return centre + u
+
+
+@njit(cache=True)
+def _circle(x, e, centre, half, peak, radius, xc):
+    """The pipe's section as a circle of the known radius through its top's beams: its centre's ``x``.
+
+    Gauss–Newton on ``Σ (|p_j − c| − radius)²`` over the beams within the window above half the
+    peak, from ``xc`` (the parabola's vertex). Unlike the parabola, the circle is not pulled
+    towards the nadir when the far flank lies in the pipe's acoustic shadow. Returns ``xc``
+    unchanged when fewer than 3 beams take part or the fit leaves the window.
+    """
+    cx, cz = xc, peak - radius
+    for _ in range(10):
+        a11 = a12 = a22 = g1 = g2 = 0.0
+        n = 0
+        for j in range(x.shape[0]):
+            if abs(x[j] - centre) < half and e[j] >= 0.5 * peak:
+                dx, dz = x[j] - cx, e[j] - cz
+                rho = math.sqrt(dx * dx + dz * dz)
+                if rho <= 0.0:
+                    continue
+                jx, jz, res = -dx / rho, -dz / rho, rho - radius
+                a11 += jx * jx
+                a12 += jx * jz
+                a22 += jz * jz
+                g1 += jx * res
+                g2 += jz * res
+                n += 1
+        det = a11 * a22 - a12 * a12
+        if n < 3 or abs(det) < 1e-12:
+            return xc
+        step_x = -(a22 * g1 - a12 * g2) / det
+        step_z = -(a11 * g2 - a12 * g1) / det
+        cx += step_x
+        cz += step_z
+        if abs(step_x) < 1e-6 and abs(step_z) < 1e-6:
+            break
+    if not abs(cx - centre) < half:
+        return xc
+    return cx
 
 
 @njit(cache=True)
@@ -213,7 +277,7 @@ def _detect(angles, ranges, diameter, threshold, min_height):
     for i in range(m):
         if abs(x[i] - centre) < half and e[i] > peak:
             peak = e[i]
-    lateral = _vertex(x, e, centre, half, peak)
+    lateral = _circle(x, e, centre, half, peak, half, _vertex(x, e, centre, half, peak))
     return True, lateral, peak, snr, -a, sigma
 
 
