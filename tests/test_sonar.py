@@ -321,3 +321,17 @@ def test_the_track_with_one_ping_takes_the_pipe_along_the_track_and_forgets_on_r
     assert track.view((0.0, 0.0, 0.0)).pings == 0
     with pytest.raises(ValueError, match="memory"):
         SonarTrack(memory=0)
+
+
+# --- the evaluation helpers -------------------------------------------------------------------
+
+
+def test_the_statistics_and_the_figure(tmp_path):
+    from pipefollow.evaluation.sonar import profile_figure, sonar_statistics
+
+    row = sonar_statistics(n=40)
+    assert row["detection_rate"] == 1.0 and row["false_alarm_rate"] == 0.0 and row["max_error_cm"] < 5.0
+    assert sonar_statistics(burial=1.0, n=20)["detection_rate"] == 0.0
+    path = tmp_path / "profiles.png"
+    profile_figure(path, cases=(("on the seabed", 0.4, 0.0), ("no pipe", None, 0.0)))
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -36,7 +36,7 @@ import numpy as np
 from numba import njit
 
 from pipefollow.perception.sonar import Ping
-from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, clip_segment, to_camera
+from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, clip_segment
 
 THRESHOLD = 6.0  # SNR of the matched filter for a detection (false alarms: docs/decisions.md, "Sonar")
 MIN_HEIGHT_SHARE = 0.25  # the fitted top at least this share of the diameter above the seabed
@@ -344,22 +344,23 @@ class SonarTrack:
     def view(self, pose: tuple[float, float, float], detected: bool = True) -> SonarView:
         """The line through the remembered detections, in the camera frame of ``pose``."""
         x, y, psi = pose
+        cs, sn = math.cos(psi), math.sin(psi)
         lat, fwd = [], []
-        for px, py in reversed(self._points):  # newest first
-            lc, fc = to_camera(px, py, x, y, psi)
-            if fc < self.along - self.memory_m or fc > self.along + 1e-9 + self.memory_m:
-                continue
-            lat.append(lc)
-            fwd.append(fc)
+        for px, py in reversed(self._points):  # newest first; sim.camera.to_camera, inline
+            lc, fc = -sn * (px - x) + cs * (py - y), cs * (px - x) + sn * (py - y)
+            if abs(fc - self.along) <= self.memory_m:
+                lat.append(lc)
+                fwd.append(fc)
         if not lat:
             return NO_VIEW
-        la, fa = np.array(lat), np.array(fwd)
-        if fa.max() - fa.min() < self.min_spread:
-            c1 = 0.0
-            c0 = float(la[0])  # the newest detection
+        n = len(lat)
+        mf, ml = sum(fwd) / n, sum(lat) / n
+        sff = sum((f - mf) ** 2 for f in fwd)
+        if max(fwd) - min(fwd) < self.min_spread:
+            c0, c1 = lat[0], 0.0  # the newest detection, along the track
         else:
-            c1, c0 = np.polyfit(fa, la, 1)
-            c0, c1 = float(c0), float(c1)
+            c1 = sum((f - mf) * (q - ml) for f, q in zip(fwd, lat, strict=True)) / sff
+            c0 = ml - c1 * mf
         angle = math.atan(c1)
         w, depth = self.camera.half_width, self.camera.depth
         t0, t1 = clip_segment(c0, 0.0, c0 + c1 * depth, depth, -w, w, 0.0, depth)
