@@ -321,6 +321,13 @@ def test_the_track_with_one_ping_takes_the_pipe_along_the_track_and_forgets_on_r
     assert track.view((0.0, 0.0, 0.0)).pings == 0
     with pytest.raises(ValueError, match="memory"):
         SonarTrack(memory=0)
+    with pytest.raises(ValueError, match="min_spread"):
+        SonarTrack(min_spread=-1.0)
+    # the memory keeps the newest detections only
+    short = SonarTrack(memory=3)
+    for k in range(5):
+        view = short.update((0.5 * k, 0.0, 0.0), SonarFix(True, lateral=0.1 * k))
+    assert view.pings == 3 and view.lateral == pytest.approx(0.4) and view.angle == pytest.approx(math.atan(0.2))
 
 
 # --- the evaluation helpers -------------------------------------------------------------------

@@ -29,7 +29,6 @@ footprint. The direction comes from the pings behind the AUV, so at a bend it la
 from __future__ import annotations
 
 import math
-from collections import deque
 from typing import NamedTuple
 
 import numpy as np
@@ -114,7 +113,7 @@ def _seabed(x, z):
     w = np.empty(x.shape[0])
     e = z - a
     sigma = _scale(e)
-    for _ in range(10):
+    for it in range(10):
         for i in range(x.shape[0]):
             q = e[i] / (TUKEY_C * sigma)
             w[i] = (1.0 - q * q) ** 2 if abs(q) < 1.0 else 0.0
@@ -122,10 +121,11 @@ def _seabed(x, z):
         done = abs(a_new - a) < 1e-7 and abs(b_new - b) < 1e-7
         a, b = a_new, b_new
         e = z - (a + b * x)
-        sigma = _scale(e)
         if done:
             break
-    return a, b, sigma
+        if it < 3:  # the scale settles with the first fits; later ones only refine the line
+            sigma = _scale(e)
+    return a, b, _scale(e)
 
 
 @njit(cache=True)
@@ -303,11 +303,12 @@ class SonarTrack:
 
     Each :meth:`update` stores the detection's earth position (from the pose of its ping and the
     fan's ``along``); :meth:`view` fits ``lateral = c0 + c1·forward`` by least squares to the
-    stored detections that lie within ``memory_m`` behind the fan in the current camera frame
-    (at most ``memory`` of them) and clips the line from forward 0 to the footprint's depth to
-    the footprint, as :func:`pipefollow.sim.camera.observe` clips the pipe. With detections spread
-    less than ``min_spread`` m along the track the line is taken parallel to the track.
-    A ping without a detection keeps the memory but gives no view (the pipe counts as not seen).
+    stored detections that lie within ``memory_m`` of the fan along the track in the current
+    camera frame (at most ``memory`` of them, the newest) and clips the line from forward 0 to the
+    footprint's depth to the footprint, as :func:`pipefollow.sim.camera.observe` clips the pipe.
+    With detections spread less than ``min_spread`` m along the track the line is the newest
+    detection's, parallel to the track. A ping without a detection keeps the memory but gives no
+    view (the pipe counts as not seen).
     """
 
     def __init__(
@@ -318,57 +319,84 @@ class SonarTrack:
         min_spread: float = 0.3,
         camera: CameraParams = PAPER_CAMERA,
     ) -> None:
-        if not (isinstance(memory, int) and memory >= 1):
+        if isinstance(memory, bool) or not isinstance(memory, int) or memory < 1:
             raise ValueError(f"memory must be a whole number of pings ≥ 1, got {memory!r}")
-        if not (math.isfinite(memory_m) and memory_m > 0.0):
+        for name, value in (("memory_m", memory_m), ("min_spread", min_spread), ("along", along)):
+            if not (isinstance(value, int | float) and math.isfinite(value)):
+                raise ValueError(f"{name} must be a finite number of metres, got {value!r}")
+        if memory_m <= 0.0:
             raise ValueError(f"memory_m must be a positive distance (m), got {memory_m!r}")
+        if min_spread < 0.0:
+            raise ValueError(f"min_spread must be ≥ 0 (m), got {min_spread!r}")
         self.along, self.memory_m, self.min_spread, self.camera = along, memory_m, min_spread, camera
-        self._points: deque[tuple[float, float]] = deque(maxlen=memory)
+        self._ring = np.zeros((memory, 2))  # earth positions, the newest at index (count − 1) % memory
+        self._count = 0
         self.last = NO_VIEW
 
     def reset(self) -> None:
         """Forget every detection (a new episode)."""
-        self._points.clear()
+        self._count = 0
         self.last = NO_VIEW
 
     def update(self, pose: tuple[float, float, float], fix: SonarFix) -> SonarView:
         """Add the ping's detection (if found) taken at ``pose``; returns :meth:`view` from ``pose``."""
-        x, y, psi = pose
         if fix.found:
+            x, y, psi = pose
             cs, sn = math.cos(psi), math.sin(psi)
-            fwd, lat = self.along, fix.lateral
-            self._points.append((x + cs * fwd - sn * lat, y + sn * fwd + cs * lat))
+            k = self._count % self._ring.shape[0]
+            self._ring[k, 0] = x + cs * self.along - sn * fix.lateral
+            self._ring[k, 1] = y + sn * self.along + cs * fix.lateral
+            self._count += 1
         self.last = self.view(pose, fix.found)
         return self.last
 
     def view(self, pose: tuple[float, float, float], detected: bool = True) -> SonarView:
         """The line through the remembered detections, in the camera frame of ``pose``."""
         x, y, psi = pose
-        cs, sn = math.cos(psi), math.sin(psi)
-        lat, fwd = [], []
-        for px, py in reversed(self._points):  # newest first; sim.camera.to_camera, inline
-            lc, fc = -sn * (px - x) + cs * (py - y), cs * (px - x) + sn * (py - y)
-            if abs(fc - self.along) <= self.memory_m:
-                lat.append(lc)
-                fwd.append(fc)
-        if not lat:
+        cam = self.camera
+        r = _track_line(
+            self._ring, self._count, float(x), float(y), float(psi),
+            self.along, self.memory_m, self.min_spread, cam.half_width, cam.depth,
+        )  # fmt: skip
+        pings, c0, angle, clipped, x1, y1, x2, yn = r
+        if pings == 0:
             return NO_VIEW
-        n = len(lat)
-        mf, ml = sum(fwd) / n, sum(lat) / n
-        sff = sum((f - mf) ** 2 for f in fwd)
-        if max(fwd) - min(fwd) < self.min_spread:
-            c0, c1 = lat[0], 0.0  # the newest detection, along the track
-        else:
-            c1 = sum((f - mf) * (q - ml) for f, q in zip(fwd, lat, strict=True)) / sff
-            c0 = ml - c1 * mf
-        angle = math.atan(c1)
-        w, depth = self.camera.half_width, self.camera.depth
-        t0, t1 = clip_segment(c0, 0.0, c0 + c1 * depth, depth, -w, w, 0.0, depth)
-        if not detected or t0 > t1:
-            return SonarView(False, 0.0, 0.0, 0.0, 0.0, c0, angle, detected, len(lat))
-        x2, yn = c0 + t0 * c1 * depth, t0 * depth
-        x1, y1 = c0 + t1 * c1 * depth, t1 * depth
-        return SonarView(True, x1, y1, x2, yn, c0, angle, detected, len(lat))
+        if not detected or not clipped:
+            return SonarView(False, 0.0, 0.0, 0.0, 0.0, c0, angle, detected, pings)
+        return SonarView(True, x1, y1, x2, yn, c0, angle, detected, pings)
+
+
+@njit(cache=True)
+def _track_line(ring, count, x, y, psi, along, memory_m, min_spread, half_width, depth):
+    """:meth:`SonarTrack.view`'s arithmetic: ``(pings, c0, angle, in footprint, x1, y1, x2, y_near)``."""
+    m = ring.shape[0]
+    cs, sn = math.cos(psi), math.sin(psi)
+    lat = np.empty(m)
+    fwd = np.empty(m)
+    n = 0
+    for i in range(min(count, m)):
+        k = (count - 1 - i) % m  # newest first
+        dx, dy = ring[k, 0] - x, ring[k, 1] - y
+        lc, fc = -sn * dx + cs * dy, cs * dx + sn * dy  # sim.camera.to_camera
+        if abs(fc - along) <= memory_m:
+            lat[n], fwd[n] = lc, fc
+            n += 1
+    if n == 0:
+        return 0, 0.0, 0.0, False, 0.0, 0.0, 0.0, 0.0
+    mf, ml = fwd[:n].mean(), lat[:n].mean()
+    if fwd[:n].max() - fwd[:n].min() < min_spread:
+        c0, c1 = lat[0], 0.0  # the newest detection, along the track
+    else:
+        sff = sfl = 0.0
+        for i in range(n):
+            sff += (fwd[i] - mf) ** 2
+            sfl += (fwd[i] - mf) * (lat[i] - ml)
+        c1 = sfl / sff
+        c0 = ml - c1 * mf
+    t0, t1 = clip_segment(c0, 0.0, c0 + c1 * depth, depth, -half_width, half_width, 0.0, depth)
+    if t0 > t1:
+        return n, c0, math.atan(c1), False, 0.0, 0.0, 0.0, 0.0
+    return n, c0, math.atan(c1), True, c0 + t1 * c1 * depth, t1 * depth, c0 + t0 * c1 * depth, t0 * depth
 
 
 __all__ = ["NO_VIEW", "SonarFix", "SonarTrack", "SonarView", "THRESHOLD", "detect_profile"]
