@@ -34,7 +34,8 @@ def main() -> None:
 
     import pipefollow.envs  # noqa: F401 (registers the environment)
     from pipefollow.perception.sonar import PAPER_SONAR, beam_angles, render_ping
-    from pipefollow.perception.sonar_detect import SonarTrack, detect_profile
+    from pipefollow.perception.sonar_detect import detect_profile
+    from pipefollow.perception.sonar_track import SonarTrack
     from pipefollow.sim import decision as sim
     from pipefollow.sim.suites import get_suite, min_length_for
 

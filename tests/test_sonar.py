@@ -16,7 +16,8 @@ from pipefollow.perception.sonar import (
     profile_points,
     render_ping,
 )
-from pipefollow.perception.sonar_detect import SonarFix, SonarTrack, detect_profile
+from pipefollow.perception.sonar_detect import SonarFix, detect_profile
+from pipefollow.perception.sonar_track import SonarSensor, SonarTrack
 from pipefollow.sim.camera import PAPER_CAMERA, observe
 
 EMPTY = np.zeros((0, 2))
@@ -327,7 +328,29 @@ def test_the_track_with_one_ping_takes_the_pipe_along_the_track_and_forgets_on_r
     short = SonarTrack(memory=3)
     for k in range(5):
         view = short.update((0.5 * k, 0.0, 0.0), SonarFix(True, lateral=0.1 * k))
-    assert view.pings == 3 and view.lateral == pytest.approx(0.4) and view.angle == pytest.approx(math.atan(0.2))
+    assert view.pings == 3 and view.lateral == pytest.approx(0.4)
+    assert view.angle == pytest.approx(math.atan(0.2))
+
+
+def test_the_sensor_is_render_detect_and_track_from_one_generator():
+    pts, cum = straight_pipe(0.2, 0.1)
+    sensor = SonarSensor(burial=0.5)
+    rng, twin = np.random.default_rng(5), np.random.default_rng(5)
+    track = SonarTrack()
+    for k in range(4):
+        pose = (0.6 * k, 0.0, 0.0)
+        view = sensor.step(pts, cum, pose, rng)
+        expected = track.update(pose, detect_profile(render_ping(pts, cum, pose, twin, burial=0.5)))
+        assert view == expected == sensor.view
+    assert view.in_view and view.pings == 4 and sensor.fix.found
+    buried = sensor.step(pts, cum, (3.0, 0.0, 0.0), rng, (0.0, math.inf, math.inf, math.inf))
+    assert not buried.in_view and not buried.detected and buried.pings == 4  # the memory stays
+    sensor.reset()
+    assert sensor.view.pings == 0 and sensor.track.view((0.0, 0.0, 0.0)).pings == 0
+    with pytest.raises(ValueError, match="burial"):
+        SonarSensor(burial=1.5)
+    with pytest.raises(SonarError, match="n_beams"):
+        SonarSensor(PAPER_SONAR._replace(n_beams=2))
 
 
 # --- the evaluation helpers -------------------------------------------------------------------
