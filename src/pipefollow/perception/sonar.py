@@ -5,12 +5,15 @@ The camera of the paper fails in murky water; inspection AUVs track pipelines wi
 AUTOTRACKER), whose ranges do not depend on turbidity. This module renders one *ping* of such a
 profiler; :mod:`pipefollow.perception.sonar_detect` finds the pipe in it.
 
-Geometry. The fan is the vertical plane across track at the forward position ``along`` (camera
-metres, default 0: under the AUV's centre) of the camera frame of :mod:`pipefollow.sim.camera`
-(``x`` lateral, positive to starboard; ``y`` forward). Beam ``i`` points at the angle ``θ_i``
-from the vertical, positive to starboard, the angles evenly spaced over ``±swath/2``. A point at
-range ``r`` of a ray at angle ``φ`` lies at lateral ``x = r sin φ`` and depth ``r cos φ`` below
-the transducer, which flies at ``altitude`` above the mean seabed.
+Geometry. The transducer flies ``altitude`` above the mean seabed at the forward position
+``along`` (camera metres, default 0: under the AUV's centre) of the camera frame of
+:mod:`pipefollow.sim.camera` (``x`` lateral, positive to starboard; ``y`` forward). The fan is
+the plane across track through it, vertical or tilted forward by ``pitch``: it meets a flat
+seabed on the line ``y = along + altitude · tan(pitch)``. Beam ``i`` points at the angle ``θ_i``
+from the fan's axis, positive to starboard, the angles evenly spaced over ``±swath/2``; a ray at
+angle ``φ`` has the direction ``(sin φ, cos φ sin τ, cos φ cos τ)`` (lateral, forward, down;
+``τ`` the pitch). So a point at range ``r`` lies at lateral ``x = r sin φ`` and depth
+``r cos φ cos τ``.
 
 * **Seabed**: the height ``g(x) = x·tan(slope) + roughness(x)`` above the mean seabed; the
   roughness is a sum of :data:`ROUGHNESS_WAVES` cosines of random phase and wavelengths between
@@ -18,8 +21,11 @@ the transducer, which flies at ``altitude`` above the mean seabed.
 * **Pipe**: a cylinder of ``diameter`` whose axis lies ``R(1 − 2b)`` above the seabed under it
   (``R`` the radius, ``b`` the burial: the share of the diameter below the seabed; 0 = lying on
   it, ½ = top half above, 1 = the top flush with the seabed: invisible). Where a segment of the
-  pipeline polyline crosses the fan at angle ``α`` to the track, the fan cuts the cylinder in the
-  ellipse ``((x − x_c) cos α)² + (z − z_axis)² = R²``. A stretch in ``buried_from``/``buried_to``
+  pipeline polyline crosses the fan's seabed line at angle ``α`` to the track (each such segment
+  taken as an infinite straight cylinder), a vertical fan cuts the cylinder in the
+  ellipse ``((x − x_c) cos α)² + (z − z_axis)² = R²`` when vertical; a ray's range to the pipe is
+  the near root of ``|(r d − p) × a| = R`` (``d`` the ray's direction, ``p`` a point of the
+  axis, ``a`` its direction), exact for any pitch. A stretch in ``buried_from``/``buried_to``
   (the disturbance's buried stretches, :mod:`pipefollow.sim.disturbance`) is fully buried.
 * **A beam's range**: the mean of ``sub_rays`` rays spread evenly over the beam's −3 dB width
   (the beam width smooths the profile over its footprint), each ray's range the nearer of the
@@ -69,7 +75,6 @@ from pipefollow.sim.disturbance import NO_BURIAL
 
 ROUGHNESS_WAVES = 8  # cosines of the seabed's roughness per ping
 ROUGHNESS_WAVELENGTHS = (0.3, 4.0)  # m: shortest and longest wavelength (log-uniform)
-MIN_COS = 0.1  # |cos α| floor: a pipe almost in the fan's plane is a 10×-wide ridge, not a wall
 MAX_CROSSINGS = 16  # crossings of the fan by the pipeline that one ping renders
 
 
@@ -85,7 +90,8 @@ class Sonar(NamedTuple):
     beam_width_deg: float = 1.0  # across-track −3 dB beam width (°), [0, 10]
     sub_rays: int = 3  # rays averaged over a beam's width, [1, 32]
     altitude: float = 2.0  # transducer height above the mean seabed (m), (0.2, 50]
-    along: float = 0.0  # forward position of the fan in camera metres, [-5, 5]
+    along: float = 0.0  # forward position of the transducer in camera metres, [-5, 5]
+    pitch_deg: float = 0.0  # forward tilt of the fan from the vertical (°), [0, 60]
     range_resolution: float = 0.01  # range quantisation step (m), [0, 0.5]; 0 = none
     range_noise: float = 0.01  # Gaussian range noise s.d. (m), [0, 0.5]
     dropout: float = 0.0  # probability that a beam has no bottom detection (NaN), [0, 0.5]
@@ -101,6 +107,7 @@ _RANGES = {  # field: (low, high, low end closed)
     "sub_rays": (1, 32, True),
     "altitude": (0.2, 50.0, False),
     "along": (-5.0, 5.0, True),
+    "pitch_deg": (0.0, 60.0, True),
     "range_resolution": (0.0, 0.5, True),
     "range_noise": (0.0, 0.5, True),
     "dropout": (0.0, 0.5, True),
@@ -146,6 +153,14 @@ def check_pipe(diameter: float, burial: float) -> None:
         raise ValueError(f"burial must be the buried share of the diameter in [0, 1], got {burial!r}")
 
 
+def fan_line(sonar: Sonar = PAPER_SONAR) -> float:
+    """Forward position (camera metres) of the fan's line on the mean seabed.
+
+    ``along + altitude · tan(pitch)``.
+    """
+    return sonar.along + sonar.altitude * math.tan(math.radians(sonar.pitch_deg))
+
+
 def beam_angles(sonar: Sonar = PAPER_SONAR) -> np.ndarray:
     """The beams' angles from the vertical (rad, positive to starboard), port to starboard."""
     half = 0.5 * math.radians(sonar.swath_deg)
@@ -155,10 +170,12 @@ def beam_angles(sonar: Sonar = PAPER_SONAR) -> np.ndarray:
 class Ping(NamedTuple):
     """One rendered profile: the beams' angles and ranges (NaN: no bottom detection), and the truth."""
 
-    angles: np.ndarray  # rad from the vertical, positive to starboard
+    angles: np.ndarray  # rad from the fan's axis, positive to starboard
     ranges: np.ndarray  # slant ranges (m)
-    pipe_x: np.ndarray  # lateral positions (camera metres) where the pipe crosses the fan ...
+    pipe_x: np.ndarray  # lateral positions (camera metres) where the pipe crosses the fan's seabed line ...
     pipe_visible: np.ndarray  # ... and whether it stands above the seabed there (not fully buried)
+    along: float = 0.0  # the transducer's forward position (camera metres) ...
+    pitch: float = 0.0  # ... and the fan's forward tilt (rad)
 
 
 def render_ping(
@@ -196,7 +213,7 @@ def render_ping(
         points, cum, float(x), float(y), float(psi), angles, _settings(sonar), float(diameter), float(burial),
         buried[0], buried[1], z, u, waves, out, xc, seen,
     )  # fmt: skip
-    return Ping(angles, out, xc[:k].copy(), seen[:k].copy())
+    return Ping(angles, out, xc[:k].copy(), seen[:k].copy(), sonar.along, math.radians(sonar.pitch_deg))
 
 
 _NONE = np.zeros(0)
@@ -208,6 +225,7 @@ def _settings(s: Sonar) -> np.ndarray:
         [
             math.radians(s.beam_width_deg), s.sub_rays, s.altitude, s.along, s.range_resolution,
             s.range_noise, s.dropout, s.roughness, math.tan(math.radians(s.seabed_slope_deg)),
+            math.radians(s.pitch_deg),
         ]
     )  # fmt: skip
 
@@ -228,7 +246,7 @@ def seabed_height(x, slope, roughness, waves):
 
 @njit(cache=True)
 def seabed_range(s, c, altitude, slope, roughness, waves):
-    """Range (m) to the seabed along the ray of direction ``(sin φ, cos φ) = (s, c)``.
+    """Range (m) to the seabed along a ray with lateral component ``s`` and downward component ``c``.
 
     A plane (no roughness) exactly: ``altitude − r s·tan β = r c``; with roughness, a fixed-point
     iteration from there (the roughness's slopes are small).
@@ -241,31 +259,33 @@ def seabed_range(s, c, altitude, slope, roughness, waves):
 
 
 @njit(cache=True)
-def cylinder_range(s, c, altitude, xc, cos_a, axis_height, radius):
-    """Range (m) along the ray ``(s, c) = (sin φ, cos φ)`` to the near side of the pipe's section, or inf.
+def cylinder_range(dx, dy, dz, px, py, pz, ax, ay, radius):
+    """Range (m) along the unit ray ``d`` from the transducer to the near side of a cylinder, or inf.
 
-    The section is ``((x − xc)·cos_a)² + (z − axis_height)² = radius²`` with heights ``z``
-    above the mean seabed; the transducer is at height ``altitude`` above it.
+    The cylinder's axis passes through ``p`` (relative to the transducer) along the horizontal
+    unit vector ``(ax, ay, 0)``; coordinates (lateral, forward, down). The near root of
+    ``|(r d − p) × a|² = radius²``: with ``q = d × a`` and ``w = p × a``,
+    ``r² |q|² − 2 r q·w + |w|² − radius² = 0``.
     """
-    k = cos_a * cos_a
-    d = altitude - axis_height  # the axis's depth below the transducer
-    a = s * s * k + c * c
-    b = -2.0 * (xc * s * k + d * c)
-    cc = xc * xc * k + d * d - radius * radius
-    disc = b * b - 4.0 * a * cc
-    if disc < 0.0:
+    qx, qy, qz = -dz * ay, dz * ax, dx * ay - dy * ax
+    wx, wy, wz = -pz * ay, pz * ax, px * ay - py * ax
+    qq = qx * qx + qy * qy + qz * qz
+    qw = qx * wx + qy * wy + qz * wz
+    ww = wx * wx + wy * wy + wz * wz
+    disc = qw * qw - qq * (ww - radius * radius)
+    if disc < 0.0 or qq <= 0.0:
         return math.inf
-    r = (-b - math.sqrt(disc)) / (2.0 * a)
+    r = (qw - math.sqrt(disc)) / qq
     return r if r > 0.0 else math.inf
 
 
 @njit(cache=True)
-def fan_crossings(points, cum, x, y, psi, along, buried_from, buried_to, xc, cos_a, arc, open_):
-    """Where the pipeline crosses the fan (the camera frame's line ``forward = along``).
+def fan_crossings(points, cum, x, y, psi, along, buried_from, buried_to, xc, dirs, arc, open_):
+    """Where the pipeline crosses the camera frame's line ``forward = along`` (the fan's seabed line).
 
-    Fills ``xc`` (lateral position), ``cos_a`` (|cos| of the angle to the track), ``arc`` (arc
-    length) and ``open_`` (False inside a buried stretch) for up to ``len(xc)`` crossings;
-    returns how many.
+    Fills ``xc`` (lateral position), ``dirs`` (the segment's unit direction, lateral and forward),
+    ``arc`` (arc length) and ``open_`` (False inside a buried stretch) for up to ``len(xc)``
+    crossings; returns how many.
     """
     cs, sn = math.cos(psi), math.sin(psi)
     n = 0
@@ -288,7 +308,7 @@ def fan_crossings(points, cum, x, y, psi, along, buried_from, buried_to, xc, cos
             if n < xc.shape[0]:
                 length = math.hypot(bl - al, bf - af)
                 xc[n] = al + t * (bl - al)
-                cos_a[n] = abs(bf - af) / length if length > 0.0 else 1.0
+                dirs[n, 0], dirs[n, 1] = (bl - al) / length, (bf - af) / length
                 arc[n] = s
                 open_[n] = not buried
                 n += 1
@@ -301,27 +321,31 @@ def _render(
     points, cum, x, y, psi, angles, st, diameter, burial, buried_from, buried_to, z, u, waves, out, xc, seen
 ):
     width, sub, altitude, along = st[0], int(st[1]), st[2], st[3]
-    resolution, noise, dropout, roughness, slope = st[4], st[5], st[6], st[7], st[8]
-    cos_a = np.empty(xc.shape[0])
+    resolution, noise, dropout, roughness, slope, pitch = st[4], st[5], st[6], st[7], st[8], st[9]
+    cos_t, sin_t = math.cos(pitch), math.sin(pitch)
+    dirs = np.empty((xc.shape[0], 2))
     arc = np.empty(xc.shape[0])
-    n = fan_crossings(points, cum, x, y, psi, along, buried_from, buried_to, xc, cos_a, arc, seen)
+    ahead = altitude * sin_t / cos_t  # the fan's seabed line, forward of the transducer
+    n = fan_crossings(points, cum, x, y, psi, along + ahead, buried_from, buried_to, xc, dirs, arc, seen)
     radius = 0.5 * diameter
     visible = burial < 1.0  # at 1 the top is flush with the seabed
-    axis = np.empty(n)
+    depth = np.empty(n)
     for k in range(n):
-        # the pipe rests on the seabed under its axis
-        axis[k] = seabed_height(xc[k], slope, roughness, waves) + radius * (1.0 - 2.0 * burial)
-        cos_a[k] = max(cos_a[k], MIN_COS)
+        # the pipe rests on the seabed under its axis: the axis's depth below the transducer
+        depth[k] = altitude - seabed_height(xc[k], slope, roughness, waves) - radius * (1.0 - 2.0 * burial)
         seen[k] = seen[k] and visible
     for i in range(angles.shape[0]):
         total = 0.0
         for j in range(sub):
             phi = angles[i] + (width * ((j + 0.5) / sub - 0.5) if sub > 1 else 0.0)
             sp, cp = math.sin(phi), math.cos(phi)
-            r = seabed_range(sp, cp, altitude, slope, roughness, waves)
+            r = seabed_range(sp, cp * cos_t, altitude, slope, roughness, waves)
             for k in range(n):
                 if seen[k]:
-                    r = min(r, cylinder_range(sp, cp, altitude, xc[k], cos_a[k], axis[k], radius))
+                    hit = cylinder_range(
+                        sp, cp * sin_t, cp * cos_t, xc[k], ahead, depth[k], dirs[k, 0], dirs[k, 1], radius
+                    )
+                    r = min(r, hit)
             total += r
         r = total / sub
         if noise > 0.0:
@@ -334,6 +358,11 @@ def _render(
     return n
 
 
-def profile_points(ranges: np.ndarray, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A ping's points as lateral position (m) and height above the transducer (m, negative)."""
-    return ranges * np.sin(angles), -ranges * np.cos(angles)
+def profile_points(
+    ranges: np.ndarray, angles: np.ndarray, pitch: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """A ping's points as lateral position (m) and height above the transducer (m, negative).
+
+    ``pitch`` (rad) is the fan's forward tilt (``Ping.pitch``).
+    """
+    return ranges * np.sin(angles), -ranges * np.cos(angles) * math.cos(pitch)

@@ -2,7 +2,8 @@ r"""The pipe in one multibeam profile: its lateral position, height and a confid
 
 :func:`detect_profile` finds a pipe in one ping of :mod:`pipefollow.perception.sonar`:
 
-1. the ping's points as lateral position ``x = r sin θ`` and height ``z = −r cos θ``;
+1. the ping's points as lateral position ``x = r sin θ`` and height ``z = −r cos θ cos τ``
+   (``τ`` the fan's forward tilt, ``Ping.pitch``);
 2. the seabed as a line ``z = a + b x``, fitted robustly (Tukey's biweight, iteratively
    reweighted from the median height; the pipe is a minority of the beams) and the noise scale
    ``σ`` as 1.4826 × the median absolute residual;
@@ -50,6 +51,7 @@ class SonarFix(NamedTuple):
     confidence: float = 0.0  # in [0, 1]
     seabed_depth: float = 0.0  # the fitted seabed's depth under the transducer (m): the altitude
     sigma: float = 0.0  # the estimated height noise (m)
+    forward: float = 0.0  # forward position (camera metres) of the pipe's axis in the fan
 
 
 def detect_profile(
@@ -58,8 +60,12 @@ def detect_profile(
     threshold: float = THRESHOLD,
     min_height: float | None = None,
 ) -> SonarFix:
-    """The pipe in one ping (``Ping`` or ``(angles, ranges)``): see the module docstring."""
+    """The pipe in one ping (``Ping``, or ``(angles, ranges)`` of a vertical fan at forward 0).
+
+    See the module docstring.
+    """
     angles, ranges = ping[0], ping[1]
+    along, pitch = (ping.along, ping.pitch) if isinstance(ping, Ping) else (0.0, 0.0)
     if not (math.isfinite(diameter) and diameter > 0.0):
         raise ValueError(f"diameter must be a positive number of metres, got {diameter!r}")
     if not (math.isfinite(threshold) and threshold > 0.0):
@@ -70,10 +76,15 @@ def detect_profile(
     if angles.shape != ranges.shape or angles.ndim != 1:
         shapes = f"{angles.shape} and {ranges.shape}"
         raise ValueError(f"angles and ranges must be 1-D arrays of one length, got {shapes}")
-    found, lateral, height, snr, depth, sigma = _detect(angles, ranges, diameter, threshold, min_height)
+    cos_t = math.cos(pitch)
+    found, lateral, height, snr, depth, sigma = _detect(
+        angles, ranges, cos_t, diameter, threshold, min_height
+    )
     if not found:
         return SonarFix(False, snr=snr, seabed_depth=depth, sigma=sigma)
-    return SonarFix(True, lateral, height, snr, min(1.0, snr / (2.0 * threshold)), depth, sigma)
+    # the fitted section's centre lies on the ray down the fan to the axis's depth
+    forward = along + (depth - (height - 0.5 * diameter)) * math.tan(pitch)
+    return SonarFix(True, lateral, height, snr, min(1.0, snr / (2.0 * threshold)), depth, sigma, forward)
 
 
 @njit(cache=True)
@@ -248,13 +259,13 @@ def _circle(x, e, centre, half, peak, radius, xc):
 
 
 @njit(cache=True)
-def _detect(angles, ranges, diameter, threshold, min_height):
+def _detect(angles, ranges, cos_pitch, diameter, threshold, min_height):
     keep = np.isfinite(ranges)
     m = int(keep.sum())
     if m < MIN_BEAMS:
         return False, 0.0, 0.0, 0.0, 0.0, 0.0
     r, th = ranges[keep], angles[keep]
-    x, z = r * np.sin(th), -r * np.cos(th)
+    x, z = r * np.sin(th), -r * np.cos(th) * cos_pitch
     a, b, sigma = _seabed(x, z)
     e = z - (a + b * x)
     half = 0.5 * diameter

@@ -26,6 +26,7 @@ from pipefollow.perception.sonar import (
     beam_angles,
     check_pipe,
     check_sonar,
+    fan_line,
     render_ping,
 )
 from pipefollow.perception.sonar_detect import THRESHOLD, SonarFix, detect_profile
@@ -54,8 +55,9 @@ class SonarTrack:
     """The pipe's line from the detections of successive pings (earth-frame memory).
 
     Each :meth:`update` stores the detection's earth position (from the pose of its ping and the
-    fan's ``along``); :meth:`view` fits ``lateral = c0 + c1·forward`` by least squares to the
-    stored detections that lie within ``memory_m`` of the fan along the track in the current
+    fix's ``lateral`` and ``forward``); :meth:`view` fits ``lateral = c0 + c1·forward`` by least
+    squares to the stored detections that lie within ``memory_m`` of ``along`` (the fan's line on
+    the seabed, :func:`~pipefollow.perception.sonar.fan_line`) along the track in the current
     camera frame (at most ``memory`` of them, the newest) and clips the line from forward 0 to the
     footprint's depth to the footprint, as :func:`pipefollow.sim.camera.observe` clips the pipe.
     With detections spread less than ``min_spread`` m along the track the line is the newest
@@ -96,8 +98,8 @@ class SonarTrack:
             x, y, psi = pose
             cs, sn = math.cos(psi), math.sin(psi)
             k = self._count % self._ring.shape[0]
-            self._ring[k, 0] = x + cs * self.along - sn * fix.lateral
-            self._ring[k, 1] = y + sn * self.along + cs * fix.lateral
+            self._ring[k, 0] = x + cs * fix.forward - sn * fix.lateral
+            self._ring[k, 1] = y + sn * fix.forward + cs * fix.lateral
             self._count += 1
         self.last = self.view(pose, fix.found)
         return self.last
@@ -172,7 +174,7 @@ class SonarSensor:
         self.sonar = check_sonar(sonar)
         check_pipe(diameter, burial)
         self.diameter, self.burial, self.threshold = float(diameter), float(burial), float(threshold)
-        self.track = SonarTrack(self.sonar.along, memory, memory_m, camera=camera)
+        self.track = SonarTrack(fan_line(self.sonar), memory, memory_m, camera=camera)
         self._angles = beam_angles(self.sonar)
         self._ranges = np.empty(self.sonar.n_beams)
         self.ping: Ping | None = None
