@@ -33,7 +33,7 @@ def main() -> None:
     import numba
 
     import pipefollow.envs  # noqa: F401 (registers the environment)
-    from pipefollow.perception.sonar import PAPER_SONAR, beam_angles, render_ping
+    from pipefollow.perception.sonar import DOWNWARD_SONAR, beam_angles, render_ping
     from pipefollow.perception.sonar_detect import detect_profile
     from pipefollow.perception.sonar_track import SonarTrack
     from pipefollow.sim import decision as sim
@@ -47,7 +47,7 @@ def main() -> None:
         poses.append((env.state[sim.X], env.state[sim.Y], env.state[sim.PSI]))
         obs, *_ = env.step([math.atan2(obs[0], obs[1]) / (0.5 * math.pi)])
     rng = np.random.default_rng(0)
-    angles, out = beam_angles(PAPER_SONAR), np.empty(PAPER_SONAR.n_beams)
+    angles, out = beam_angles(DOWNWARD_SONAR), np.empty(DOWNWARD_SONAR.n_beams)
     pings = [render_ping(pipe.points, pipe.cumulative, p, rng) for p in poses]
     track = SonarTrack()
     it = iter(range(10**9))

@@ -9,9 +9,11 @@ import pytest
 from scipy import optimize, stats
 
 from pipefollow.perception.sonar import (
-    PAPER_SONAR,
+    DOWNWARD_SONAR,
+    LOOK_AHEAD_SONAR,
     SonarError,
     beam_angles,
+    fan_line,
     make_sonar,
     profile_points,
     render_ping,
@@ -34,7 +36,7 @@ def straight_pipe(x0: float, angle: float = 0.0, length: float = 40.0, north: fl
     return np.array([p0 - 0.5 * length * d, p0 + 0.5 * length * d]), np.array([0.0, length])
 
 
-def ping(points, cum, sonar=PAPER_SONAR, seed=0, pose=(0.0, 0.0, 0.0), **kw):
+def ping(points, cum, sonar=DOWNWARD_SONAR, seed=0, pose=(0.0, 0.0, 0.0), **kw):
     return render_ping(points, cum, pose, np.random.default_rng(seed), sonar, **kw)
 
 
@@ -63,6 +65,17 @@ def test_a_beams_width_averages_its_rays_over_the_flat_seabed():
     assert np.all(p.ranges >= 2.0 / np.cos(p.angles) - 1e-12)  # 1/cos is convex: the mean reads long
 
 
+@pytest.mark.parametrize("pitch", [20.0, 45.0])
+def test_a_tilted_fan_reads_the_flat_seabed_at_altitude_over_cos_phi_cos_pitch(pitch):
+    sonar = EXACT._replace(pitch_deg=pitch)
+    p = ping(EMPTY, EMPTY[:, 0], sonar)
+    tau = math.radians(pitch)
+    assert np.allclose(p.ranges, 2.0 / (np.cos(p.angles) * math.cos(tau)), atol=1e-12)
+    assert p.pitch == pytest.approx(tau) and fan_line(sonar) == pytest.approx(2.0 * math.tan(tau))
+    _, z = profile_points(p.ranges, p.angles, p.pitch)
+    assert np.allclose(z, -2.0, atol=1e-12)  # heights in the vertical
+
+
 def test_a_sloping_seabed_puts_every_point_on_its_plane():
     p = ping(EMPTY, EMPTY[:, 0], EXACT._replace(seabed_slope_deg=10.0))
     x, z = profile_points(p.ranges, p.angles)
@@ -87,23 +100,28 @@ def test_the_beam_below_reads_the_top_of_the_pipe(burial):
             assert p.ranges[i] == pytest.approx(r, abs=1e-12)
 
 
-@pytest.mark.parametrize("x0, angle", [(0.4, 0.0), (-0.7, 0.5), (1.2, -0.9)])
-def test_a_pipe_crossing_the_fan_obliquely_matches_the_3d_cylinder(x0, angle):
+@pytest.mark.parametrize(
+    "x0, angle, pitch", [(0.4, 0.0, 0.0), (-0.7, 0.5, 0.0), (1.2, -0.9, 0.0), (0.3, 0.4, 45.0)]
+)
+def test_a_pipe_crossing_the_fan_obliquely_matches_the_3d_cylinder(x0, angle, pitch):
     """Each beam's range against a root-finder on the distance to the cylinder's axis in 3-D."""
-    pts, cum = straight_pipe(x0, angle)
-    p = ping(pts, cum, EXACT)
+    tau = math.radians(pitch)
+    ahead = 2.0 * math.tan(tau)  # the fan's seabed line; the pipe crosses it at lateral x0
+    pts, cum = straight_pipe(x0, angle, north=ahead)
+    p = ping(pts, cum, EXACT._replace(pitch_deg=pitch))
+    assert p.pipe_x[0] == pytest.approx(x0, abs=1e-12)
     radius, altitude = 0.125, 2.0
-    axis_point = np.array([x0, 0.0, altitude - radius])  # (lateral, forward, depth) on the axis
+    axis_point = np.array([x0, ahead, altitude - radius])  # (lateral, forward, depth) on the axis
     axis_dir = np.array([math.sin(angle), math.cos(angle), 0.0])  # camera frame: east → lateral
 
     def gap(r, phi):
-        q = np.array([r * math.sin(phi), 0.0, r * math.cos(phi)]) - axis_point
-        return np.linalg.norm(np.cross(q, axis_dir)) - radius
+        ray = np.array([math.sin(phi), math.cos(phi) * math.sin(tau), math.cos(phi) * math.cos(tau)])
+        return np.linalg.norm(np.cross(r * ray - axis_point, axis_dir)) - radius
 
     hits = 0
     for phi, measured in zip(p.angles, p.ranges, strict=True):
-        seabed = altitude / math.cos(phi)
-        if abs(altitude * math.tan(phi) - x0) > 0.6:  # the ray passes ≥ 0.35 m from the pipe
+        seabed = altitude / (math.cos(phi) * math.cos(tau))
+        if abs(seabed * math.sin(phi) - x0) > 0.8:  # the ray passes ≥ 0.5 m from the pipe
             assert measured == pytest.approx(seabed, abs=1e-12)
             continue
         rs = np.linspace(0.5, seabed, 1000)
@@ -235,6 +253,28 @@ def test_the_detector_finds_the_pipe_where_it_is_to_a_centimetre():
     assert abs(np.mean(errors)) < 0.005  # no side bias
 
 
+def test_a_tilted_fan_finds_the_pipe_ahead_and_where_along_the_track():
+    tau = math.radians(45.0)
+    errors = []
+    for seed in range(100):
+        rng = np.random.default_rng(seed)
+        x0, angle = rng.uniform(-1.0, 1.0), rng.uniform(-0.5, 0.5)  # the pipe through (0, x0)
+        p = render_ping(*straight_pipe(x0, angle), (0.0, 0.0, 0.0), rng, LOOK_AHEAD_SONAR)
+        fix = detect_profile(p)
+        assert fix.found and fix.seabed_depth == pytest.approx(2.0, abs=0.01)
+        # the section's centre: the axis (1.875 m down) on the fan, forward 1.875·tan τ
+        forward = (2.0 - 0.125) * math.tan(tau)
+        assert fix.forward == pytest.approx(forward, abs=0.05)
+        # a tilted fan cuts an oblique pipe in a sheared section: a point Δz above the axis lies
+        # nearer by Δz·tan τ, so beside the axis by −Δz·tan τ·tan α; the top half is fitted
+        err = fix.lateral - (x0 + forward * math.tan(angle))
+        assert abs(err) <= 0.015 + 0.125 * math.tan(tau) * abs(math.tan(angle))
+        errors.append((err, math.tan(angle)))
+    err, tan_a = np.array(errors).T
+    assert np.median(np.abs(err[np.abs(tan_a) < 0.1])) < 0.01
+    assert stats.pearsonr(err, tan_a).statistic < -0.5  # the shear's sign
+
+
 def test_the_detector_sees_across_the_swath_beyond_the_camera():
     for x0 in (-2.5, -1.8, 1.6, 2.4):
         fix = detect_profile(ping(*straight_pipe(x0), seed=1))
@@ -243,7 +283,7 @@ def test_the_detector_sees_across_the_swath_beyond_the_camera():
 
 @pytest.mark.parametrize(
     "sonar",
-    [PAPER_SONAR, make_sonar(roughness=0.01), make_sonar(range_noise=0.03, dropout=0.1)],
+    [DOWNWARD_SONAR, make_sonar(roughness=0.01), make_sonar(range_noise=0.03, dropout=0.1)],
     ids=["default", "rough 1 cm", "noisy 3 cm, 10 % dropouts"],
 )
 def test_no_false_detections_on_pipe_free_seabeds(sonar):
@@ -335,14 +375,17 @@ def test_the_track_with_one_ping_takes_the_pipe_along_the_track_and_forgets_on_r
 def test_the_sensor_is_render_detect_and_track_from_one_generator():
     pts, cum = straight_pipe(0.2, 0.1)
     sensor = SonarSensor(burial=0.5)
+    assert sensor.sonar == LOOK_AHEAD_SONAR
     rng, twin = np.random.default_rng(5), np.random.default_rng(5)
-    track = SonarTrack()
+    track = SonarTrack(along=2.0)
     for k in range(4):
         pose = (0.6 * k, 0.0, 0.0)
         view = sensor.step(pts, cum, pose, rng)
-        expected = track.update(pose, detect_profile(render_ping(pts, cum, pose, twin, burial=0.5)))
-        assert view == expected == sensor.view
+        fix = detect_profile(render_ping(pts, cum, pose, twin, LOOK_AHEAD_SONAR, burial=0.5))
+        assert view == track.update(pose, fix) == sensor.view
     assert view.in_view and view.pings == 4 and sensor.fix.found
+    truth = observe(pts, cum, *pose, 10.0, PAPER_CAMERA)
+    assert view.x1 == pytest.approx(truth.x1, abs=0.05) and view.x2 == pytest.approx(truth.x2, abs=0.05)
     buried = sensor.step(pts, cum, (3.0, 0.0, 0.0), rng, (0.0, math.inf, math.inf, math.inf))
     assert not buried.in_view and not buried.detected and buried.pings == 4  # the memory stays
     sensor.reset()
@@ -350,7 +393,7 @@ def test_the_sensor_is_render_detect_and_track_from_one_generator():
     with pytest.raises(ValueError, match="burial"):
         SonarSensor(burial=1.5)
     with pytest.raises(SonarError, match="n_beams"):
-        SonarSensor(PAPER_SONAR._replace(n_beams=2))
+        SonarSensor(DOWNWARD_SONAR._replace(n_beams=2))
 
 
 # --- the evaluation helpers -------------------------------------------------------------------

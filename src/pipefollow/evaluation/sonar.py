@@ -17,7 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from pipefollow.perception.sonar import PAPER_SONAR, Sonar, profile_points, render_ping
+from pipefollow.perception.sonar import DOWNWARD_SONAR, Sonar, profile_points, render_ping
 from pipefollow.perception.sonar_detect import THRESHOLD, detect_profile
 from pipefollow.sim.camera import PAPER_CAMERA
 
@@ -35,7 +35,7 @@ def straight_pipe(lateral: float, angle: float, length: float = 40.0) -> tuple[n
 
 
 def sonar_statistics(
-    sonar: Sonar = PAPER_SONAR,
+    sonar: Sonar = DOWNWARD_SONAR,
     burial: float = 0.0,
     diameter: float = 0.25,
     n: int = 1000,
@@ -82,7 +82,7 @@ def profile_figure(
         ("outside the camera", 2.2, 0.0),
         ("no pipe", None, 0.0),
     ),
-    sonar: Sonar = PAPER_SONAR,
+    sonar: Sonar = DOWNWARD_SONAR,
     diameter: float = 0.25,
     seed: int = 0,
 ) -> None:

@@ -39,6 +39,11 @@ Parameters and their sources (docs/decisions.md, "Sonar"):
 =================  ===========  ==============================================================
 field              default      source
 =================  ===========  ==============================================================
+pitch              0° / 45°     :data:`DOWNWARD_SONAR` / :data:`LOOK_AHEAD_SONAR`: R2Sonic
+                                heads steer the receive fan ±45° (receiver tilt, R2Sonic
+                                manual); at 45° and 2 m the fan meets the seabed 2 m ahead,
+                                inside the camera's 3 m (a fan under the AUV cannot lead it:
+                                docs/decisions.md)
 altitude           2.0 m        the camera's: the renderer's light path assumes 2 m
                                 (``Water.altitude``); a 2 m wide footprint at 2 m is a ±26.6°
                                 lateral field of view, a plausible camera
@@ -117,7 +122,8 @@ _RANGES = {  # field: (low, high, low end closed)
 }
 _WHOLE = ("n_beams", "sub_rays")
 
-PAPER_SONAR = Sonar()
+DOWNWARD_SONAR = Sonar()  # the fan straight down under the AUV's centre
+LOOK_AHEAD_SONAR = Sonar(pitch_deg=45.0)  # the fan tilted forward, meeting the seabed 2 m ahead
 
 
 def check_sonar(s: Sonar) -> Sonar:
@@ -153,7 +159,7 @@ def check_pipe(diameter: float, burial: float) -> None:
         raise ValueError(f"burial must be the buried share of the diameter in [0, 1], got {burial!r}")
 
 
-def fan_line(sonar: Sonar = PAPER_SONAR) -> float:
+def fan_line(sonar: Sonar = DOWNWARD_SONAR) -> float:
     """Forward position (camera metres) of the fan's line on the mean seabed.
 
     ``along + altitude · tan(pitch)``.
@@ -161,7 +167,7 @@ def fan_line(sonar: Sonar = PAPER_SONAR) -> float:
     return sonar.along + sonar.altitude * math.tan(math.radians(sonar.pitch_deg))
 
 
-def beam_angles(sonar: Sonar = PAPER_SONAR) -> np.ndarray:
+def beam_angles(sonar: Sonar = DOWNWARD_SONAR) -> np.ndarray:
     """The beams' angles from the vertical (rad, positive to starboard), port to starboard."""
     half = 0.5 * math.radians(sonar.swath_deg)
     return np.linspace(-half, half, sonar.n_beams)
@@ -183,7 +189,7 @@ def render_ping(
     cum: np.ndarray,
     pose: tuple[float, float, float],
     rng: np.random.Generator,
-    sonar: Sonar = PAPER_SONAR,
+    sonar: Sonar = DOWNWARD_SONAR,
     diameter: float = 0.25,
     burial: float = 0.0,
     buried_from=NO_BURIAL,

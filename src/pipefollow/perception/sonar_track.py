@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 
 from pipefollow.perception.sonar import (
-    PAPER_SONAR,
+    LOOK_AHEAD_SONAR,
     Ping,
     Sonar,
     beam_angles,
@@ -163,7 +163,7 @@ class SonarSensor:
 
     def __init__(
         self,
-        sonar: Sonar = PAPER_SONAR,
+        sonar: Sonar = LOOK_AHEAD_SONAR,
         diameter: float = 0.25,
         burial: float = 0.0,
         threshold: float = THRESHOLD,
