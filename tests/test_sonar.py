@@ -396,15 +396,40 @@ def test_the_sensor_is_render_detect_and_track_from_one_generator():
         SonarSensor(DOWNWARD_SONAR._replace(n_beams=2))
 
 
+def test_the_sensor_writes_the_observation_slots_as_the_vision_camera_does():
+    from pipefollow.sim import decision as sim
+
+    pts, cum = straight_pipe(0.3, 0.0)
+    s = np.zeros(sim.STATE_SIZE)
+    s[sim.X], s[sim.Y], s[sim.PSI] = -2.0, 0.0, 0.0
+    sensor = SonarSensor()
+    rng = np.random.default_rng(0)
+    view = sensor.look(s, pts, cum, rng)
+    assert view.in_view and s[sim.IN_VIEW] == 1.0
+    assert (s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR]) == (view.x1, view.y1, view.x2, view.y_near)
+    assert s[sim.E_DIST] == pytest.approx(0.3, abs=0.03) and s[sim.E_ANGL] == 0.0 and s[sim.LAST_SIDE] == 1.0
+    # the pipe buried under the fan: lost, the last sighting's slots stay
+    kept = s[: sim.E_ANGL + 1].copy()
+    sensor.look(s, pts, cum, rng, (0.0, math.inf, math.inf, math.inf))
+    assert s[sim.IN_VIEW] == 0.0 and np.array_equal(s[: sim.E_DIST], kept[: sim.E_DIST])
+
+
 # --- the evaluation helpers -------------------------------------------------------------------
 
 
 def test_the_statistics_and_the_figure(tmp_path):
-    from pipefollow.evaluation.sonar import profile_figure, sonar_statistics
+    from pipefollow.evaluation.sonar import heuristic_on_sonar, profile_figure, sonar_statistics
 
     row = sonar_statistics(n=40)
     assert row["detection_rate"] == 1.0 and row["false_alarm_rate"] == 0.0 and row["max_error_cm"] < 5.0
     assert sonar_statistics(burial=1.0, n=20)["detection_rate"] == 0.0
+    from pipefollow.sim.suites import get_suite
+
+    loop = heuristic_on_sonar(get_suite("heldout"), n_pipes=4, seconds=20.0)
+    assert loop["exact"]["pipes"] == loop["sonar"]["pipes"] == 4
+    assert loop["sonar"]["in_view"] > 0.8 and loop["sonar"]["progress_m"] > 4.0
+    down = heuristic_on_sonar(get_suite("heldout"), n_pipes=2, seconds=10.0, sonar=DOWNWARD_SONAR)
+    assert down["sonar"]["progress_m"] < 1.0  # a fan under the AUV never sees the pipe ahead of its start
     path = tmp_path / "profiles.png"
     profile_figure(path, cases=(("on the seabed", 0.4, 0.0), ("no pipe", None, 0.0)))
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

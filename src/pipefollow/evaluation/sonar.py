@@ -4,6 +4,10 @@
   positions and angles, and pipe-free pings, and runs
   :func:`~pipefollow.perception.sonar_detect.detect_profile` on each: the detection rate, the
   false-alarm rate and the lateral error against the rendered truth.
+* :func:`heuristic_on_sonar` runs the heuristic controller on the held-out suite with the
+  observation from :class:`~pipefollow.perception.sonar_track.SonarSensor` instead of the exact
+  camera, as an environment with the sonar would (reward eq. 19 from the true geometry, −10
+  while the sonar has lost the pipe), beside the same controller on the exact camera.
 * :func:`profile_figure` draws sample profiles (heights above the fitted seabed against lateral
   position) with the true pipe section (green), the detection (red) and the camera's footprint.
 
@@ -70,6 +74,65 @@ def sonar_statistics(
         "max_error_cm": float(e.max()) if e.size else math.nan,
         "mean_error_cm": float(np.mean(errors) * 100.0) if e.size else math.nan,
     }
+
+
+def heuristic_on_sonar(
+    suite,
+    n_pipes: int = 100,
+    sonar: Sonar | None = None,
+    burial: float = 0.0,
+    seconds: float = 60.0,
+    seed: int = 0,
+) -> dict:
+    """Mean return, share of decisions with the pipe truly in view and progress (m), per camera.
+
+    Pipe ``k``'s episode draws from ``default_rng(SeedSequence([seed, 4, k]))``; ``sonar=None`` is
+    :data:`~pipefollow.perception.sonar.LOOK_AHEAD_SONAR`. The exact camera's row runs the same
+    episodes without the sonar.
+    """
+    from pipefollow.learners.heuristic import heuristic_action
+    from pipefollow.perception.sonar import LOOK_AHEAD_SONAR
+    from pipefollow.perception.sonar_track import SonarSensor
+    from pipefollow.sim import decision as sim
+    from pipefollow.sim.suites import min_length_for
+
+    pipes = suite.pipes(n_pipes, min_length_for(seconds))
+    packed = sim.pack_params(sim.PAPER_SIM)
+    lost = sim.PAPER_SIM.lost_reward
+    out = {}
+    for camera in ("exact", "sonar"):
+        returns, in_view, progress, followed = [], [], [], 0
+        for k, pipe in enumerate(pipes):
+            s = np.zeros(sim.STATE_SIZE)
+            p0 = pipe.points[0]
+            sim.init_state_packed(s, pipe.points, pipe.cumulative, p0[0], p0[1], pipe.start_heading, packed)
+            rng = np.random.default_rng(np.random.SeedSequence([seed, 4, k]))
+            sensor = SonarSensor(sonar or LOOK_AHEAD_SONAR, burial=burial)
+            if camera == "sonar":
+                sensor.look(s, pipe.points, pipe.cumulative, rng)
+            total, seen = 0.0, 0
+            n = int(round(seconds))
+            for _ in range(n):
+                a = heuristic_action(s[sim.X1], s[sim.Y1]) if s[sim.IN_VIEW] else 0.0
+                r = sim.decide_packed(s, a, pipe.points, pipe.cumulative, packed)
+                seen += s[sim.IN_VIEW] != 0.0  # the exact camera's verdict, before the sonar's slots
+                if camera == "sonar":
+                    sensor.look(s, pipe.points, pipe.cumulative, rng)
+                    if s[sim.OVERRIDDEN] != 0.0 or s[sim.IN_VIEW] == 0.0:
+                        r = lost
+                total += r
+            returns.append(total)
+            in_view.append(seen / n)
+            progress.append(s[sim.PROGRESS])
+            followed += seen / n >= 0.9
+        out[camera] = {
+            "mean_return": float(np.mean(returns)),
+            "in_view": float(np.mean(in_view)),
+            "progress_m": float(np.mean(progress)),
+            "pipes_in_view_90": int(followed),
+            "pipes": len(pipes),
+        }
+    return out
 
 
 def profile_figure(

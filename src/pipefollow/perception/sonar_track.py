@@ -8,7 +8,8 @@ footprint. The direction comes from the pings behind the AUV, so at a bend it la
 
 :class:`SonarSensor` is one decision's work for an environment: render a ping from the pose
 (:func:`~pipefollow.perception.sonar.render_ping`), detect the pipe
-(:func:`~pipefollow.perception.sonar_detect.detect_profile`) and update the track.
+(:func:`~pipefollow.perception.sonar_detect.detect_profile`), update the track and, with
+:meth:`SonarSensor.look`, write the observation slots of the simulation state.
 """
 
 from __future__ import annotations
@@ -30,7 +31,8 @@ from pipefollow.perception.sonar import (
     render_ping,
 )
 from pipefollow.perception.sonar_detect import THRESHOLD, SonarFix, detect_profile
-from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, clip_segment
+from pipefollow.sim import decision as sim
+from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, clip_segment, tracking_errors
 from pipefollow.sim.disturbance import NO_BURIAL
 
 
@@ -180,11 +182,13 @@ class SonarSensor:
         self.ping: Ping | None = None
         self.fix = SonarFix(False)
         self.view = NO_VIEW
+        self._last = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)  # the last sighting's slots (starboard if none)
 
     def reset(self) -> None:
         """A new episode: forget the track."""
         self.track.reset()
         self.ping, self.fix, self.view = None, SonarFix(False), NO_VIEW
+        self._last = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
 
     def step(
         self,
@@ -203,6 +207,35 @@ class SonarSensor:
         self.fix = detect_profile(self.ping, self.diameter, self.threshold)
         self.view = self.track.update(pose, self.fix)
         return self.view
+
+    def look(
+        self,
+        state: np.ndarray,
+        points: np.ndarray,
+        cum: np.ndarray,
+        rng: np.random.Generator,
+        buried_from=NO_BURIAL,
+        buried_to=NO_BURIAL,
+    ) -> SonarView:
+        """:meth:`step` from the simulation state's pose, then its observation slots from the view.
+
+        As the vision camera does (:class:`~pipefollow.perception.camera.VisionCamera`): while the
+        pipe is in view, ``x1, y1, x2, y_near``, the tracking errors and the side of the sighting
+        come from the view; otherwise they keep the last sighting's, and ``IN_VIEW`` is 0 (a lost
+        pipe: the next decision searches).
+        """
+        view = self.step(
+            points, cum, (state[sim.X], state[sim.Y], state[sim.PSI]), rng, buried_from, buried_to
+        )
+        if view.in_view:
+            e_dist, e_angl = tracking_errors(view.x1, view.y1, view.x2, view.y_near)
+            side = 1.0 if view.x1 >= 0.0 else -1.0
+            self._last = (view.x1, view.y1, view.x2, view.y_near, e_dist, e_angl, side)
+        s = state
+        s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR] = self._last[:4]
+        s[sim.E_DIST], s[sim.E_ANGL], s[sim.LAST_SIDE] = self._last[4:]
+        s[sim.IN_VIEW] = 1.0 if view.in_view else 0.0
+        return view
 
 
 __all__ = ["NO_VIEW", "SonarSensor", "SonarTrack", "SonarView"]
