@@ -70,6 +70,7 @@ if ``range_noise > 0``), ``n_beams`` uniforms (dropouts, if ``dropout > 0``) and
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -214,7 +215,10 @@ def render_ping(
     xc = np.empty(MAX_CROSSINGS)
     seen = np.zeros(MAX_CROSSINGS, dtype=np.bool_)
     x, y, psi = pose
-    buried = np.asarray(buried_from, dtype=np.float64), np.asarray(buried_to, dtype=np.float64)
+    if buried_from is NO_BURIAL and buried_to is NO_BURIAL:
+        buried = _NO_BURIAL, _NO_BURIAL
+    else:
+        buried = np.asarray(buried_from, dtype=np.float64), np.asarray(buried_to, dtype=np.float64)
     k = _render(
         points, cum, float(x), float(y), float(psi), angles, _settings(sonar), float(diameter), float(burial),
         buried[0], buried[1], z, u, waves, out, xc, seen,
@@ -223,17 +227,24 @@ def render_ping(
 
 
 _NONE = np.zeros(0)
+_NO_BURIAL = np.array(NO_BURIAL)
 
 
+@functools.lru_cache(maxsize=64)
 def _settings(s: Sonar) -> np.ndarray:
-    """The settings the compiled render reads, as a float array (a record costs µs to pass)."""
-    return np.array(
+    """The settings the compiled render reads, as a float array (a record costs µs to pass).
+
+    Cached per record (records are immutable); the array is read-only.
+    """
+    a = np.array(
         [
             math.radians(s.beam_width_deg), s.sub_rays, s.altitude, s.along, s.range_resolution,
             s.range_noise, s.dropout, s.roughness, math.tan(math.radians(s.seabed_slope_deg)),
             math.radians(s.pitch_deg),
         ]
     )  # fmt: skip
+    a.flags.writeable = False
+    return a
 
 
 @njit(cache=True)
