@@ -21,20 +21,22 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from pipefollow.perception.sonar import DOWNWARD_SONAR, Sonar, profile_points, render_ping
+from pipefollow.perception.sonar import DOWNWARD_SONAR, Sonar, fan_line, profile_points, render_ping
 from pipefollow.perception.sonar_detect import THRESHOLD, detect_profile
 from pipefollow.sim.camera import PAPER_CAMERA
 
 EMPTY = np.zeros((0, 2))
 
 
-def straight_pipe(lateral: float, angle: float, length: float = 40.0) -> tuple[np.ndarray, np.ndarray]:
-    """A straight pipe (points, arc lengths) crossing the fan of an AUV at (0, 0, ψ = 0) at ``lateral``.
+def straight_pipe(
+    lateral: float, angle: float, length: float = 40.0, forward: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """A straight pipe (points, arc lengths) through camera ``(lateral, forward)`` of an AUV at (0, 0, ψ = 0).
 
     ``angle`` (rad) turns it from the track (north) towards starboard (east).
     """
     d = np.array([math.cos(angle), math.sin(angle)])
-    p0 = np.array([0.0, lateral])
+    p0 = np.array([forward, lateral])
     return np.array([p0 - 0.5 * length * d, p0 + 0.5 * length * d]), np.array([0.0, length])
 
 
@@ -49,18 +51,23 @@ def sonar_statistics(
 ) -> dict:
     """Detection rate, false-alarm rate and lateral error (cm) over ``n`` pings with and without a pipe.
 
-    The pipe crosses the fan at a lateral position uniform in ``lateral`` (default: the camera's
-    footprint) and an angle to the track uniform in ``±max_angle`` (rad).
+    The pipe crosses the fan's seabed line (:func:`~pipefollow.perception.sonar.fan_line`) at a
+    lateral position uniform in ``lateral`` (default: the camera's footprint) and an angle to the
+    track uniform in ``±max_angle`` (rad). The error is the detection's lateral position against
+    the pipe's centre line at the detection's forward position.
     """
     found, false, errors = 0, 0, []
+    line = fan_line(sonar)
     for k in range(n):
         rng = np.random.default_rng(np.random.SeedSequence([seed, 1, k]))
         x0, angle = rng.uniform(*lateral), rng.uniform(-max_angle, max_angle)
-        ping = render_ping(*straight_pipe(x0, angle), (0.0, 0.0, 0.0), rng, sonar, diameter, burial)
+        ping = render_ping(
+            *straight_pipe(x0, angle, forward=line), (0.0, 0.0, 0.0), rng, sonar, diameter, burial
+        )
         fix = detect_profile(ping, diameter)
         if fix.found:
             found += 1
-            errors.append(fix.lateral - x0)
+            errors.append(fix.lateral - (x0 + (fix.forward - line) * math.tan(angle)))
         rng = np.random.default_rng(np.random.SeedSequence([seed, 2, k]))
         false += detect_profile(render_ping(EMPTY, EMPTY[:, 0], (0.0, 0.0, 0.0), rng, sonar), diameter).found
     e = np.abs(np.array(errors)) * 100.0
@@ -160,10 +167,10 @@ def profile_figure(
     for i, (title, x0, burial) in enumerate(cases):
         ax = axes[i // cols, i % cols]
         rng = np.random.default_rng(np.random.SeedSequence([seed, 3, i]))
-        pts, cum = straight_pipe(x0, 0.0) if x0 is not None else (EMPTY, EMPTY[:, 0])
+        pts, cum = straight_pipe(x0, 0.0, forward=fan_line(sonar)) if x0 is not None else (EMPTY, EMPTY[:, 0])
         ping = render_ping(pts, cum, (0.0, 0.0, 0.0), rng, sonar, diameter, burial)
         fix = detect_profile(ping, diameter)
-        x, z = profile_points(ping.ranges, ping.angles)
+        x, z = profile_points(ping.ranges, ping.angles, ping.pitch)
         h = z + fix.seabed_depth  # heights above the fitted seabed
         ax.axvspan(-PAPER_CAMERA.half_width, PAPER_CAMERA.half_width, color="0.92", lw=0)
         ax.axhline(0.0, color="0.6", lw=0.6)
