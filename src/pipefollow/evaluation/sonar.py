@@ -198,8 +198,9 @@ def profile_figure(
     for j in range(len(cases), rows * cols):
         axes[j // cols, j % cols].set_visible(False)
     fig.suptitle(
-        "multibeam profiles (128 beams, ±60°, 2 m altitude): pipe section (green), detection (red), "
-        "camera footprint (grey)",
+        f"multibeam profiles ({sonar.n_beams} beams, ±{0.5 * sonar.swath_deg:g}°, "
+        f"{sonar.altitude:g} m altitude, tilt {sonar.pitch_deg:g}°): "
+        "pipe section (green), detection (red), camera footprint (grey)",
         fontsize=8,
     )
     fig.tight_layout()
