@@ -47,17 +47,18 @@ pitch              0° / 45°     :data:`DOWNWARD_SONAR` / :data:`LOOK_AHEAD_SON
 altitude           2.0 m        the camera's: the renderer's light path assumes 2 m
                                 (``Water.altitude``); a 2 m wide footprint at 2 m is a ±26.6°
                                 lateral field of view, a plausible camera
-n_beams            128          R2Sonic 2024 / Norbit WBMS form 256 beams (R2Sonic operation
-                                manual); every second one keeps the render cheap
+n_beams            128          the R2Sonic 2024 forms 256 beams (R2Sonic operation manual);
+                                every second one keeps the render cheap
 swath              120°         R2Sonic 2024: opening angle 10°–160° selectable; ±60° at 2 m
                                 covers 6.9 m across, 3.5× the camera's 2 m
-beam_width         1.0°         across-track receive beam at 400 kHz: 0.5° R2Sonic 2024,
-                                0.9° Norbit WBMS, 0.4°–0.7° Kongsberg EM 2040 (datasheets)
+beam_width         1.0°         Kongsberg EM 2040: beams of 0.5° × 1° or 1° × 1° (product
+                                description); the wider, conservative one
 range_resolution   0.01 m       c / 2B = 1500 / (2 · 80 kHz) = 9.4 mm for the WBMS's 80 kHz
-                                bandwidth (Norbit manual); R2Sonic quotes 1.25 cm
+                                bandwidth (Norbit WBMS manual)
 range_noise        0.01 m       of the order of the range resolution (conservative at 2 m)
-frequency          400 kHz      all three at 400 kHz (documentation only: nothing here depends
-                                on it, attenuation at 2 m being negligible)
+frequency          400 kHz      R2Sonic 2024: 200–400 kHz; Norbit WBMS: optimised for 400 kHz
+                                (manuals); documentation only: nothing here depends on it,
+                                attenuation over 2 m being negligible
 pipe diameter      0.25 m       the renderer's pipe (``Water.pipe_diameter``); subsea lines
                                 range from 6–12 in (0.15–0.3 m) flowlines to 42–44 in trunk
                                 lines (Langeled, ≈1.1 m)
