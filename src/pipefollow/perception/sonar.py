@@ -21,11 +21,13 @@ angle ``φ`` has the direction ``(sin φ, cos φ sin τ, cos φ cos τ)`` (later
 * **Pipe**: a cylinder of ``diameter`` whose axis lies ``R(1 − 2b)`` above the seabed under it
   (``R`` the radius, ``b`` the burial: the share of the diameter below the seabed; 0 = lying on
   it, ½ = top half above, 1 = the top flush with the seabed: invisible). Where a segment of the
-  pipeline polyline crosses the fan's seabed line at angle ``α`` to the track (each such segment
-  taken as an infinite straight cylinder), a vertical fan cuts the cylinder in the
+  pipeline polyline crosses the fan's seabed line at angle ``α`` to the track, a vertical fan
+  cuts the cylinder in the
   ellipse ``((x − x_c) cos α)² + (z − z_axis)² = R²`` when vertical; a ray's range to the pipe is
   the near root of ``|(r d − p) × a| = R`` (``d`` the ray's direction, ``p`` a point of the
-  axis, ``a`` its direction), exact for any pitch. A stretch in ``buried_from``/``buried_to``
+  axis, ``a`` its direction), exact for any pitch. Each segment near the fan is a cylinder of its
+  own length (lengthened by ``R`` at both ends, which closes the wedge between two segments at a
+  bend). A stretch in ``buried_from``/``buried_to``
   (the disturbance's buried stretches, :mod:`pipefollow.sim.disturbance`) is fully buried.
 * **A beam's range**: the mean of ``sub_rays`` rays spread evenly over the beam's −3 dB width
   (the beam width smooths the profile over its footprint), each ray's range the nearer of the
@@ -82,7 +84,7 @@ from pipefollow.sim.disturbance import NO_BURIAL
 
 ROUGHNESS_WAVES = 8  # cosines of the seabed's roughness per ping
 ROUGHNESS_WAVELENGTHS = (0.3, 4.0)  # m: shortest and longest wavelength (log-uniform)
-MAX_CROSSINGS = 16  # crossings of the fan by the pipeline that one ping renders
+MAX_SEGMENTS = 16  # segments of the pipeline near the fan that one ping renders
 
 
 class SonarError(ValueError):
@@ -213,8 +215,9 @@ def render_ping(
     z = rng.standard_normal(n) if sonar.range_noise > 0.0 else _NONE
     u = rng.random(n) if sonar.dropout > 0.0 else _NONE
     waves = rng.random(2 * ROUGHNESS_WAVES) if sonar.roughness > 0.0 else _NONE
-    xc = np.empty(MAX_CROSSINGS)
-    seen = np.zeros(MAX_CROSSINGS, dtype=np.bool_)
+    seg = np.empty((MAX_SEGMENTS, 7))
+    seen = np.zeros(MAX_SEGMENTS, dtype=np.bool_)
+    crosses = np.zeros(MAX_SEGMENTS, dtype=np.bool_)
     x, y, psi = pose
     if buried_from is NO_BURIAL and buried_to is NO_BURIAL:
         buried = _NO_BURIAL, _NO_BURIAL
@@ -222,9 +225,10 @@ def render_ping(
         buried = np.asarray(buried_from, dtype=np.float64), np.asarray(buried_to, dtype=np.float64)
     k = _render(
         points, cum, float(x), float(y), float(psi), angles, _settings(sonar), float(diameter), float(burial),
-        buried[0], buried[1], z, u, waves, out, xc, seen,
+        buried[0], buried[1], z, u, waves, out, seg, seen, crosses,
     )  # fmt: skip
-    return Ping(angles, out, xc[:k].copy(), seen[:k].copy(), sonar.along, math.radians(sonar.pitch_deg))
+    c = crosses[:k]
+    return Ping(angles, out, seg[:k, 5][c], seen[:k][c], sonar.along, math.radians(sonar.pitch_deg))
 
 
 _NONE = np.zeros(0)
@@ -277,13 +281,14 @@ def seabed_range(s, c, altitude, slope, roughness, waves):
 
 
 @njit(cache=True)
-def cylinder_range(dx, dy, dz, px, py, pz, ax, ay, radius):
+def cylinder_range(dx, dy, dz, px, py, pz, ax, ay, radius, length=math.inf):
     """Range (m) along the unit ray ``d`` from the transducer to the near side of a cylinder, or inf.
 
-    The cylinder's axis passes through ``p`` (relative to the transducer) along the horizontal
-    unit vector ``(ax, ay, 0)``; coordinates (lateral, forward, down). The near root of
-    ``|(r d − p) × a|² = radius²``: with ``q = d × a`` and ``w = p × a``,
-    ``r² |q|² − 2 r q·w + |w|² − radius² = 0``.
+    The cylinder's axis starts at ``p`` (relative to the transducer) and runs ``length`` along the
+    horizontal unit vector ``(ax, ay, 0)``; coordinates (lateral, forward, down). The near root of
+    ``|(r d − p) × a|² = radius²`` (with ``q = d × a`` and ``w = p × a``:
+    ``r² |q|² − 2 r q·w + |w|² − radius² = 0``), if its point lies along the axis within
+    ``[−radius, length + radius]`` (the overlap closes the wedge between two segments at a bend).
     """
     qx, qy, qz = -dz * ay, dz * ax, dx * ay - dy * ax
     wx, wy, wz = -pz * ay, pz * ax, px * ay - py * ax
@@ -294,16 +299,23 @@ def cylinder_range(dx, dy, dz, px, py, pz, ax, ay, radius):
     if disc < 0.0 or qq <= 0.0:
         return math.inf
     r = (qw - math.sqrt(disc)) / qq
-    return r if r > 0.0 else math.inf
+    if r <= 0.0:
+        return math.inf
+    t = (r * dx - px) * ax + (r * dy - py) * ay  # along the axis from its start
+    if t < -radius or t > length + radius:
+        return math.inf
+    return r
 
 
 @njit(cache=True)
-def fan_crossings(points, cum, x, y, psi, along, buried_from, buried_to, xc, dirs, arc, open_):
-    """Where the pipeline crosses the camera frame's line ``forward = along`` (the fan's seabed line).
+def near_segments(points, cum, x, y, psi, line, margin, buried_from, buried_to, seg, open_, crosses):
+    """The pipeline's segments that come within ``margin`` (m) of the fan's seabed line.
 
-    Fills ``xc`` (lateral position), ``dirs`` (the segment's unit direction, lateral and forward),
-    ``arc`` (arc length) and ``open_`` (False inside a buried stretch) for up to ``len(xc)``
-    crossings; returns how many.
+    ``line`` is the line's forward position in the camera frame of pose (x, y, ψ). Fills, for up
+    to ``len(seg)`` segments, ``seg[k] = (lateral, forward of the start, unit direction lateral,
+    forward, length, lateral where the segment is nearest the line, arc length there)``,
+    ``open_[k]`` (False inside a buried stretch) and ``crosses[k]`` (the segment crosses the line;
+    a half-open test, so a vertex on the line counts once); returns how many.
     """
     cs, sn = math.cos(psi), math.sin(psi)
     n = 0
@@ -314,43 +326,67 @@ def fan_crossings(points, cum, x, y, psi, along, buried_from, buried_to, xc, dir
     for i in range(points.shape[0] - 1):
         dx, dy = points[i + 1, 0] - x, points[i + 1, 1] - y
         bl, bf = -sn * dx + cs * dy, cs * dx + sn * dy
-        ta, tb = af - along, bf - along
-        # a half-open test, so a vertex on the fan counts once
-        if (ta < 0.0 <= tb) or (tb < 0.0 <= ta):
-            t = ta / (ta - tb)
+        ta, tb = af - line, bf - line
+        length = math.hypot(bl - al, bf - af)
+        if min(ta, tb) <= margin and max(ta, tb) >= -margin and length > 0.0 and n < seg.shape[0]:
+            cross = (ta < 0.0 <= tb) or (tb < 0.0 <= ta)
+            if cross:
+                t = ta / (ta - tb)
+            else:
+                t = 0.0 if abs(ta) <= abs(tb) else 1.0
             s = cum[i] + t * (cum[i + 1] - cum[i])
             buried = False
             for j in range(buried_from.shape[0]):
                 if buried_from[j] <= s <= buried_to[j]:
                     buried = True
-            if n < xc.shape[0]:
-                length = math.hypot(bl - al, bf - af)
-                xc[n] = al + t * (bl - al)
-                dirs[n, 0], dirs[n, 1] = (bl - al) / length, (bf - af) / length
-                arc[n] = s
-                open_[n] = not buried
-                n += 1
+            seg[n, 0], seg[n, 1] = al, af
+            seg[n, 2], seg[n, 3], seg[n, 4] = (bl - al) / length, (bf - af) / length, length
+            seg[n, 5], seg[n, 6] = al + t * (bl - al), s
+            open_[n] = not buried
+            crosses[n] = cross
+            n += 1
         al, af = bl, bf
     return n
 
 
 @njit(cache=True)
 def _render(
-    points, cum, x, y, psi, angles, st, diameter, burial, buried_from, buried_to, z, u, waves, out, xc, seen
+    points,
+    cum,
+    x,
+    y,
+    psi,
+    angles,
+    st,
+    diameter,
+    burial,
+    buried_from,
+    buried_to,
+    z,
+    u,
+    waves,
+    out,
+    seg,
+    seen,
+    crosses,
 ):
     width, sub, altitude, along = st[0], int(st[1]), st[2], st[3]
     resolution, noise, dropout, roughness, slope, pitch = st[4], st[5], st[6], st[7], st[8], st[9]
     cos_t, sin_t = math.cos(pitch), math.sin(pitch)
-    dirs = np.empty((xc.shape[0], 2))
-    arc = np.empty(xc.shape[0])
     ahead = altitude * sin_t / cos_t  # the fan's seabed line, forward of the transducer
-    n = fan_crossings(points, cum, x, y, psi, along + ahead, buried_from, buried_to, xc, dirs, arc, seen)
     radius = 0.5 * diameter
+    # a point of the pipe at height z above the seabed lies on the fan z·tan τ nearer than the line
+    margin = diameter * (1.0 + sin_t / cos_t) + radius
+    n = near_segments(
+        points, cum, x, y, psi, along + ahead, margin, buried_from, buried_to, seg, seen, crosses
+    )
     visible = burial < 1.0  # at 1 the top is flush with the seabed
     depth = np.empty(n)
     for k in range(n):
-        # the pipe rests on the seabed under its axis: the axis's depth below the transducer
-        depth[k] = altitude - seabed_height(xc[k], slope, roughness, waves) - radius * (1.0 - 2.0 * burial)
+        # the pipe rests on the seabed under it: the axis's depth below the transducer
+        depth[k] = (
+            altitude - seabed_height(seg[k, 5], slope, roughness, waves) - radius * (1.0 - 2.0 * burial)
+        )
         seen[k] = seen[k] and visible
     for i in range(angles.shape[0]):
         total = 0.0
@@ -361,8 +397,9 @@ def _render(
             for k in range(n):
                 if seen[k]:
                     hit = cylinder_range(
-                        sp, cp * sin_t, cp * cos_t, xc[k], ahead, depth[k], dirs[k, 0], dirs[k, 1], radius
-                    )
+                        sp, cp * sin_t, cp * cos_t, seg[k, 0], seg[k, 1] - along, depth[k],
+                        seg[k, 2], seg[k, 3], radius, seg[k, 4],
+                    )  # fmt: skip
                     r = min(r, hit)
             total += r
         r = total / sub
