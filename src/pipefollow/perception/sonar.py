@@ -44,7 +44,7 @@ field              default      source
 pitch              0° / 45°     :data:`DOWNWARD_SONAR` / :data:`LOOK_AHEAD_SONAR`: R2Sonic
                                 heads steer the receive fan ±45° (receiver tilt, R2Sonic
                                 manual); at 45° and 2 m the fan meets the seabed 2 m ahead,
-                                inside the camera's 3 m (a fan under the AUV cannot lead it:
+                                inside the camera's 3 m (a fan under the AUV follows poorly:
                                 docs/decisions.md)
 altitude           2.0 m        the camera's: the renderer's light path assumes 2 m
                                 (``Water.altitude``); a 2 m wide footprint at 2 m is a ±26.6°
