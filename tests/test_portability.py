@@ -80,3 +80,33 @@ def test_camera_images_and_detections_are_the_same_under_the_generic_cpu_target(
     a = subprocess.run(run, env=host, check=True, capture_output=True, text=True).stdout
     b = subprocess.run(run, env=generic, check=True, capture_output=True, text=True).stdout
     assert a == b and len(a.split()) == 2
+
+
+PINGS = """
+import hashlib
+import numpy as np
+from pipefollow.perception.sonar import make_sonar
+from pipefollow.perception.sonar_track import SonarSensor
+from pipefollow.sim.suites import get_suite, min_length_for
+
+pipe = get_suite("heldout").pipes(1, min_length_for(200.0))[0]
+rng = np.random.default_rng(0)
+sensor = SonarSensor(make_sonar(pitch_deg=45.0, roughness=0.01, dropout=0.05), burial=0.3)
+ranges, views = hashlib.sha256(), hashlib.sha256()
+x0, y0 = pipe.points[0]
+for k in range(40):
+    view = sensor.step(pipe.points, pipe.cumulative, (x0 + 0.3 * k, y0 + 0.01 * k, 0.02 * k), rng)
+    ranges.update(sensor.ping.ranges.tobytes())
+    views.update(repr((sensor.fix, view)).encode())
+print(ranges.hexdigest(), views.hexdigest())
+"""
+
+
+@pytest.mark.slow  # compiles the sonar for another target
+def test_sonar_pings_and_detections_are_the_same_under_the_generic_cpu_target(tmp_path):
+    host = {k: v for k, v in os.environ.items() if k != "NUMBA_CPU_NAME"}
+    generic = dict(os.environ, NUMBA_CPU_NAME="generic", NUMBA_CACHE_DIR=str(tmp_path))
+    run = [sys.executable, "-c", PINGS]
+    a = subprocess.run(run, env=host, check=True, capture_output=True, text=True).stdout
+    b = subprocess.run(run, env=generic, check=True, capture_output=True, text=True).stdout
+    assert a == b and len(a.split()) == 2

@@ -1,10 +1,12 @@
-"""Perception: the downward camera's grey image of the footprint and a pipe detector on it.
+"""Perception: the downward camera's grey image of the footprint and a pipe detector on it; a sonar.
 
 ``water`` holds the one parameter record of water and camera settings, ``pixels`` the image's
 pixel ↔ camera-metre conventions, ``image`` renders the footprint as the camera sees it,
 ``detector`` finds the pipe in a grey image (OpenCV, the optional extra ``vision``), ``follow``
 walks along the pipe's edges to the ends of the visible piece (and holds the least-squares edge
-fit both use), and ``camera`` joins them to the simulation's observation slots.
+fit both use), and ``camera`` joins them to the simulation's observation slots. ``sonar`` renders
+a multibeam profiler's ping, ``sonar_detect`` finds the pipe in it and ``sonar_track`` turns
+successive detections into the camera's observation (not yet used by the environments).
 """
 
 from pipefollow.files.compile_cache import configure_numba_cache
