@@ -299,15 +299,19 @@ def test_benchmark_prints_the_camera_and_water_in_one_line_under_its_head():
 
 def test_the_command_writes_the_committed_pages_and_checks_them(tmp_path):
     out = tmp_path / "results"
-    res = CliRunner().invoke(main, ["docs", "results", "--docs", str(DOCS), "--out", str(out)])
+    readme_copy = tmp_path / "README.md"
+    readme_copy.write_bytes((DOCS.parent / "README.md").read_bytes())
+    args = ["--docs", str(DOCS), "--readme", str(readme_copy)]
+    res = CliRunner().invoke(main, ["docs", "results", *args, "--out", str(out)])
     assert res.exit_code == 0, res.output
     assert sorted(p.name for p in out.iterdir()) == sorted(f"{n}.md" for n in results_pages.PAGES)
     for p in out.iterdir():
         assert p.read_bytes() == (RESULTS / p.name).read_bytes()
-    ok = CliRunner().invoke(main, ["docs", "results", "--docs", str(DOCS), "--out", str(out), "--check"])
+    assert readme_copy.read_bytes() == (DOCS.parent / "README.md").read_bytes()  # the README was current
+    ok = CliRunner().invoke(main, ["docs", "results", *args, "--out", str(out), "--check"])
     assert ok.exit_code == 0 and "up to date: 8 page(s)" in ok.output
     (out / "robustness.md").write_text("old\n")
-    stale = CliRunner().invoke(main, ["docs", "results", "--docs", str(DOCS), "--out", str(out), "--check"])
+    stale = CliRunner().invoke(main, ["docs", "results", *args, "--out", str(out), "--check"])
     assert stale.exit_code == 1 and stale.output.strip() == f"stale: {out / 'robustness.md'}"
     assert (out / "robustness.md").read_text() == "old\n"  # --check writes nothing
 
@@ -344,3 +348,38 @@ def test_the_reproduction_regenerates_to_the_committed_outputs_and_page(tmp_path
 
     fresh = results_pages.render("reproduction", docs)
     assert body(fresh) == body((RESULTS / "reproduction.md").read_text(encoding="utf-8"))
+
+
+# ---------------------------------------------------------------------------------------------
+# The README's claims table
+
+
+def test_the_readme_claims_table_is_what_the_stored_reports_give():
+    from pipefollow.experiments.results_pages import readme
+
+    assert not readme.stale(DOCS.parent / "README.md", DOCS)
+
+
+def test_a_changed_verdict_makes_the_readme_stale_and_the_command_rewrites_it(tmp_path):
+    from pipefollow.experiments.results_pages import readme
+
+    docs = tmp_path / "docs"
+    for name in ("reproduction", "repeats"):
+        (docs / name).mkdir(parents=True)
+        (docs / name / "REPORT.md").write_bytes((DOCS / name / "REPORT.md").read_bytes())
+    copy = tmp_path / "README.md"
+    copy.write_bytes((DOCS.parent / "README.md").read_bytes())
+    report = docs / "repeats" / "REPORT.md"
+    text = report.read_text(encoding="utf-8")
+    assert "SARSA: 12/30 repeats converged." in text
+    old, new = "SARSA: 12/30 repeats converged.", "SARSA: 13/30 repeats converged."
+    report.write_text(text.replace(old, new), "utf-8")
+    assert readme.stale(copy, docs)
+    args = ["--docs", str(docs), "--readme", str(copy), "--page", "reproduction", "--out", str(tmp_path)]
+    check = CliRunner().invoke(main, ["docs", "results", *args, "--check"])
+    assert check.exit_code == 1 and f"stale: the claims table of {copy}" in check.output
+    assert readme.update(copy, docs) and new in copy.read_text(encoding="utf-8")
+    assert not readme.stale(copy, docs)
+    copy.write_text("no markers\n")
+    with pytest.raises(results_pages.PageError, match="marker lines"):
+        readme.render(copy, docs)

@@ -40,13 +40,21 @@ def docs() -> None:
     "deep-vs-paper, robustness, sample-efficiency, perception [default: all].",
 )
 @click.option(
+    "--readme",
+    "readme_path",
+    default=None,
+    type=click.Path(dir_okay=False),
+    help="The README whose claims table is regenerated too (between its marker lines) "
+    "[default: README.md beside DOCS, if there is one].",
+)
+@click.option(
     "--check",
     is_flag=True,
     help="Write nothing; list the pages that differ from what the stored outputs give "
     "and exit with status 1 if any.",
 )
 @guard
-def results(docs_dir, out_dir, names, check):
+def results(docs_dir, out_dir, names, readme_path, check):
     """Write one results page per result from the stored outputs under DOCS.
 
     Tables are rendered from the stored CSV/JSON files and every number in a page's text is filled
@@ -62,14 +70,25 @@ def results(docs_dir, out_dir, names, check):
             )
     if not Path(docs_dir).is_dir():
         raise UserError(f"--docs '{docs_dir}': no such folder")
+    from pipefollow.experiments.results_pages import readme
+
     out = Path(out_dir) if out_dir else Path(docs_dir) / "results"
+    if readme_path is None and (Path(docs_dir).resolve().parent / "README.md").is_file():
+        readme_path = Path(docs_dir).resolve().parent / "README.md"
+    if readme_path is not None and not Path(readme_path).is_file():
+        raise UserError(f"--readme '{readme_path}': no such file")
     if check:
         stale = results_pages.stale_pages(docs_dir, out, names or None)
         for n in stale:
             click.echo(f"stale: {out / (n + '.md')}")
+        if readme_path is not None and readme.stale(Path(readme_path), Path(docs_dir)):
+            stale.append("README")
+            click.echo(f"stale: the claims table of {readme_path}")
         if stale:
             raise SystemExit(1)
         click.echo(f"up to date: {len(names or results_pages.PAGES)} page(s) in {out}")
         return
     for path in results_pages.write_pages(docs_dir, out, names or None):
         click.echo(f"wrote {path}")
+    if readme_path is not None and readme.update(Path(readme_path), Path(docs_dir)):
+        click.echo(f"wrote the claims table of {readme_path}")
