@@ -40,7 +40,9 @@ Regenerate the stored outputs with `python examples/deep-vs-paper.py --out FOLDE
 All four train on a new `random:mixed` pipe every episode, undisturbed, and every policy is
 judged on `{suite}` ({pipes} pipes) calm and disturbed (a current and camera noise). Per cell:
 the mean over training seeds of the mean return, the 95 % bootstrap interval of the seed whose
-interval lies lowest, the seeds' range of success rates, the mean paired difference to the
+interval lies lowest, the seeds' range of success rates (the pipe in view at ≥ 95 % of the
+decisions: these outputs were measured before success also asked that the pipe be followed
+forward, and their policies are not stored to judge them again), the mean paired difference to the
 heuristic, and the training's wall time per seed as stored (on a shared machine: compare orders of
 magnitude only):
 

@@ -84,7 +84,8 @@ At the presets' turbidities: {preset_models}.
 
 `heldout` (noise seed 0) through the detector, each controller against the
 heuristic on the *ideal* camera (paired per-pipe difference, 95 % bootstrap interval); success =
-the true pipe in view at ≥ 95 % of the decisions. "{pixels}" sees only the camera image
+the true pipe in view at ≥ 95 % of the decisions (measured before success also asked that the
+pipe be followed forward). "{pixels}" sees only the camera image
 ({pixel_steps} steps of PPO, seed {pixel_seed}; its training took {pixel_train} s as stored).
 
 {closed_loop}
