@@ -302,7 +302,9 @@ def end_info(ends) -> dict[str, np.ndarray]:
     into tensors or HDF5 datasets (TorchRL, Minari) takes it. One code gives a 0-d array, a batch an
     array of the batch's length.
     """
-    return {"reached_pipe_end": np.asarray(np.asarray(ends) == ep.PIPE_END)}
+    if isinstance(ends, int | np.integer):  # one environment, at every step: no array arithmetic
+        return {"reached_pipe_end": np.array(ends == ep.PIPE_END)}
+    return {"reached_pipe_end": np.asarray(ends) == ep.PIPE_END}
 
 
 def episode_summary(book: np.ndarray, states: np.ndarray) -> dict[str, np.ndarray]:
