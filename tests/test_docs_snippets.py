@@ -1,0 +1,299 @@
+"""Every code block of the README and of the documentation site runs, as a reader would paste it.
+
+*Python blocks* (```` ```python ````) of README.md and docs/**/*.md (the generated ``REPORT.md`` files
+of the result folders aside) run each in a fresh interpreter, in an empty temporary folder, with a
+timeout. Two HTML comments on the line just before a block's fence change that, visibly in the
+Markdown source and invisibly on the site:
+
+* ``<!-- continues -->``: the block continues the page's previous Python block (it runs after it,
+  in the same interpreter, and after the block that one continues, and so on);
+* ``<!-- no-run: REASON -->``: the block is not run (a cluster address, say); the reason is shown
+  in the skip. Such blocks are counted (:data:`MAX_NO_RUN`): they must stay rare.
+
+A block that imports an optional extra gets that extra's marker and is skipped without it
+(torch, Stable-Baselines3, TorchRL: ``deep``; Minari: ``rollouts``; TensorBoard: ``tensorboard``);
+one that needs OpenCV (``cv2``, ``camera="vision"``, the image observation) is skipped without it
+(the README's test command installs the extra ``vision``). Blocks that train for long are ``slow``
+(:data:`SLOW`).
+
+*Bash blocks* (```` ```bash ````): every ``pipefollow ...`` command (continuation lines joined, ``&&``
+and ``;`` split) names a command that exists and parses with the command's own options, types and
+choices (click's parser; a file an earlier command writes need not exist). A cheap subset runs for
+real (:func:`_cheap`): ``--help``, ``pipelines``, and ``evaluate`` of a built-in controller on a
+built-in or suite pipe (a few seconds each); trainings, reproductions, benchmarks and files of
+earlier commands are only parsed.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import re
+import shlex
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import click
+import pytest
+
+from pipefollow import cli
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGES = [ROOT / "README.md"] + sorted(
+    p for p in (ROOT / "docs").rglob("*.md") if p.name != "REPORT.md"  # REPORT.md: generated results
+)
+FENCE = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```[ \t]*$", flags=re.DOTALL | re.MULTILINE)
+DIRECTIVE = re.compile(r"<!--\s*(continues|no-run:\s*(?P<reason>.*?))\s*-->\s*\Z")
+MAX_NO_RUN = 3  # blocks that do not run: each justified beside it in the Markdown
+TIMEOUT_S = 600
+
+# the optional extras a block may need: (pattern in the code, marker, module that must be importable)
+EXTRAS = [
+    (r"^\s*(import|from)\s+(torch|torchrl|stable_baselines3)\b", "deep", ("torch", "stable_baselines3")),
+    (r"^\s*(import|from)\s+torchrl\b", "deep", ("torchrl",)),
+    (r"^\s*(import|from)\s+minari\b", "rollouts", ("minari",)),
+    (r"^\s*(import|from)\s+tensorboard\b|tensorboard=", "tensorboard", ("tensorboard",)),
+    (r"^\s*(import|from)\s+cv2\b|camera=\"vision\"|observation=\"image\"|PipelineFollowingImage", None, ("cv2",)),
+]
+# blocks that train for long (page name, a string of the block): slow, they still run in CI
+SLOW = [("deep-rl.md", "make_model(")]
+
+
+@dataclass(frozen=True)
+class Block:
+    """One fenced block: its page, language, number among the page's blocks, line, code, directive."""
+
+    page: Path
+    lang: str
+    index: int
+    line: int
+    code: str
+    continues: bool
+    no_run: str | None
+
+    @property
+    def name(self) -> str:
+        return f"{self.page.relative_to(ROOT)}:{self.line}"
+
+
+def _blocks(page: Path, lang: str | None = None) -> list[Block]:
+    """The page's fenced blocks of one language (all when None), numbered among those."""
+    text = page.read_text(encoding="utf-8")
+    found = []
+    for m in FENCE.finditer(text):
+        if lang is not None and m.group(1) != lang:
+            continue
+        before = text[: m.start()].rstrip("\n")
+        d = DIRECTIVE.search(before.splitlines()[-1] if before else "")
+        found.append(
+            Block(
+                page=page,
+                lang=m.group(1),
+                index=len(found),
+                line=text.count("\n", 0, m.start()) + 1,
+                code=m.group(2),
+                continues=bool(d and d.group(1) == "continues"),
+                no_run=d.group("reason") if d and d.group("reason") is not None else None,
+            )
+        )
+    return found
+
+
+BLOCKS = [b for page in PAGES for b in _blocks(page)]
+PYTHON = [b for b in BLOCKS if b.lang == "python"]
+BASH = [b for b in BLOCKS if b.lang == "bash"]
+
+
+def _chain(block: Block) -> list[Block]:
+    """The block and the blocks it continues (any language: a Python block may continue a bash one)."""
+    chain = [block]
+    page_blocks = _blocks(block.page)
+    while chain[0].continues:
+        assert chain[0].index > 0, f"{chain[0].name}: 'continues' on the page's first block"
+        chain.insert(0, page_blocks[chain[0].index - 1])
+    return chain
+
+
+def _program(block: Block) -> str:
+    """The Python code a block runs: the Python blocks it continues first."""
+    return "\n".join(b.code for b in _chain(block) if b.lang == "python")
+
+
+def _shell(block: Block) -> list[str]:
+    """The bash blocks a Python block continues: they run first (a reader's earlier commands)."""
+    chain = _chain(block)
+    langs = [b.lang for b in chain]
+    assert langs == sorted(langs, key=lambda lang: lang != "bash"), f"{block.name}: bash after Python"
+    return [b.code for b in chain if b.lang == "bash"]
+
+
+def _marks(block: Block) -> list:
+    code = _program(block) + "\n".join(_shell(block))
+    marks = []
+    for pattern, marker, modules in EXTRAS:
+        if re.search(pattern, code, flags=re.MULTILINE):
+            if marker:
+                marks.append(getattr(pytest.mark, marker))
+            missing = [m for m in modules if importlib.util.find_spec(m) is None]
+            if missing:
+                marks.append(pytest.mark.skip(reason=f"needs {', '.join(missing)}"))
+    if any(block.page.name == page and s in code for page, s in SLOW):
+        marks.append(pytest.mark.slow)
+    if block.no_run is not None:
+        marks.append(pytest.mark.skip(reason=f"no-run in the Markdown: {block.no_run}"))
+    return marks
+
+
+def _clean_env(tmp_path: Path) -> dict[str, str]:
+    """A reader's environment: the venv's bin first on the PATH, Minari's default root empty."""
+    path = f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"
+    minari_root = str(tmp_path.parent / f"{tmp_path.name}-minari-home")  # not ~/.minari: tests write no home
+    return {**os.environ, "PATH": path, "MINARI_DATASETS_PATH": minari_root, "MPLBACKEND": "Agg"}
+
+
+@pytest.mark.parametrize("block", [pytest.param(b, marks=_marks(b), id=b.name) for b in PYTHON])
+def test_the_python_block_runs(block, tmp_path):
+    for code in _shell(block):
+        res = subprocess.run(
+            ["bash", "-eu", "-c", code],
+            cwd=tmp_path,
+            env=_clean_env(tmp_path),
+            capture_output=True,
+            text=True,
+            timeout=TIMEOUT_S,
+        )
+        assert res.returncode == 0, f"{block.name}, the bash block it continues:\n{res.stderr[-3000:]}"
+    res = subprocess.run(
+        [sys.executable, "-c", _program(block)],
+        cwd=tmp_path,
+        env=_clean_env(tmp_path),
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT_S,
+    )
+    assert res.returncode == 0, f"{block.name}:\n{res.stderr[-3000:]}"
+
+
+def test_the_pages_have_python_blocks_and_few_skips():
+    pages = {b.page.relative_to(ROOT).as_posix() for b in PYTHON}
+    assert {"README.md", "docs/index.md", "docs/getting-started.md", "docs/guides/deep-rl.md"} <= pages
+    assert sum(b.no_run is not None for b in PYTHON + BASH) <= MAX_NO_RUN
+
+
+def test_the_directives_are_understood():
+    """A misspelt directive would silently run a block alone or run a cluster's block."""
+    bad = []
+    for page in PAGES:
+        for n, line in enumerate(page.read_text(encoding="utf-8").splitlines(), 1):
+            if re.search(r"<!--\s*(continue|no-?run)", line) and not DIRECTIVE.search(line.rstrip()):
+                bad.append(f"{page.relative_to(ROOT)}:{n}: {line}")
+    assert bad == []
+
+
+def test_a_directive_is_read_only_just_before_its_block(tmp_path):
+    page = tmp_path / "p.md"
+    page.write_text(
+        "```python\na = 1\n```\n<!-- continues -->\n```python\nprint(a)\n```\n"
+        "<!-- no-run: needs a cluster -->\n\ntext\n```python\nb = 2\n```\n"
+        "<!-- no-run: a cluster -->\n```python\nray.init('ray://x')\n```\n",
+        encoding="utf-8",
+    )
+    blocks = _blocks(page)
+    assert [(b.continues, b.no_run) for b in blocks] == [
+        (False, None), (True, None), (False, None), (False, "a cluster")
+    ]  # fmt: skip
+    assert _program(blocks[1]) == "a = 1\n\nprint(a)\n"
+
+
+# ---------------------------------------------------------------------------------------- bash
+
+
+def _commands(block: Block) -> list[list[str]]:
+    """The ``pipefollow ...`` commands of a bash block, each as its arguments after ``pipefollow``."""
+    found = []
+    for line in block.code.replace("\\\n", " ").splitlines():
+        for part in re.split(r"&&|;|\|", line):
+            try:
+                words = shlex.split(part, comments=True)
+            except ValueError:  # a quote that spans a split point: not a pipefollow command here
+                continue
+            while words and re.fullmatch(r"\w+=\S*", words[0]):  # VAR=value before the command
+                words = words[1:]
+            if words[:3] in (["python", "-m", "pipefollow"], [".venv/bin/python", "-m", "pipefollow"]):
+                words = ["pipefollow", *words[3:]]
+            if words and words[0] in ("pipefollow", ".venv/bin/pipefollow") and len(words) > 1:
+                found.append(words[1:])
+    return found
+
+
+COMMANDS = [(b, words) for b in BASH if b.no_run is None for words in _commands(b)]
+
+
+def _resolve(words: list[str]) -> tuple[click.Command, list[str], str]:
+    """The click command the words name, the arguments left for it, and its name."""
+    cmd, name = cli.main, "pipefollow"
+    while isinstance(cmd, click.Group) and words and not words[0].startswith("-"):
+        sub = cmd.get_command(click.Context(cmd), words[0])
+        assert sub is not None, f"{name} has no command {words[0]!r}"
+        cmd, name, words = sub, f"{name} {words[0]}", words[1:]
+    return cmd, words, name
+
+
+def _cheap(words: list[str]) -> bool:
+    """Commands that run for real: help, listings, and an evaluation of built-in things (seconds)."""
+    if "--help" in words or "-h" in words or words in (["pipelines"], ["suites"]):
+        return True
+    if words[:1] != ["evaluate"]:
+        return False
+    opts = dict(zip(words[1::2], words[2::2], strict=False))
+    return (
+        opts.get("--controller", "heuristic") in ("heuristic", "los")
+        and not any(o in opts for o in ("--plot", "--animate", "--out"))
+        and not opts.get("--pipeline", "paper-left").endswith(".json")
+    )
+
+
+@pytest.mark.parametrize(
+    "block, words", [pytest.param(b, w, id=f"{b.name}:{' '.join(w)[:60]}") for b, w in COMMANDS]
+)
+def test_the_command_and_its_options_exist(block, words, tmp_path):
+    cmd, args, name = _resolve(words)
+    known = {o for p in cmd.params for o in (*p.opts, *p.secondary_opts)} | {"--help", "-h"}
+    unknown = [w for w in args if w.startswith("-") and not w[1:2].isdigit() and w.split("=")[0] not in known]
+    assert unknown == [], f"{block.name}: {name} has no option {unknown}"
+    if "--help" in args or "-h" in args:
+        return
+    # click parses the arguments: types, choices, counts; a path an earlier command writes may be missing
+    ctx = click.Context(cmd, info_name=name, resilient_parsing=False)
+    try:
+        with ctx:
+            cmd.parse_args(ctx, list(args))
+    except click.BadParameter as err:
+        if "does not exist" not in str(err):
+            raise AssertionError(f"{block.name}: pipefollow {' '.join(words)}: {err.format_message()}") from err
+    except click.UsageError as err:
+        raise AssertionError(f"{block.name}: pipefollow {' '.join(words)}: {err.format_message()}") from err
+
+
+@pytest.mark.parametrize(
+    "block, words",
+    [pytest.param(b, w, id=f"{b.name}:{' '.join(w)[:60]}") for b, w in COMMANDS if _cheap(w)],
+)
+def test_the_cheap_commands_run(block, words, tmp_path):
+    res = subprocess.run(
+        [sys.executable, "-m", "pipefollow", *words],
+        cwd=tmp_path,
+        env=_clean_env(tmp_path),
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT_S,
+    )
+    assert res.returncode == 0, f"{block.name}: pipefollow {' '.join(words)}\n{res.stderr[-3000:]}"
+    assert res.stdout.strip()
+
+
+def test_the_pages_have_commands_and_some_run():
+    assert len(COMMANDS) >= 40
+    assert sum(_cheap(w) for _, w in COMMANDS) >= 5
