@@ -13,8 +13,8 @@ Markdown source and invisibly on the site:
 A block that imports an optional extra gets that extra's marker and is skipped without it
 (torch, Stable-Baselines3, TorchRL: ``deep``; Minari: ``rollouts``; TensorBoard: ``tensorboard``);
 one that needs OpenCV (``cv2``, ``camera="vision"``, the image observation) is skipped without it
-(the README's test command installs the extra ``vision``). Blocks that train for long are ``slow``
-(:data:`SLOW`).
+(the README's test command installs the extra ``vision``). A training in a block is kept short (a few
+thousand steps, the text saying what a real one takes), so that none needs the marker ``slow``.
 
 *Bash blocks* (```` ```bash ````): every ``pipefollow ...`` command (continuation lines joined, ``&&``
 and ``;`` split) names a command that exists and parses with the command's own options, types and
@@ -30,6 +30,7 @@ import importlib.util
 import os
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 from dataclasses import dataclass
@@ -55,10 +56,8 @@ EXTRAS = [
     (r"^\s*(import|from)\s+torchrl\b", "deep", ("torchrl",)),
     (r"^\s*(import|from)\s+minari\b", "rollouts", ("minari",)),
     (r"^\s*(import|from)\s+tensorboard\b|tensorboard=", "tensorboard", ("tensorboard",)),
-    (r"^\s*(import|from)\s+cv2\b|camera=\"vision\"|observation=\"image\"|PipelineFollowingImage", None, ("cv2",)),
+    (r'^\s*(import|from)\s+cv2\b|camera="vision"|observation="image"|PipelineFollowingImage', None, ("cv2",)),
 ]
-# blocks that train for long (page name, a string of the block): slow, they still run in CI
-SLOW = [("deep-rl.md", "make_model(")]
 
 
 @dataclass(frozen=True)
@@ -139,8 +138,6 @@ def _marks(block: Block) -> list:
             missing = [m for m in modules if importlib.util.find_spec(m) is None]
             if missing:
                 marks.append(pytest.mark.skip(reason=f"needs {', '.join(missing)}"))
-    if any(block.page.name == page and s in code for page, s in SLOW):
-        marks.append(pytest.mark.slow)
     if block.no_run is not None:
         marks.append(pytest.mark.skip(reason=f"no-run in the Markdown: {block.no_run}"))
     return marks
@@ -241,18 +238,22 @@ def _resolve(words: list[str]) -> tuple[click.Command, list[str], str]:
     return cmd, words, name
 
 
+READ_ONLY = ("trials",)  # commands that only read the repository's files: they run in its root
+
+
 def _cheap(words: list[str]) -> bool:
-    """Commands that run for real: help, listings, and an evaluation of built-in things (seconds)."""
-    if "--help" in words or "-h" in words or words in (["pipelines"], ["suites"]):
+    """Commands that run for real, in seconds: help, listings, the export of a few suite pipes, and
+    an evaluation of a built-in controller on a built-in or suite pipe (its plot or animation too)."""
+    if "--help" in words or "-h" in words or words in (["pipelines"], ["suites"]) or words[:1] == ["trials"]:
         return True
+    opts = dict(zip(words[1::2], words[2::2], strict=False))
+    if words[:2] == ["suites", "export"]:
+        return int(opts.get("--pipes", "100")) <= 10
     if words[:1] != ["evaluate"]:
         return False
-    opts = dict(zip(words[1::2], words[2::2], strict=False))
-    return (
-        opts.get("--controller", "heuristic") in ("heuristic", "los")
-        and not any(o in opts for o in ("--plot", "--animate", "--out"))
-        and not opts.get("--pipeline", "paper-left").endswith(".json")
-    )
+    return opts.get("--controller", "heuristic") in ("heuristic", "los") and not opts.get(
+        "--pipeline", "paper-left"
+    ).endswith(".json")
 
 
 @pytest.mark.parametrize(
@@ -270,21 +271,28 @@ def test_the_command_and_its_options_exist(block, words, tmp_path):
     try:
         with ctx:
             cmd.parse_args(ctx, list(args))
-    except click.BadParameter as err:
-        if "does not exist" not in str(err):
-            raise AssertionError(f"{block.name}: pipefollow {' '.join(words)}: {err.format_message()}") from err
     except click.UsageError as err:
-        raise AssertionError(f"{block.name}: pipefollow {' '.join(words)}: {err.format_message()}") from err
+        missing_file = isinstance(err, click.BadParameter) and "does not exist" in str(err)
+        assert missing_file, f"{block.name}: pipefollow {' '.join(words)}: {err.format_message()}"
+
+
+def _first_of_each(commands):
+    seen, out = set(), []
+    for block, words in commands:
+        if tuple(words) not in seen:
+            seen.add(tuple(words))
+            out.append((block, words))
+    return out
 
 
 @pytest.mark.parametrize(
     "block, words",
-    [pytest.param(b, w, id=f"{b.name}:{' '.join(w)[:60]}") for b, w in COMMANDS if _cheap(w)],
+    [pytest.param(b, w, id=f"{b.name}:{' '.join(w)[:60]}") for b, w in _first_of_each(COMMANDS) if _cheap(w)],
 )
 def test_the_cheap_commands_run(block, words, tmp_path):
     res = subprocess.run(
         [sys.executable, "-m", "pipefollow", *words],
-        cwd=tmp_path,
+        cwd=ROOT if words[0] in READ_ONLY else tmp_path,
         env=_clean_env(tmp_path),
         capture_output=True,
         text=True,
@@ -292,8 +300,37 @@ def test_the_cheap_commands_run(block, words, tmp_path):
     )
     assert res.returncode == 0, f"{block.name}: pipefollow {' '.join(words)}\n{res.stderr[-3000:]}"
     assert res.stdout.strip()
+    written = [v for o, v in zip(words, words[1:], strict=False) if o in ("--plot", "--animate", "--out")]
+    assert [w for w in written if not (tmp_path / w).exists()] == []
 
 
 def test_the_pages_have_commands_and_some_run():
     assert len(COMMANDS) >= 40
     assert sum(_cheap(w) for _, w in COMMANDS) >= 5
+
+
+COMPLETION = [
+    (b, line.split("#")[0].strip())
+    for b in BASH
+    for line in b.code.splitlines()
+    if "_PIPEFOLLOW_COMPLETE=" in line
+]
+
+
+@pytest.mark.skipif(shutil.which("pipefollow", path=_clean_env(ROOT)["PATH"]) is None, reason="no script")
+@pytest.mark.parametrize("block, line", [pytest.param(b, line, id=line[:45]) for b, line in COMPLETION])
+def test_the_shell_completion_lines_give_a_script(block, line, tmp_path):
+    """The completion lines; the bash one is evaluated in bash, which then completes pipefollow."""
+    shell = re.search(r"_PIPEFOLLOW_COMPLETE=(\w+)_source", line).group(1)
+    if shell == "bash":
+        code = f"{line}\ncomplete -p pipefollow"
+    else:  # zsh and fish may not be installed: the script the line feeds to them
+        code = line.split("|")[0].removeprefix('eval "$(').removesuffix(')"')
+    env = _clean_env(tmp_path)
+    res = subprocess.run(["bash", "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert res.returncode == 0, f"{block.name}: {line}\n{res.stderr}"
+    assert "_pipefollow_completion" in res.stdout
+
+
+def test_the_completion_lines_are_found():
+    assert {re.search(r"=(\w+)_source", line).group(1) for _, line in COMPLETION} == {"bash", "zsh", "fish"}
