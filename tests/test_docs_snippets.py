@@ -33,6 +33,7 @@ import shlex
 import shutil
 import subprocess
 import sys
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -45,7 +46,10 @@ ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md"] + sorted(
     p for p in (ROOT / "docs").rglob("*.md") if p.name != "REPORT.md"  # REPORT.md: generated results
 )
-FENCE = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```[ \t]*$", flags=re.DOTALL | re.MULTILINE)
+FENCE = re.compile(  # a fence may be indented (in a list item): its code is dedented
+    r"^(?P<indent>[ \t]*)```(?P<lang>\w*)[^\n]*\n(?P<code>.*?)^(?P=indent)```[ \t]*$",
+    flags=re.DOTALL | re.MULTILINE,
+)
 DIRECTIVE = re.compile(r"<!--\s*(continues|no-run:\s*(?P<reason>.*?))\s*-->\s*\Z")
 MAX_NO_RUN = 3  # blocks that do not run: each justified beside it in the Markdown
 TIMEOUT_S = 600
@@ -82,17 +86,17 @@ def _blocks(page: Path, lang: str | None = None) -> list[Block]:
     text = page.read_text(encoding="utf-8")
     found = []
     for m in FENCE.finditer(text):
-        if lang is not None and m.group(1) != lang:
+        if lang is not None and m.group("lang") != lang:
             continue
         before = text[: m.start()].rstrip("\n")
-        d = DIRECTIVE.search(before.splitlines()[-1] if before else "")
+        d = DIRECTIVE.search(before.splitlines()[-1].strip() if before else "")
         found.append(
             Block(
                 page=page,
-                lang=m.group(1),
+                lang=m.group("lang"),
                 index=len(found),
                 line=text.count("\n", 0, m.start()) + 1,
-                code=m.group(2),
+                code=textwrap.dedent(m.group("code")),
                 continues=bool(d and d.group(1) == "continues"),
                 no_run=d.group("reason") if d and d.group("reason") is not None else None,
             )
