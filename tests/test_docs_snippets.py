@@ -188,6 +188,7 @@ def test_the_directives_are_understood():
     bad = []
     for page in PAGES:
         for n, line in enumerate(page.read_text(encoding="utf-8").splitlines(), 1):
+            line = re.sub(r"`[^`]*`", "", line)  # inline code names the comments, it is none
             if re.search(r"<!--\s*(continue|no-?run)", line) and not DIRECTIVE.search(line.rstrip()):
                 bad.append(f"{page.relative_to(ROOT)}:{n}: {line}")
     assert bad == []
