@@ -10,11 +10,11 @@ Markdown source and invisibly on the site:
 * ``<!-- no-run: REASON -->``: the block is not run (a cluster address, say); the reason is shown
   in the skip. Such blocks are counted (:data:`MAX_NO_RUN`): they must stay rare.
 
-A block that imports an optional extra gets that extra's marker and is skipped without it
-(torch, Stable-Baselines3, TorchRL: ``deep``; Minari: ``rollouts``; TensorBoard: ``tensorboard``);
-one that needs OpenCV (``cv2``, ``camera="vision"``, the image observation) is skipped without it
-(the README's test command installs the extra ``vision``). A training in a block is kept short (a few
-thousand steps, the text saying what a real one takes), so that none needs the marker ``slow``.
+A block that imports an optional extra gets that extra's marker and is skipped without it (torch,
+Stable-Baselines3, TorchRL, ``pipefollow.training.deep``: ``deep``; Minari: ``rollouts``; TensorBoard:
+``tensorboard``); one that needs OpenCV (``cv2``, ``camera="vision"``, the image observation) is
+skipped without it (the README's test command installs the extra ``vision``). A training in a block
+is kept short (a few thousand steps, the text saying what a real one takes): none needs ``slow``.
 
 *Bash blocks* (```` ```bash ````): every ``pipefollow ...`` command (continuation lines joined, ``&&``
 and ``;`` split) names a command that exists and parses with the command's own options, types and
@@ -56,8 +56,12 @@ TIMEOUT_S = 600
 
 # the optional extras a block may need: (pattern in the code, marker, module that must be importable)
 EXTRAS = [
-    (r"^\s*(import|from)\s+(torch|torchrl|stable_baselines3)\b", "deep", ("torch", "stable_baselines3")),
-    (r"^\s*(import|from)\s+torchrl\b", "deep", ("torchrl",)),
+    (
+        r"^\s*(import|from)\s+(torch|torchrl|stable_baselines3|pipefollow\.training\.deep)\b",
+        "deep",
+        ("torch", "stable_baselines3"),
+    ),
+    (r"^\s*(import|from)\s+torchrl\b", None, ("torchrl",)),
     (r"^\s*(import|from)\s+minari\b", "rollouts", ("minari",)),
     (r"^\s*(import|from)\s+tensorboard\b|tensorboard=", "tensorboard", ("tensorboard",)),
     (r'^\s*(import|from)\s+cv2\b|camera="vision"|observation="image"|PipelineFollowingImage', None, ("cv2",)),
@@ -137,7 +141,7 @@ def _marks(block: Block) -> list:
     marks = []
     for pattern, marker, modules in EXTRAS:
         if re.search(pattern, code, flags=re.MULTILINE):
-            if marker:
+            if marker and marker not in {m.name for m in marks}:
                 marks.append(getattr(pytest.mark, marker))
             missing = [m for m in modules if importlib.util.find_spec(m) is None]
             if missing:
