@@ -1,8 +1,7 @@
 """The documentation site (mkdocs.yml): it builds with ``--strict``, and its own pages' code runs.
 
 The build needs the extra ``docs`` and is skipped without it; it writes to a temporary folder,
-never into the repository. The Python blocks of the home page and of getting started run each in
-a fresh interpreter, as a reader would paste them.
+never into the repository. The code blocks of every page run in tests/test_docs_snippets.py.
 """
 
 from __future__ import annotations
@@ -10,12 +9,10 @@ from __future__ import annotations
 import importlib.util
 import os
 import re
-import shlex
 import subprocess
 import sys
 from pathlib import Path
 
-import click
 import pytest
 
 from pipefollow import cli
@@ -24,12 +21,7 @@ pytestmark = pytest.mark.docs
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
-PAGES_WITH_CODE = ("index.md", "getting-started.md")
 HAS_MKDOCS = all(importlib.util.find_spec(m) is not None for m in ("mkdocs", "mkdocstrings", "mkdocs_click"))
-
-
-def _blocks(page: str, lang: str) -> list[str]:
-    return re.findall(rf"```{lang}\n(.*?)```", (DOCS / page).read_text(encoding="utf-8"), flags=re.DOTALL)
 
 
 @pytest.fixture(scope="module")
@@ -62,34 +54,3 @@ def test_the_reference_pages_show_no_raw_sphinx_roles(site):
     for page in ("environment", "api"):
         html = (site / "reference" / page / "index.html").read_text(encoding="utf-8")
         assert re.search(r":(class|func|mod|data|meth|attr):<code>", html) is None, page
-
-
-@pytest.mark.parametrize(
-    "page, index",
-    [(page, i) for page in PAGES_WITH_CODE for i in range(len(_blocks(page, "python")))],
-)
-def test_the_pages_python_blocks_run(page, index, tmp_path):
-    code = _blocks(page, "python")[index]
-    res = subprocess.run(
-        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600
-    )
-    assert res.returncode == 0, f"{page}, block {index}:\n{res.stderr}"
-    assert list(tmp_path.iterdir()) == []  # it writes nothing
-
-
-def test_the_pages_have_python_blocks():
-    assert all(_blocks(page, "python") for page in PAGES_WITH_CODE)
-
-
-def test_every_option_getting_started_uses_exists():
-    lines = "\n".join(_blocks("getting-started.md", "bash")).replace("\\\n", " ").splitlines()
-    commands = [shlex.split(line, comments=True) for line in lines]
-    commands = [words[1:] for words in commands if words[:1] == ["pipefollow"]]
-    assert len(commands) >= 5
-    unknown = []
-    for words in commands:
-        assert words[0] in cli.COMMANDS, words
-        cmd = cli.main.get_command(click.Context(cli.main), words[0])
-        known = {o for p in cmd.params for o in (*p.opts, *p.secondary_opts)} | {"--help", "-h"}
-        unknown += [f"{words[0]} {w}" for w in words if w.startswith("--") and w not in known]
-    assert unknown == []

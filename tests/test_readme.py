@@ -1,5 +1,5 @@
-"""The commands of the README and its guides (docs/guides/): what they write is ignored by git, and
-the options they use exist."""
+"""The commands of the README and its guides (docs/guides/): what they write is ignored by git (that
+they exist and parse: tests/test_docs_snippets.py)."""
 
 from __future__ import annotations
 
@@ -9,10 +9,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
-import click
 import pytest
-
-from pipefollow import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs" / "guides").glob("*.md"))]
@@ -54,16 +51,3 @@ def test_what_the_readme_commands_write_is_ignored_by_git(path):
     probe = path.rstrip("/") + ("/x" if not Path(path).suffix else "")
     res = subprocess.run(["git", "check-ignore", "-q", probe], cwd=ROOT)
     assert res.returncode == 0, f"{path} is not in .gitignore"
-
-
-def test_every_option_the_readme_uses_exists():
-    unknown = []
-    for words in _commands():
-        if not words or words[0] not in cli.COMMANDS:
-            continue
-        cmd = cli.main.get_command(click.Context(cli.main), words[0])
-        if isinstance(cmd, click.Group) and len(words) > 1 and words[1] in cmd.commands:
-            cmd, words = cmd.commands[words[1]], words[1:]
-        known = {o for p in cmd.params for o in (*p.opts, *p.secondary_opts)} | {"--help", "-h"}
-        unknown += [f"{words[0]} {w}" for w in words if w.startswith("--") and w.split("=")[0] not in known]
-    assert unknown == []
