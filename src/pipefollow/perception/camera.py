@@ -20,7 +20,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from pipefollow.perception.detector import NOT_FOUND, Detection, detect_pipe, require_cv2
-from pipefollow.perception.image import Renderer, Textures, make_textures
+from pipefollow.perception.image import SCENES, Renderer, Textures
 from pipefollow.perception.pixels import column_at, pixel_grid, row_at
 from pipefollow.perception.water import Water, water_from
 from pipefollow.sim import decision as sim
@@ -110,8 +110,12 @@ class VisionCamera:
         self._last = Sighting()  # the last detection's slots
 
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
-        """A new scene (seabed and growth textures from ``rng``) and its first image."""
-        self._textures = make_textures(rng)
+        """A new scene (seabed and growth textures from ``rng``) and its first image.
+
+        The textures come from :data:`~pipefollow.perception.image.SCENES`: a seed's scene is made
+        once (the generator left as drawing it leaves it), and without marine growth its tile stays blank.
+        """
+        self._textures = SCENES.draw(rng, growth=self.settings.water.growth > 0.0)
         self._last = Sighting()
         self.detection = NOT_FOUND  # no tracking across episodes
         self._look(state, points, cum, rng)
