@@ -53,7 +53,8 @@ from numba import njit
 from pipefollow.sim.camera import clip_segment
 from pipefollow.sim.controller import wrap_angle as wrap
 
-CHI2_2DOF_99 = 9.2103  # the Mahalanobis gate: 99 % of a correct detection's innovations fall inside
+CHI2_2DOF_99 = 9.2103  # Mahalanobis gates: 99 % of a correct detection's innovations fall inside
+CHI2_1DOF_99 = 6.6349
 
 
 class NavParams(NamedTuple):
@@ -80,24 +81,30 @@ class TrackParams(NamedTuple):
     point_sd: float = 0.05  # a detected end's error (m) along each axis: 1.6 pixels
     bend_sd: float = 0.2  # the pipe's direction's random walk (rad per √m travelled): arcs and bends
     shift_sd: float = 0.03  # the pipe's offset's random walk (m per √m travelled)
-    gate: float = CHI2_2DOF_99  # Mahalanobis gate (squared)
-    max_misses: int = 3  # frames a leg is carried without a detection
-    max_offset_sd: float = 0.4  # m: a leg whose offset is this uncertain is lost
-    confirm: int = 2  # frames a second leg must be seen in to take over (or show without a seen end)
-    corner_reach: float = 0.6  # m: a rejected detection turns the pipe if its corner is this near the seen end
-    parallel_deg: float = 25.0  # a rejected detection this close in direction is a shifted line, not a turn
+    gate: float = CHI2_2DOF_99  # Mahalanobis gate of a detection's line (squared, 2 degrees of freedom)
+    point_gate: float = CHI2_1DOF_99  # ... and of a detected end on the line (1 degree of freedom)
+    max_misses: int = 3  # frames the line (and a far end beyond a bend) is carried without a detection
+    max_offset_sd: float = 0.4  # m: a line whose offset is this uncertain is lost
+    confirm: int = 2  # frames in a row a new line must be seen in to replace a tracked one in view
     border: float = 0.06  # m: a detected far end this near the footprint's border is where the pipe leaves it
+    far_margin: float = 0.25  # m: a far end beyond a bend this far outside the footprint still shows (on its border)
+    far_match: float = 0.4  # m: a new line whose end lies this near the far end beyond a bend continues the pipe
 
 
 TRACK = TrackParams()
 
-# slots of a track's state array
-TH1, D1, P1, ACTIVE1, MISS1, HAS_END, END_X, END_Y = 0, 1, 2, 5, 6, 7, 8, 9  # P1: Pθθ, Pθd, Pdd
-TH2, D2, P2, ACTIVE2, MISS2, HITS2 = 10, 11, 12, 15, 16, 17
-SIDE, CONFIDENCE, LAST_TH, EVENT = 18, 19, 20, 21
-STATE_SIZE = 22
-# EVENT: what the last frame's detection did
-NO_DETECTION, ACCEPTED, SECOND_LEG, REJECTED, STARTED = 0.0, 1.0, 2.0, 3.0, 4.0
+# slots of a track's state array: the line, its covariance (Pθθ, Pθd, Pdd), the far end seen
+# beyond a bend (off the line), the end seen on the line (where it ends or turns), the candidate
+# line, and bookkeeping
+TH, D, P, ACTIVE, MISS = 0, 1, 2, 5, 6
+HAS_FAR, FAR_X, FAR_Y, FAR_AGE = 7, 8, 9, 10
+HAS_END, END_X, END_Y = 11, 12, 13
+C_TH, C_D, C_P, C_ACTIVE, C_HITS = 14, 15, 16, 19, 20
+SIDE, CONFIDENCE, HAD_LINE, EVENT = 21, 22, 23, 24  # HAD_LINE: a line was tracked (it is still predicted)
+NEAR_X, NEAR_Y, HAS_NEAR = 25, 26, 27  # this frame's accepted near end
+STATE_SIZE = 28
+# EVENT: what the frame's detection did
+NO_DETECTION, ACCEPTED, BEND, REJECTED, STARTED, REPLACED = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0
 # slots of the output
 OUT_IN_VIEW, OUT_X1, OUT_Y1, OUT_X2, OUT_Y_NEAR, OUT_SIDE = 0, 1, 2, 3, 4, 5
 OUT_SIZE = 6
@@ -213,9 +220,48 @@ def correct(T, o, nu_t, nu_d, s_tt, s_td, s_dd, r_tt, r_td, r_dd):
 
 
 @njit(cache=True)
+def point_innovation(T, o, px, py, point_sd):
+    """A detected end ``p`` against line ``o``: ``(ν, jθ, S, m²)``.
+
+    The end lies on the line if ``r = n(θ)·p − d`` is 0; linearized, ``r ≈ r₀ + jθ·δθ − δd +
+    n·δp`` with ``jθ = −u·p``, so ``S = J P Jᵀ + σ²`` (J = (jθ, −1)) and ``ν = −r₀``.
+    """
+    th, d = T[o], T[o + 1]
+    c, s = math.cos(th), math.sin(th)
+    nu = d - (px * c - py * s)
+    j = -(px * s + py * c)
+    ptt, ptd, pdd = T[o + 2], T[o + 3], T[o + 4]
+    S = j * j * ptt - 2.0 * j * ptd + pdd + point_sd * point_sd
+    return nu, j, S, nu * nu / S
+
+
+@njit(cache=True)
+def point_correct(T, o, nu, j, S):
+    """Kalman update of line ``o`` with a detected end's innovation (:func:`point_innovation`).
+
+    The state moves by ``−K·r₀ = K·ν`` with ``K = P Jᵀ / S`` and the covariance becomes
+    ``P − K S Kᵀ`` (symmetric by construction).
+    """
+    ptt, ptd, pdd = T[o + 2], T[o + 3], T[o + 4]
+    # P Jᵀ with J = (j, −1)
+    g0 = ptt * j - ptd
+    g1 = ptd * j - pdd
+    k0, k1 = g0 / S, g1 / S
+    # r = J x − (measured): x⁺ = x − K·r₀ = x + K·(−r₀) = x + K·ν', where ν' = −r₀ = ν
+    T[o] = wrap(T[o] - k0 * nu)
+    T[o + 1] = T[o + 1] - k1 * nu
+    T[o + 2] = ptt - k0 * g0
+    T[o + 3] = ptd - k0 * g1
+    T[o + 4] = pdd - k1 * g1
+
+
+@njit(cache=True)
 def _start(T, o, th, d, r_tt, r_td, r_dd):
     T[o], T[o + 1] = th, d
     T[o + 2], T[o + 3], T[o + 4] = r_tt, r_td, r_dd
+
+
+PARALLEL = math.sin(math.radians(25.0))  # lines closer in direction than this have no corner worth the name
 
 
 @njit(cache=True)
@@ -224,8 +270,7 @@ def crossing(th1, d1, th2, d2):
     sn = math.sin(th1 - th2)  # u1·n2
     if abs(sn) < 1e-9:
         return math.nan
-    cs = math.cos(th1 - th2)  # n1·n2
-    return (d2 - d1 * cs) / sn
+    return (d2 - d1 * math.cos(th1 - th2)) / sn
 
 
 @njit(cache=True)
@@ -253,41 +298,59 @@ def in_footprint(th, d, t_from, t_to, hw, depth):
 
 
 @njit(cache=True)
-def _corner(T):
-    """The corner of leg 1 and leg 2 as leg 1's parameter (nan without a second leg or if parallel)."""
-    if T[ACTIVE2] == 0.0:
-        return math.nan
-    return crossing(T[TH1], T[D1], T[TH2], T[D2])
+def inside(x, y, hw, depth, margin):
+    """Whether a point lies in the footprint grown by ``margin``."""
+    return abs(x) <= hw + margin and -margin <= y <= depth + margin
 
 
 @njit(cache=True)
-def _shows_turn(T, tp):
-    """Whether the second leg is a turn of the first that the observation shows."""
-    t_c = _corner(T)
-    if math.isnan(t_c) or T[ACTIVE1] == 0.0:
-        return False
-    if abs(math.sin(T[TH1] - T[TH2])) < math.sin(math.radians(tp[8])):
-        return False  # a shifted line: it replaces the first leg once confirmed, it does not continue it
-    if T[HITS2] >= tp[6]:
-        return True
-    if T[HAS_END] != 0.0:  # seen once: a turn where the first leg was seen to end
-        cx, cy = on_line(T[TH1], T[D1], t_c)
-        return math.hypot(cx - T[END_X], cy - T[END_Y]) < tp[7]
-    return False
+def _line_end(T, hw, depth):
+    """The line's part in view ``(t0, t1)`` (t0 > t1 if none), up to where it was seen to end."""
+    a, b = in_footprint(T[TH], T[D], -REACH, REACH, hw, depth)
+    if T[HAS_END] != 0.0:
+        b = min(b, along(T[TH], T[END_X], T[END_Y]))
+    return a, b
 
 
 @njit(cache=True)
-def _promote(T):
-    """The second leg becomes the first."""
-    for k in range(5):
-        T[TH1 + k] = T[TH2 + k]
-    T[ACTIVE1], T[MISS1], T[HAS_END] = 1.0, 0.0, 0.0
-    T[ACTIVE2], T[MISS2], T[HITS2] = 0.0, 0.0, 0.0
+def _take_end(T, fx, fy, hw, depth, border):
+    """A far end on the line: where the pipe is seen to end or turn (inside), or that it goes on (border)."""
+    if min(hw - abs(fx), fy, depth - fy) > border:
+        T[HAS_END], T[END_X], T[END_Y] = 1.0, fx, fy
+    else:
+        T[HAS_END], T[HAS_FAR] = 0.0, 0.0  # the pipe leaves the view straight on
+
+
+@njit(cache=True)
+def _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border):
+    """The line through a detection, ends ordered by the far end seen beyond a bend (or the last line's direction)."""
+    th, d, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
+    if T[HAS_FAR] != 0.0:
+        # the pipe goes on towards the far end seen beyond the bend: the end nearer it is the far one
+        if math.hypot(x2 - T[FAR_X], y_near - T[FAR_Y]) < math.hypot(x1 - T[FAR_X], y1 - T[FAR_Y]):
+            x1, y1, x2, y_near = x2, y_near, x1, y1
+            th, d, r_td = wrap(th + math.pi), -d, -r_td
+    elif T[HAD_LINE] != 0.0:
+        # after the line tracked before: away from the corner where the two meet, or its way if parallel
+        t_c = crossing(T[TH], T[D], th, d)
+        if abs(math.sin(T[TH] - th)) < PARALLEL or math.isnan(t_c):
+            flip = abs(wrap(th - T[TH])) > 0.5 * math.pi
+        else:
+            cx, cy = on_line(T[TH], T[D], t_c)
+            flip = (0.5 * (x1 + x2) - cx) * math.sin(th) + (0.5 * (y1 + y_near) - cy) * math.cos(th) < 0.0
+        if flip:
+            x1, y1, x2, y_near = x2, y_near, x1, y1
+            th, d, r_td = wrap(th + math.pi), -d, -r_td
+    _start(T, TH, th, d, r_tt, r_td, r_dd)
+    T[ACTIVE], T[MISS], T[C_ACTIVE], T[C_HITS], T[HAD_LINE] = 1.0, 0.0, 0.0, 0.0, 1.0
+    T[HAS_FAR], T[HAS_END] = 0.0, 0.0
+    _take_end(T, x1, y1, hw, depth, border)
+    T[NEAR_X], T[NEAR_Y], T[HAS_NEAR] = x2, y_near, 1.0
 
 
 @njit(cache=True)
 def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
-    """One frame: predict both legs by ``motion``, take the detection, write the observation.
+    """One frame: predict the line by ``motion``, take the detection, write the observation.
 
     Args:
         T: the track's state (:data:`STATE_SIZE` slots), updated in place.
@@ -301,133 +364,139 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
         depth: the footprint's forward extent (m).
         out: the observation (:data:`OUT_SIZE` slots): in view, x1, y1, x2, y_near, side.
     """
-    point_sd, bend_sd, shift_sd, gate = tp[0], tp[1], tp[2], tp[3]
-    max_misses, max_offset_sd, confirm = tp[4], tp[5], tp[6]
-    corner_reach, parallel, border = tp[7], math.sin(math.radians(tp[8])), tp[9]
+    point_sd, bend_sd, shift_sd, gate, point_gate = tp[0], tp[1], tp[2], tp[3], tp[4]
+    max_misses, max_offset_sd, confirm, border, far_match = tp[5], tp[6], tp[7], tp[8], tp[10]
     dl, df, dpsi = motion[0], motion[1], motion[2]
     travelled = math.sqrt(dl * dl + df * df)
     q_theta, q_d = bend_sd * bend_sd * travelled, shift_sd * shift_sd * travelled
-    for o, active in ((TH1, ACTIVE1), (TH2, ACTIVE2)):
-        if T[active] != 0.0:
-            predict(T, o, dl, df, dpsi, nav_var, q_theta, q_d)
-    if T[HAS_END] != 0.0:  # the seen end is a point fixed in the world
+    if T[HAD_LINE] != 0.0:  # a lost line too: where the pipe was orders the ends of the next
+        predict(T, TH, dl, df, dpsi, nav_var, q_theta, q_d)
+    if T[C_ACTIVE] != 0.0:
+        predict(T, C_TH, dl, df, dpsi, nav_var, q_theta, q_d)
+    c, s = math.cos(dpsi), math.sin(dpsi)
+    if T[HAS_FAR] != 0.0:  # the ends seen are points fixed in the world
+        ex, ey = T[FAR_X] - dl, T[FAR_Y] - df
+        T[FAR_X], T[FAR_Y] = c * ex - s * ey, s * ex + c * ey
+        T[FAR_AGE] += 1.0
+    if T[HAS_END] != 0.0:
         ex, ey = T[END_X] - dl, T[END_Y] - df
-        c, s = math.cos(dpsi), math.sin(dpsi)
         T[END_X], T[END_Y] = c * ex - s * ey, s * ex + c * ey
-    if T[LAST_TH] == T[LAST_TH]:
-        T[LAST_TH] = wrap(T[LAST_TH] - dpsi)
-    T[MISS1] += 1.0
-    T[MISS2] += 1.0
+    T[MISS] += 1.0
     T[EVENT] = NO_DETECTION
+    T[HAS_NEAR] = 0.0
     if found:
         x1, y1, x2, y_near = det[0], det[1], det[2], det[3]
-        th_m, d_m, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
         taken = False
-        if T[ACTIVE1] != 0.0:
-            th_o, d_o, r_o = oriented(th_m, d_m, r_td, T[TH1])
-            nu_t, nu_d, s_tt, s_td, s_dd, m2 = innovation(T, TH1, th_o, d_o, r_tt, r_o, r_dd)
-            if m2 <= gate:
-                flip = th_o != th_m
-                correct(T, TH1, nu_t, nu_d, s_tt, s_td, s_dd, r_tt, r_o, r_dd)
-                T[MISS1] = 0.0
-                T[EVENT] = ACCEPTED
-                taken = True
-                # the far end in the pipe's direction: where the pipe is seen to end (or leave the view)
-                fx, fy = (x2, y_near) if flip else (x1, y1)
-                if min(hw - abs(fx), fy, depth - fy) > border:
-                    T[HAS_END], T[END_X], T[END_Y] = 1.0, fx, fy
+        if T[ACTIVE] != 0.0:
+            nu_a, j_a, s_a, m_a = point_innovation(T, TH, x2, y_near, point_sd)
+            nu_b, j_b, s_b, m_b = point_innovation(T, TH, x1, y1, point_sd)
+            ok_a, ok_b = m_a <= point_gate, m_b <= point_gate
+            if ok_a or ok_b:
+                if ok_a and ok_b:
+                    # both ends on the line: ordered along it (the detector's order is a guess)
+                    if along(T[TH], x2, y_near) > along(T[TH], x1, y1):
+                        x1, y1, x2, y_near = x2, y_near, x1, y1
+                    th_m, d_m, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
+                    nu_t, nu_d, s_tt, s_td, s_dd, m2 = innovation(T, TH, th_m, d_m, r_tt, r_td, r_dd)
+                    if m2 <= gate:
+                        correct(T, TH, nu_t, nu_d, s_tt, s_td, s_dd, r_tt, r_td, r_dd)
+                    else:
+                        nu_a, j_a, s_a, m_a = point_innovation(T, TH, x2, y_near, point_sd)
+                        point_correct(T, TH, nu_a, j_a, s_a)
+                    T[EVENT] = ACCEPTED
+                    _take_end(T, x1, y1, hw, depth, border)
                 else:
-                    T[HAS_END] = 0.0
-        if not taken and T[ACTIVE2] != 0.0:
-            th_o, d_o, r_o = oriented(th_m, d_m, r_td, T[TH2])
-            nu_t, nu_d, s_tt, s_td, s_dd, m2 = innovation(T, TH2, th_o, d_o, r_tt, r_o, r_dd)
-            if m2 <= gate:
-                correct(T, TH2, nu_t, nu_d, s_tt, s_td, s_dd, r_tt, r_o, r_dd)
-                T[MISS2] = 0.0
-                T[HITS2] += 1.0
-                T[EVENT] = SECOND_LEG
+                    # one end on the line, the other off it: the pipe bends in view
+                    if ok_b:
+                        x1, y1, x2, y_near = x2, y_near, x1, y1
+                        nu_a, j_a, s_a = nu_b, j_b, s_b
+                    point_correct(T, TH, nu_a, j_a, s_a)
+                    T[EVENT] = BEND
+                    T[HAS_FAR], T[FAR_X], T[FAR_Y], T[FAR_AGE] = 1.0, x1, y1, 0.0
+                T[MISS] = 0.0
+                T[C_ACTIVE], T[C_HITS] = 0.0, 0.0
+                T[NEAR_X], T[NEAR_Y], T[HAS_NEAR] = x2, y_near, 1.0
                 taken = True
-        if not taken and T[ACTIVE1] == 0.0:
-            # a new track: the detector's order of the ends, unless the last track ran the other way
-            if T[LAST_TH] == T[LAST_TH]:
-                th_m, d_m, r_td = oriented(th_m, d_m, r_td, T[LAST_TH])
-            _start(T, TH1, th_m, d_m, r_tt, r_td, r_dd)
-            T[ACTIVE1], T[MISS1], T[HAS_END] = 1.0, 0.0, 0.0
-            T[EVENT] = STARTED
-            taken = True
-        elif not taken:
-            # a second leg: away from the corner if it turns the pipe, along the first if parallel
-            t_c = crossing(T[TH1], T[D1], th_m, d_m)
-            if abs(math.sin(T[TH1] - th_m)) < parallel or math.isnan(t_c):
-                th_m, d_m, r_td = oriented(th_m, d_m, r_td, T[TH1])
+        if not taken:
+            a, b = _line_end(T, hw, depth)
+            line_in_view = T[ACTIVE] != 0.0 and a <= b
+            beyond = T[HAS_FAR] != 0.0 and min(
+                math.hypot(x1 - T[FAR_X], y1 - T[FAR_Y]), math.hypot(x2 - T[FAR_X], y_near - T[FAR_Y])
+            ) < far_match
+            if beyond:
+                # the leg after the bend, where the far end beyond it was seen: the pipe goes on there
+                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border)
+                T[EVENT] = REPLACED
+            elif not line_in_view:
+                # nothing tracked in view: the detection is the pipe
+                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border)
+                T[EVENT] = STARTED
             else:
-                cx, cy = on_line(T[TH1], T[D1], t_c)
-                mx, my = 0.5 * (x1 + x2), 0.5 * (y1 + y_near)
-                if (mx - cx) * math.sin(th_m) + (my - cy) * math.cos(th_m) < 0.0:
-                    th_m, d_m, r_td = wrap(th_m + math.pi), -d_m, -r_td
-            _start(T, TH2, th_m, d_m, r_tt, r_td, r_dd)
-            T[ACTIVE2], T[MISS2], T[HITS2] = 1.0, 0.0, 1.0
-            T[EVENT] = REJECTED
-    # legs no longer seen are dropped; a confirmed second leg takes over from a first no longer seen
-    for active, miss, o in ((ACTIVE1, MISS1, TH1), (ACTIVE2, MISS2, TH2)):
-        if T[active] != 0.0 and (T[miss] > max_misses or T[o + 4] > max_offset_sd * max_offset_sd):
-            T[active] = 0.0
-            if active == ACTIVE1:
-                T[HAS_END] = 0.0
-    if T[ACTIVE2] != 0.0 and T[HITS2] >= confirm and (T[ACTIVE1] == 0.0 or T[MISS1] >= 1.0):
-        _promote(T)
-    if T[ACTIVE1] == 0.0 and T[ACTIVE2] != 0.0 and T[HITS2] >= confirm:
-        _promote(T)
+                th_m, d_m, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
+                hit = False
+                if T[C_ACTIVE] != 0.0:
+                    th_o, d_o, r_o = oriented(th_m, d_m, r_td, T[C_TH])
+                    nu_t, nu_d, s_tt, s_td, s_dd, m2 = innovation(T, C_TH, th_o, d_o, r_tt, r_o, r_dd)
+                    if m2 <= gate:
+                        correct(T, C_TH, nu_t, nu_d, s_tt, s_td, s_dd, r_tt, r_o, r_dd)
+                        T[C_HITS] += 1.0
+                        hit = True
+                if not hit:
+                    _start(T, C_TH, th_m, d_m, r_tt, r_td, r_dd)
+                    T[C_ACTIVE], T[C_HITS] = 1.0, 1.0
+                T[EVENT] = REJECTED
+                if T[C_HITS] >= confirm:
+                    # seen again where the tracked line is not: that line was wrong, or left behind
+                    _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border)
+                    T[EVENT] = REPLACED
+    if T[ACTIVE] != 0.0 and (T[MISS] > max_misses or T[P + 2] > max_offset_sd * max_offset_sd):
+        T[ACTIVE] = 0.0
+    if T[HAS_FAR] != 0.0 and (T[FAR_AGE] > max_misses or T[ACTIVE] == 0.0):
+        T[HAS_FAR] = 0.0
+    if T[ACTIVE] == 0.0:
+        T[HAS_END] = 0.0
     observe_track(T, tp, hw, depth, out)
 
 
 @njit(cache=True)
 def observe_track(T, tp, hw, depth, out):
-    """The track's observation (see :func:`track_step`'s ``out``); sets the track's side and confidence."""
+    """The track's observation (see :func:`track_step`'s ``out``); sets the track's side and confidence.
+
+    The near end is this frame's accepted detection's, or where the line enters the view; the far
+    end the far end seen beyond a bend while it is in view, else where the line leaves the view or
+    was seen to end.
+    """
     out[OUT_IN_VIEW] = 0.0
-    if T[ACTIVE1] == 0.0:
+    if T[ACTIVE] == 0.0:
         T[CONFIDENCE] = 0.0
         out[OUT_SIDE] = T[SIDE]
         return
-    T[LAST_TH] = T[TH1]
-    th1, d1 = T[TH1], T[D1]
-    turn = _shows_turn(T, tp)
-    t_end = REACH
-    if turn:
-        t_end = _corner(T)
-    elif T[HAS_END] != 0.0:
-        t_end = along(th1, T[END_X], T[END_Y])
-    a1, b1 = in_footprint(th1, d1, -REACH, REACH, hw, depth)
-    b1 = min(b1, t_end)
-    seen1 = a1 <= b1
-    seen2 = False
-    a2, b2 = 1.0, 0.0
-    if turn:
-        cx, cy = on_line(th1, d1, t_end)
-        a2, b2 = in_footprint(T[TH2], T[D2], along(T[TH2], cx, cy), REACH, hw, depth)
-        seen2 = a2 <= b2
-    if seen1:
-        out[OUT_X2], out[OUT_Y_NEAR] = on_line(th1, d1, a1)
-    elif seen2:
-        out[OUT_X2], out[OUT_Y_NEAR] = on_line(T[TH2], T[D2], a2)
-    if seen2:
-        out[OUT_X1], out[OUT_Y1] = on_line(T[TH2], T[D2], b2)
-    elif seen1:
-        out[OUT_X1], out[OUT_Y1] = on_line(th1, d1, b1)
+    th, d = T[TH], T[D]
+    a, b = _line_end(T, hw, depth)
+    seen_line = a <= b
+    far_beyond = T[HAS_FAR] != 0.0 and inside(T[FAR_X], T[FAR_Y], hw, depth, tp[9])
+    if far_beyond:
+        out[OUT_X1], out[OUT_Y1] = T[FAR_X], T[FAR_Y]
+    elif seen_line:
+        out[OUT_X1], out[OUT_Y1] = on_line(th, d, b)
+    if T[HAS_NEAR] != 0.0:
+        out[OUT_X2], out[OUT_Y_NEAR] = T[NEAR_X], T[NEAR_Y]
+    elif seen_line:
+        out[OUT_X2], out[OUT_Y_NEAR] = on_line(th, d, a)
+    elif far_beyond:
+        out[OUT_X2], out[OUT_Y_NEAR] = T[FAR_X], T[FAR_Y]
     # how well the offset is known: 1 at a fresh detection's, falling as the prediction's grows
     floor = 0.5 * tp[0] * tp[0]
-    T[CONFIDENCE] = min(1.0, math.sqrt(floor / max(T[P1 + 2], floor)))
-    if seen1 or seen2:
+    T[CONFIDENCE] = min(1.0, math.sqrt(floor / max(T[P + 2], floor)))
+    if seen_line or far_beyond:
         out[OUT_IN_VIEW] = 1.0
         out[OUT_X1] = min(max(out[OUT_X1], -hw), hw)
         out[OUT_X2] = min(max(out[OUT_X2], -hw), hw)
         out[OUT_Y1] = min(max(out[OUT_Y1], 0.0), depth)
         out[OUT_Y_NEAR] = min(max(out[OUT_Y_NEAR], 0.0), depth)
         T[SIDE] = 1.0 if out[OUT_X1] >= 0.0 else -1.0
-    elif turn:
-        # out of view after a turn: search towards where the second leg goes on
-        cx, cy = on_line(th1, d1, t_end)
-        T[SIDE] = 1.0 if cx + 2.0 * math.sin(T[TH2]) >= 0.0 else -1.0
+    elif T[HAS_FAR] != 0.0:
+        T[SIDE] = 1.0 if T[FAR_X] >= 0.0 else -1.0  # out of view after a bend: towards where it went
     out[OUT_SIDE] = T[SIDE]
 
 
@@ -435,7 +504,6 @@ def new_track() -> np.ndarray:
     """An empty track's state."""
     T = np.zeros(STATE_SIZE)
     T[SIDE] = 1.0
-    T[LAST_TH] = math.nan
     return T
 
 
