@@ -239,7 +239,7 @@ def point_innovation(T, o, px, py, point_sd):
 def point_correct(T, o, nu, j, S):
     """Kalman update of line ``o`` with a detected end's innovation (:func:`point_innovation`).
 
-    The state moves by ``−K·r₀ = K·ν`` with ``K = P Jᵀ / S`` and the covariance becomes
+    The state moves by ``−K·r₀ = K·ν`` with ``K = P Jᵀ / S``, and the covariance becomes
     ``P − K S Kᵀ`` (symmetric by construction).
     """
     ptt, ptd, pdd = T[o + 2], T[o + 3], T[o + 4]
@@ -247,9 +247,8 @@ def point_correct(T, o, nu, j, S):
     g0 = ptt * j - ptd
     g1 = ptd * j - pdd
     k0, k1 = g0 / S, g1 / S
-    # r = J x − (measured): x⁺ = x − K·r₀ = x + K·(−r₀) = x + K·ν', where ν' = −r₀ = ν
-    T[o] = wrap(T[o] - k0 * nu)
-    T[o + 1] = T[o + 1] - k1 * nu
+    T[o] = wrap(T[o] + k0 * nu)  # x⁺ = x − K·r₀ = x + K·ν
+    T[o + 1] = T[o + 1] + k1 * nu
     T[o + 2] = ptt - k0 * g0
     T[o + 3] = ptd - k0 * g1
     T[o + 4] = pdd - k1 * g1
@@ -391,32 +390,38 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
             nu_a, j_a, s_a, m_a = point_innovation(T, TH, x2, y_near, point_sd)
             nu_b, j_b, s_b, m_b = point_innovation(T, TH, x1, y1, point_sd)
             ok_a, ok_b = m_a <= point_gate, m_b <= point_gate
-            if ok_a or ok_b:
-                if ok_a and ok_b:
-                    # both ends on the line: ordered along it (the detector's order is a guess)
-                    if along(T[TH], x2, y_near) > along(T[TH], x1, y1):
-                        x1, y1, x2, y_near = x2, y_near, x1, y1
-                    th_m, d_m, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
-                    nu_t, nu_d, s_tt, s_td, s_dd, m2 = innovation(T, TH, th_m, d_m, r_tt, r_td, r_dd)
-                    if m2 <= gate:
-                        correct(T, TH, nu_t, nu_d, s_tt, s_td, s_dd, r_tt, r_td, r_dd)
-                    else:
-                        nu_a, j_a, s_a, m_a = point_innovation(T, TH, x2, y_near, point_sd)
-                        point_correct(T, TH, nu_a, j_a, s_a)
-                    T[EVENT] = ACCEPTED
-                    _take_end(T, x1, y1, hw, depth, border)
-                else:
-                    # one end on the line, the other off it: the pipe bends in view
-                    if ok_b:
-                        x1, y1, x2, y_near = x2, y_near, x1, y1
-                        nu_a, j_a, s_a = nu_b, j_b, s_b
+            if ok_a and not ok_b or ok_b and not ok_a:
+                # one end on the line, the other off it: the pipe bends in view, if the end on the
+                # line is the near one: nearer than the other to where the line enters the view
+                # (else it is a line beside the pipe that crosses it far ahead, which is no bend)
+                if ok_b:
+                    x1, y1, x2, y_near = x2, y_near, x1, y1
+                    nu_a, j_a, s_a = nu_b, j_b, s_b
+                t_in, _ = in_footprint(T[TH], T[D], -REACH, REACH, hw, depth)
+                ex, ey = on_line(T[TH], T[D], t_in)
+                if math.hypot(x2 - ex, y_near - ey) < math.hypot(x1 - ex, y1 - ey):
                     point_correct(T, TH, nu_a, j_a, s_a)
                     T[EVENT] = BEND
                     T[HAS_FAR], T[FAR_X], T[FAR_Y], T[FAR_AGE] = 1.0, x1, y1, 0.0
+                    taken = True
+            elif ok_a and ok_b:
+                # both ends on the line: ordered along it (the detector's order is a guess)
+                if along(T[TH], x2, y_near) > along(T[TH], x1, y1):
+                    x1, y1, x2, y_near = x2, y_near, x1, y1
+                th_m, d_m, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
+                nu_t, nu_d, s_tt, s_td, s_dd, m2 = innovation(T, TH, th_m, d_m, r_tt, r_td, r_dd)
+                if m2 <= gate:
+                    correct(T, TH, nu_t, nu_d, s_tt, s_td, s_dd, r_tt, r_td, r_dd)
+                else:
+                    nu_a, j_a, s_a, m_a = point_innovation(T, TH, x2, y_near, point_sd)
+                    point_correct(T, TH, nu_a, j_a, s_a)
+                T[EVENT] = ACCEPTED
+                _take_end(T, x1, y1, hw, depth, border)
+                taken = True
+            if taken:
                 T[MISS] = 0.0
                 T[C_ACTIVE], T[C_HITS] = 0.0, 0.0
                 T[NEAR_X], T[NEAR_Y], T[HAS_NEAR] = x2, y_near, 1.0
-                taken = True
         if not taken:
             a, b = _line_end(T, hw, depth)
             line_in_view = T[ACTIVE] != 0.0 and a <= b
