@@ -89,6 +89,7 @@ class TrackParams(NamedTuple):
     border: float = 0.06  # m: a detected far end this near the footprint's border is where the pipe leaves it
     far_margin: float = 0.25  # m: a far end beyond a bend this far outside the footprint still shows (on its border)
     far_match: float = 0.4  # m: a new line whose end lies this near the far end beyond a bend continues the pipe
+    near_reach: float = 0.3  # m: a rejected detection with an end this near the line's entry is the pipe curving
 
 
 TRACK = TrackParams()
@@ -321,10 +322,13 @@ def _take_end(T, fx, fy, hw, depth, border):
 
 
 @njit(cache=True)
-def _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border):
-    """The line through a detection, ends ordered by the far end seen beyond a bend (or the last line's direction)."""
+def _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, order):
+    """The line through a detection; with ``order`` its ends ordered by the far end seen beyond a
+    bend (or away from the corner with the last line), else as given."""
     th, d, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
-    if T[HAS_FAR] != 0.0:
+    if not order:
+        pass
+    elif T[HAS_FAR] != 0.0:
         # the pipe goes on towards the far end seen beyond the bend: the end nearer it is the far one
         if math.hypot(x2 - T[FAR_X], y_near - T[FAR_Y]) < math.hypot(x1 - T[FAR_X], y1 - T[FAR_Y]):
             x1, y1, x2, y_near = x2, y_near, x1, y1
@@ -365,6 +369,7 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
     """
     point_sd, bend_sd, shift_sd, gate, point_gate = tp[0], tp[1], tp[2], tp[3], tp[4]
     max_misses, max_offset_sd, confirm, border, far_match = tp[5], tp[6], tp[7], tp[8], tp[10]
+    near_reach = tp[11]
     dl, df, dpsi = motion[0], motion[1], motion[2]
     travelled = math.sqrt(dl * dl + df * df)
     q_theta, q_d = bend_sd * bend_sd * travelled, shift_sd * shift_sd * travelled
@@ -428,13 +433,25 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
             beyond = T[HAS_FAR] != 0.0 and min(
                 math.hypot(x1 - T[FAR_X], y1 - T[FAR_Y]), math.hypot(x2 - T[FAR_X], y_near - T[FAR_Y])
             ) < far_match
-            if beyond:
+            near_end = False
+            if line_in_view:
+                ex, ey = on_line(T[TH], T[D], a)  # where the tracked pipe enters the view
+                da, db = math.hypot(x2 - ex, y_near - ey), math.hypot(x1 - ex, y1 - ey)
+                near_end = min(da, db) < near_reach
+                if near_end and db < da:
+                    x1, y1, x2, y_near = x2, y_near, x1, y1
+            if near_end:
+                # it starts where the tracked pipe enters the view: the same pipe, curving away
+                # from the line (an arc the line cannot follow); the line starts again from it
+                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, False)
+                T[EVENT] = REPLACED
+            elif beyond:
                 # the leg after the bend, where the far end beyond it was seen: the pipe goes on there
-                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border)
+                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, True)
                 T[EVENT] = REPLACED
             elif not line_in_view:
                 # nothing tracked in view: the detection is the pipe
-                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border)
+                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, True)
                 T[EVENT] = STARTED
             else:
                 th_m, d_m, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
@@ -452,7 +469,7 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
                 T[EVENT] = REJECTED
                 if T[C_HITS] >= confirm:
                     # seen again where the tracked line is not: that line was wrong, or left behind
-                    _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border)
+                    _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, True)
                     T[EVENT] = REPLACED
     if T[ACTIVE] != 0.0 and (T[MISS] > max_misses or T[P + 2] > max_offset_sd * max_offset_sd):
         T[ACTIVE] = 0.0
