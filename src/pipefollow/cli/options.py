@@ -218,7 +218,9 @@ def camera_options(fn):
         }
         if camera == "ideal":
             if settings or water is not None:
-                raise UserError("--water, --turbidity, --burial and --growth need --camera vision (or vision-raw)")
+                raise UserError(
+                    "--water, --turbidity, --burial and --growth need --camera vision (or vision-raw)"
+                )
             return fn(*args, camera=None, **kwargs)
         from pipefollow.perception.camera import camera_settings
 

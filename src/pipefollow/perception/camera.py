@@ -6,8 +6,9 @@ With ``camera="vision"`` the observation slots of the simulation state (``x1, y1
 (:mod:`pipefollow.perception.tracker`: the pipe carried from frame to frame by the vehicle's
 navigation, detections gated), instead of from the exact geometry; ``camera="vision-raw"`` takes
 each frame's detection as it is. A pipe out of the tracked (or raw) view is a lost pipe, so the
-next decision runs the search behaviour and this one gets the lost reward. The reward (eq. 19) stays computed from the true geometry
-(``reward_from="truth"``, docs/design.md says why) unless ``reward_from="detected"``.
+next decision runs the search behaviour and this one gets the lost reward. The reward (eq. 19)
+stays computed from the true geometry (``reward_from="truth"``, docs/design.md says why) unless
+``reward_from="detected"``.
 ``observation="image"`` hands the image itself to the agent, with either camera.
 
 The environments call :meth:`VisionCamera.reset` after their reset and :meth:`VisionCamera.step`
@@ -24,7 +25,15 @@ import numpy as np
 from pipefollow.perception.detector import NOT_FOUND, Detection, detect_pipe, require_cv2
 from pipefollow.perception.image import SCENES, Renderer, Textures
 from pipefollow.perception.pixels import column_at, pixel_grid, row_at
-from pipefollow.perception.tracker import OUT_IN_VIEW, OUT_SIDE, OUT_X1, OUT_X2, OUT_Y1, OUT_Y_NEAR, PipeTracker
+from pipefollow.perception.tracker import (
+    OUT_IN_VIEW,
+    OUT_SIDE,
+    OUT_X1,
+    OUT_X2,
+    OUT_Y1,
+    OUT_Y_NEAR,
+    PipeTracker,
+)
 from pipefollow.perception.water import Water, water_from
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams, tracking_errors
@@ -112,7 +121,7 @@ def camera_settings(
 
 
 def _spawn(rng: np.random.Generator) -> np.random.Generator:
-    """A child generator of ``rng`` that leaves ``rng``'s stream as it is (one draw from it if it cannot spawn)."""
+    """A child generator of ``rng``, leaving ``rng``'s stream as it is (one draw if it cannot spawn)."""
     try:
         return rng.spawn(1)[0]
     except (TypeError, ValueError):  # a bit generator without a seed sequence

@@ -130,7 +130,7 @@ class TextureCache:
         self._scenes: dict[tuple, tuple[Textures, dict]] = {}
 
     def draw(self, rng: np.random.Generator, growth: bool = True) -> Textures:
-        """The textures :func:`make_textures` would draw from ``rng`` (and ``rng`` left as it would leave it)."""
+        """The textures :func:`make_textures` would draw from ``rng``, ``rng`` left as it would leave it."""
         bits = rng.bit_generator
         key = (growth, repr(bits.state))
         hit = self._scenes.pop(key, None)

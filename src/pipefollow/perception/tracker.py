@@ -87,9 +87,15 @@ class TrackParams(NamedTuple):
     max_offset_sd: float = 0.4  # m: a line whose offset is this uncertain is lost
     confirm: int = 2  # frames in a row a new line must be seen in to replace a tracked one in view
     border: float = 0.06  # m: a detected far end this near the footprint's border is where the pipe leaves it
-    far_margin: float = 0.25  # m: a far end beyond a bend this far outside the footprint still shows (on its border)
-    far_match: float = 0.4  # m: a new line whose end lies this near the far end beyond a bend continues the pipe
-    near_reach: float = 0.3  # m: a rejected detection with an end this near the line's entry is the pipe curving
+    far_margin: float = (
+        0.25  # m: a far end beyond a bend this far outside the footprint still shows (on its border)
+    )
+    far_match: float = (
+        0.4  # m: a new line whose end lies this near the far end beyond a bend continues the pipe
+    )
+    near_reach: float = (
+        0.3  # m: a rejected detection with an end this near the line's entry is the pipe curving
+    )
 
 
 TRACK = TrackParams()
@@ -288,7 +294,7 @@ def along(th, x, y):
 
 @njit(cache=True)
 def in_footprint(th, d, t_from, t_to, hw, depth):
-    """The part ``[t0, t1]`` of line (θ, d) from ``t_from`` to ``t_to`` inside the footprint; t0 > t1 if none."""
+    """The part ``[t0, t1]`` of line (θ, d) from ``t_from`` to ``t_to`` in the footprint (t0 > t1: none)."""
     ax, ay = on_line(th, d, t_from)
     bx, by = on_line(th, d, t_to)
     a, b = clip_segment(ax, ay, bx, by, -hw, hw, 0.0, depth)
@@ -323,8 +329,11 @@ def _take_end(T, fx, fy, hw, depth, border):
 
 @njit(cache=True)
 def _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, order):
-    """The line through a detection; with ``order`` its ends ordered by the far end seen beyond a
-    bend (or away from the corner with the last line), else as given."""
+    """The line through a detection, its ends ordered (with ``order``) or as given.
+
+    Ordered: the end nearer the far end seen beyond a bend is the far one; else the line runs away
+    from the corner where it meets the last line (or that line's way if they are near parallel).
+    """
     th, d, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
     if not order:
         pass
@@ -430,9 +439,13 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
         if not taken:
             a, b = _line_end(T, hw, depth)
             line_in_view = T[ACTIVE] != 0.0 and a <= b
-            beyond = T[HAS_FAR] != 0.0 and min(
-                math.hypot(x1 - T[FAR_X], y1 - T[FAR_Y]), math.hypot(x2 - T[FAR_X], y_near - T[FAR_Y])
-            ) < far_match
+            beyond = (
+                T[HAS_FAR] != 0.0
+                and min(
+                    math.hypot(x1 - T[FAR_X], y1 - T[FAR_Y]), math.hypot(x2 - T[FAR_X], y_near - T[FAR_Y])
+                )
+                < far_match
+            )
             near_end = False
             if line_in_view:
                 ex, ey = on_line(T[TH], T[D], a)  # where the tracked pipe enters the view
@@ -529,6 +542,9 @@ def new_track() -> np.ndarray:
     return T
 
 
+NORMALS_BLOCK = 256  # steps of navigation noise drawn at a time
+
+
 class Navigation:
     """Dead reckoning between frames: a DVL's velocity and a gyro's heading, with their errors.
 
@@ -549,6 +565,9 @@ class Navigation:
         self.variances = np.array([disp_sd**2, disp_sd**2, turn_var])
         self.rng = np.random.default_rng(0)
         self.scale, self.bias = 1.0, 0.0
+        self._z = np.empty((0, 4))  # the steps' normals, drawn from the generator a block at a time
+        self._k = 0
+        self._out = np.zeros(3)
 
     def reset(self, rng: np.random.Generator) -> None:
         """A new episode: the scale error and the gyro's bias drawn from ``rng``, which later steps use."""
@@ -556,20 +575,30 @@ class Navigation:
         self.rng = rng
         self.scale = 1.0 + p.dvl_scale_sd * float(rng.standard_normal())
         self.bias = math.radians(p.gyro_bias_sd) * float(rng.standard_normal())
+        self._z, self._k = np.empty((0, 4)), 0
 
     def motion(self, before: tuple[float, float, float], after: tuple[float, float, float]) -> np.ndarray:
-        """The navigation's ``(Δl, Δf, Δψ)`` between two true poses (x north, y east, ψ)."""
+        """The navigation's ``(Δl, Δf, Δψ)`` between two true poses (x north, y east, ψ).
+
+        Returns an array the next call overwrites. The step's four normals come from blocks of
+        :data:`NORMALS_BLOCK` rows drawn from the generator (a draw per step cost more than the filter).
+        """
         p, dt = self.params, self.dt
         x0, y0, psi0 = before
         dx, dy = after[0] - x0, after[1] - y0
         cs, sn = math.cos(psi0), math.sin(psi0)
-        z = self.rng.standard_normal(4)
+        if self._k >= len(self._z):
+            self._z, self._k = self.rng.standard_normal((NORMALS_BLOCK, 4)), 0
+        z = self._z[self._k]
+        self._k += 1
         d_f = self.scale * (cs * dx + sn * dy) + self.disp_sd * z[0]
         d_l = self.scale * (-sn * dx + cs * dy) + self.disp_sd * z[1]
         d_psi = math.remainder(after[2] - psi0, 2.0 * math.pi)
         d_psi += self.bias * dt + math.radians(p.gyro_arw) * math.sqrt(dt) * z[2]
         self.bias += math.radians(p.gyro_bias_walk) * math.sqrt(dt) * z[3]
-        return np.array([d_l, d_f, d_psi])
+        out = self._out
+        out[0], out[1], out[2] = d_l, d_f, d_psi
+        return out
 
 
 class PipeTracker:
@@ -590,6 +619,7 @@ class PipeTracker:
         self.state = new_track()
         self.out = np.zeros(OUT_SIZE)
         self._det = np.zeros(4)
+        self._still = np.zeros(3)
         self._pose: tuple[float, float, float] | None = None
 
     def reset(self, rng: np.random.Generator, pose: tuple[float, float, float]) -> None:
@@ -603,13 +633,15 @@ class PipeTracker:
         self.state[:] = new_track()
         self._pose = None
 
-    def step(self, pose: tuple[float, float, float], found: bool, det: tuple[float, float, float, float]) -> np.ndarray:
+    def step(
+        self, pose: tuple[float, float, float], found: bool, det: tuple[float, float, float, float]
+    ) -> np.ndarray:
         """A frame from the true ``pose`` with the detection ``det`` = (x1, y1, x2, y_near): the observation.
 
         Returns the output array (in view, x1, y1, x2, y_near, side), reused frame after frame.
         """
         if self._pose is None:
-            motion = np.zeros(3)
+            motion = self._still
         else:
             motion = self.navigation.motion(self._pose, pose)
         self._pose = pose

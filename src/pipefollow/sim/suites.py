@@ -247,8 +247,10 @@ def suite_pipe(
 
 
 def _turn(lv: Level, heading: float, u_turn: float, u_side: float, max_heading: float) -> float:
-    """A bend's turn (rad) from its two uniforms: its size in the level's range, its side at random
-    unless that breaks the heading bound."""
+    """A bend's turn (rad) from its two uniforms.
+
+    Its size in the level's range, its side at random unless that breaks the heading bound.
+    """
     turn = math.radians(lv.turn_deg[0] + u_turn * (lv.turn_deg[1] - lv.turn_deg[0]))
     turn = turn if u_side < 0.5 else -turn
     if abs(heading + turn) > max_heading:
@@ -283,8 +285,10 @@ def _clear_turn(lv: Level, pts: list, heading: float, turn: float, draws, max_he
 
 
 def _gap_ahead(pts: list, heading: float, reach: float) -> float:
-    """The distance from a straight of ``reach`` from the last point at ``heading`` to the pipe
-    before the last straight (which meets it at the corner by construction)."""
+    """The distance from a straight of ``reach`` (from the last point at ``heading``) to the pipe.
+
+    The pipe before the last straight: that one meets the new straight at the corner by construction.
+    """
     x, y = pts[-1]
     end = (x + reach * math.cos(heading), y + reach * math.sin(heading))
     return min((_segment_gap(pts[i], pts[i + 1], (x, y), end) for i in range(len(pts) - 2)), default=math.inf)
