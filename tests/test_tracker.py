@@ -167,7 +167,8 @@ def test_uncertainty_grows_through_misses_until_the_pipe_is_lost():
         seen.append(out[tk.OUT_IN_VIEW])
     m = int(t.params.max_misses)
     assert all(b > a for a, b in zip(variances[:m], variances[1 : m + 1], strict=True))
-    assert all(b <= a for a, b in zip(confidences[:-1], confidences[1:], strict=True)) and confidences[m - 1] < confidences[0]
+    assert all(b <= a for a, b in zip(confidences[:-1], confidences[1:], strict=True))
+    assert confidences[m - 1] < confidences[0]
     assert seen[:m] == [1.0] * m and seen[m:] == [0.0] * (6 - m)  # carried max_misses frames, then lost
     # while carried, the prediction stays on the pipe (straight, the vehicle on it)
     assert t.state[tk.ACTIVE] == 0.0
