@@ -185,12 +185,12 @@ def test_the_raw_camera_observes_each_frames_detection_as_it_is():
             assert (obs[0], obs[1], obs[2]) == (det.x1, det.y1, det.x2)
 
 
-def test_the_hook_is_followed_round_its_corner_with_the_tracker():
-    # 135° to starboard after 6 m: the tracked camera keeps the pipe in view as the exact camera
-    # does, the raw detector (the first leg up to the corner only, then a lost pipe) does not
+def test_the_hook_is_followed_round_its_corner_with_the_vision_camera():
+    # 135° to starboard after 6 m: both vision cameras keep the pipe in view as the exact camera
+    # does (the detector joins the leg after the corner; before, it reported the first leg up to
+    # the corner only and the raw camera kept the pipe in view at 0.73 of the decisions)
     seen = {}
     for camera in ("ideal", "vision", "vision-raw"):
         steps = run_heuristic(PipelineFollowingEnv(SHARP, 30.0, camera=camera), 0, 30)
         seen[camera] = np.mean([s[1] for s in steps[1:]])  # the exact camera's: the pipe truly in view
-    assert seen["ideal"] >= 0.95 and seen["vision"] >= 0.8
-    assert seen["vision"] > seen["vision-raw"] + 0.1
+    assert seen["ideal"] >= 0.95 and seen["vision"] >= 0.85 and seen["vision-raw"] >= 0.85

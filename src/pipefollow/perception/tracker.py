@@ -53,8 +53,8 @@ from numba import njit
 from pipefollow.sim.camera import clip_segment
 from pipefollow.sim.controller import wrap_angle as wrap
 
-CHI2_2DOF_99 = 9.2103  # Mahalanobis gates: 99 % of a correct detection's innovations fall inside
-CHI2_1DOF_99 = 6.6349
+CHI2_2DOF_99 = 9.2103  # Mahalanobis gate of a line: 99 % of a correct detection's innovations fall inside
+CHI2_1DOF_90 = 2.7055  # ... of a detected end on the line: 90 % (a wider gate kept wrong lines; decisions.md)
 
 
 class NavParams(NamedTuple):
@@ -82,8 +82,8 @@ class TrackParams(NamedTuple):
     bend_sd: float = 0.2  # the pipe's direction's random walk (rad per √m travelled): arcs and bends
     shift_sd: float = 0.03  # the pipe's offset's random walk (m per √m travelled)
     gate: float = CHI2_2DOF_99  # Mahalanobis gate of a detection's line (squared, 2 degrees of freedom)
-    point_gate: float = CHI2_1DOF_99  # ... and of a detected end on the line (1 degree of freedom)
-    max_misses: int = 3  # frames the line (and a far end beyond a bend) is carried without a detection
+    point_gate: float = CHI2_1DOF_90  # ... and of a detected end on the line (1 degree of freedom)
+    max_misses: int = 2  # frames the line (and a far end beyond a bend) is carried without a detection
     max_offset_sd: float = 0.4  # m: a line whose offset is this uncertain is lost
     confirm: int = 2  # frames in a row a new line must be seen in to replace a tracked one in view
     border: float = 0.06  # m: a detected far end this near the footprint's border is where the pipe leaves it
@@ -93,9 +93,7 @@ class TrackParams(NamedTuple):
     far_match: float = (
         0.4  # m: a new line whose end lies this near the far end beyond a bend continues the pipe
     )
-    near_reach: float = (
-        0.3  # m: a rejected detection with an end this near the line's entry is the pipe curving
-    )
+    near_reach: float = 0.5  # m: a rejected detection with an end this near the line's entry: the pipe
 
 
 TRACK = TrackParams()
