@@ -188,7 +188,7 @@ def test_the_raw_camera_observes_each_frames_detection_as_it_is():
 def test_the_hook_is_followed_round_its_corner_with_the_vision_camera():
     # 135° to starboard after 6 m: both vision cameras keep the pipe in view as the exact camera
     # does (the detector joins the leg after the corner; before, it reported the first leg up to
-    # the corner only and the raw camera kept the pipe in view at 0.73 of the decisions)
+    # the corner only and the raw camera kept the pipe in view at 0.63 of the decisions)
     seen = {}
     for camera in ("ideal", "vision", "vision-raw"):
         steps = run_heuristic(PipelineFollowingEnv(SHARP, 30.0, camera=camera), 0, 30)
