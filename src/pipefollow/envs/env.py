@@ -116,7 +116,9 @@ class PipelineFollowingEnv(gym.Env):
       most neural-network policies take; the observation rounded to float32).
     * ``camera``: ``"ideal"`` (default: the exact visible piece, the paper's) or ``"vision"``: the
       observation and the in-view decision come from a pipe detector on the rendered camera image
-      (:mod:`pipefollow.perception`; needs the extra ``vision``); "not found" is a lost pipe.
+      and a tracker that carries the pipe from frame to frame by the vehicle's navigation
+      (:mod:`pipefollow.perception`; needs the extra ``vision``); a pipe out of the tracked view is
+      a lost pipe. ``"vision-raw"``: the detector alone, each frame's detection as it is.
     * ``observation``: ``"state"`` (default, ``Box(4)``) or ``"image"``: the camera image,
       ``Box(0, 255, (1, H, W), uint8)``.
     * ``reward_from``: ``"truth"`` (default: eq. 19 from the true geometry; a lost detection still
@@ -145,7 +147,8 @@ class PipelineFollowingEnv(gym.Env):
     ``episode_pipe_in_view`` (share of decisions ending with the pipe in view),
     ``episode_progress_m`` and ``episode_rms_e_dist`` (RMS of ``e_dist`` over those decisions;
     NaN if none). With the vision camera also ``detected``, ``detection_confidence``,
-    ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the exact camera's); the episode's
+    ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the exact camera's; with the tracker
+    also ``track_confidence``); the episode's
     summary is then the exact camera's too.
     """
 
