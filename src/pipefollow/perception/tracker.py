@@ -1,8 +1,9 @@
 """A pipe tracker: the pipe as a line fixed in the world, carried by the vehicle's navigation.
 
 The detector (:mod:`pipefollow.perception.detector`) judges every frame on its own: it swaps the
-ends when the pipe crosses the view, loses the pipe in a frame without edges, and at a hook of more
-than 120° reports only the leg before the corner. The tracker keeps what earlier frames showed.
+ends when the pipe crosses the view, loses the pipe in a frame without edges, and at a hook may
+report only the leg before the corner in one frame and the piece after it in the next. The
+tracker keeps what earlier frames showed.
 
 **State.** The pipe's current leg is a straight line fixed in the world, held in the vehicle's
 camera frame (x lateral to starboard, y forward, origin at the vehicle's centre) as its direction
@@ -10,8 +11,8 @@ camera frame (x lateral to starboard, y forward, origin at the vehicle's centre)
 pipe's own direction) and its signed offset ``d`` (m) along ``n = (cos θ, −sin θ)``: the line is
 ``p(t) = d·n + t·u``. The same line in earth coordinates would be badly conditioned far from the
 origin; held in the vehicle's frame it is re-expressed at every frame by the vehicle's motion,
-which is the world-fixed line seen from the new pose. A second leg (the pipe after a corner) is
-held the same way; the two meet at the corner.
+which is the world-fixed line seen from the new pose. Beside it: the far end seen beyond a bend
+and the end seen on the line (world points, moved the same way), and a candidate line.
 
 **Prediction** (an extended Kalman filter): the vehicle moves ``(Δl, Δf)`` (lateral, forward,
 in the earlier frame) and turns ``Δψ`` (to starboard) as its *navigation* reports them
@@ -23,20 +24,23 @@ and bias drift from a seeded generator, not the simulator's truth)::
 The process noise is the navigation's (through the Jacobian in ``(Δl, Δf, Δψ)``) plus the pipe's
 own bending: a random walk of ``θ`` and ``d`` per metre travelled (:class:`TrackParams`).
 
-**Correction.** A detection's near and far ends give a measured line (``θ_m`` from their
-direction, ``d_m``) whose covariance follows from the ends' pixel noise and the piece's length.
-Its direction is taken the way nearer the prediction (the ends' order is the detector's guess),
-and it is accepted only inside a Mahalanobis gate (χ² with 2 degrees of freedom); a rejected
-detection starts (or feeds) the second leg instead: a turn of the pipe if it meets the first
-near where that was last seen to end, a new line otherwise. A second leg seen in
-:attr:`TrackParams.confirm` frames takes over when the first is no longer seen. Through missed
-detections the prediction goes on and its uncertainty grows; beyond :attr:`TrackParams.max_misses`
-frames, or an offset uncertain by more than :attr:`TrackParams.max_offset_sd`, the pipe is lost.
+**Correction.** Each detected end is tested against the line (a χ² gate with 1 degree of
+freedom on its offset from it). Both ends on it: they are ordered along the line (so swapped
+ends are put back) and the line through them updates the filter inside a χ² gate with 2 degrees
+of freedom (else the near end alone does). One end on it, nearer than the other to where the
+line enters the view: the pipe bends in view; that end updates the line and the other is the far
+end beyond the bend. Otherwise the detection is rejected: it starts (or feeds) a candidate line
+that replaces the line when seen :attr:`TrackParams.confirm` times, and at once if it starts
+where the line enters the view (an arc the line cannot follow), ends where the far end beyond a
+bend was seen (the next leg), or if the line is out of view. Through missed detections the
+prediction goes on and its uncertainty grows; beyond :attr:`TrackParams.max_misses` frames, or an
+offset uncertain by more than :attr:`TrackParams.max_offset_sd`, the pipe is lost.
 
-**Observation.** The tracked piece inside the footprint, in the exact camera's format
-(:mod:`pipefollow.sim.camera`): the near end where the first leg enters the view, the far end
-where the pipe (after the corner, if one is tracked) leaves it or ends, the in-view flag, and the
-side to search on when it is out of view.
+**Observation.** In the exact camera's format (:mod:`pipefollow.sim.camera`): the near end is
+the accepted detection's (else where the line enters the view), the far end the far end beyond a
+bend while that is in view (also in frames where the detector stops at the corner), else where
+the line leaves the view or was seen to end; the in-view flag; the side to search on when it is
+out of view (towards the far end beyond a bend).
 
 All of it is compiled (:func:`track_step`, one call per frame; no ``fastmath``);
 :class:`PipeTracker` holds the arrays and the navigation.
