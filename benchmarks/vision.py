@@ -1,4 +1,4 @@
-"""Benchmarks of the vision camera: render, detect, and env.step with it beside the ideal camera.
+"""Benchmarks of the vision camera: render, detect, env.step and reset beside the ideal camera, the tracker.
 
 Usage: ``python benchmarks/vision.py [--repeats N] [--cpu]``
 
@@ -29,6 +29,64 @@ def blocks(fn, repeats: int, inner: int) -> list[float]:
             fn()
         out.append((CLOCK() - t) / inner)
     return out
+
+
+def reset_rows(gym, pipe, ideal_step, repeats: int) -> list[tuple[str, float, str]]:
+    """``reset`` of a vision environment beside ``env.step`` of the ideal camera, timed in turns.
+
+    "same seed" resets with one of three seeds in turn, so a scene's textures come from the cache
+    (perception.image.TextureCache); "new seed" resets with a seed never used before, so they are
+    drawn (the growth tile left blank in clear water).
+    """
+    env = gym.make("pipefollow/PipelineFollowing-v0", pipeline=pipe, camera="vision").unwrapped
+    seeds = iter(range(10, 10**9))
+    same = iter(range(10**9))
+
+    def reset_same():
+        env.reset(seed=next(same) % 3)
+
+    def reset_new():
+        env.reset(seed=next(seeds))
+
+    reset_same(), reset_new()
+    t_same, t_new, t_step = [], [], []
+    for _ in range(repeats):
+        t_same += blocks(reset_same, 1, 20)
+        t_new += blocks(reset_new, 1, 5)
+        t_step += blocks(ideal_step, 1, 200)
+    return [
+        ("reset, vision camera, a seed seen before (textures cached)", statistics.median(t_same), "≤ 1 ms"),
+        ("reset, vision camera, a new seed (textures drawn)", statistics.median(t_new), ""),
+        ("env.step, ideal camera (beside the resets)", statistics.median(t_step), ""),
+    ]
+
+
+def tracker_rows(repeats: int) -> list[tuple[str, float, str]]:
+    """The tracker per decision: the compiled step alone and with the navigation's draws (Python)."""
+    from pipefollow.perception import tracker as tk
+
+    t = tk.PipeTracker()
+    t.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
+    k = iter(range(10**9))
+    motion, det = np.array([0.0, 0.5, 0.01]), np.array([0.1, 3.0, 0.05, 0.0])
+
+    def compiled():
+        i = next(k)
+        tk.track_step(t.state, i % 7 != 0, det, motion, t.navigation.variances, t._tp, 1.0, 3.0, t.out)
+
+    def whole():
+        i = next(k)
+        t.step((0.5 * i, 0.0, 0.01 * i), i % 7 != 0, (0.1, 3.0, 0.05, 0.0))
+
+    compiled(), whole()
+    tc, tw = [], []
+    for _ in range(repeats):
+        tc += blocks(compiled, 1, 2000)
+        tw += blocks(whole, 1, 2000)
+    return [
+        ("tracker, compiled step (track_step)", statistics.median(tc), "≤ 0.02 ms"),
+        ("tracker, one decision (navigation + track_step)", statistics.median(tw), "≤ 0.02 ms"),
+    ]
 
 
 def main() -> None:
@@ -104,14 +162,18 @@ def main() -> None:
 
         return step
 
-    ideal, vision = stepper("ideal"), stepper("vision")
-    ideal(), vision()
-    ti, tv = [], []
-    for _ in range(args.repeats):  # in turns, so both meet the same load
+    ideal, vision, raw = stepper("ideal"), stepper("vision"), stepper("vision-raw")
+    ideal(), vision(), raw()
+    ti, tv, tr = [], [], []
+    for _ in range(args.repeats):  # in turns, so all meet the same load
         ti += blocks(ideal, 1, 200)
         tv += blocks(vision, 1, 200)
+        tr += blocks(raw, 1, 200)
     rows.append(("env.step, ideal camera", statistics.median(ti), ""))
-    rows.append(("env.step, vision camera", statistics.median(tv), "≤ 0.4 ms"))
+    rows.append(("env.step, vision camera (detector + tracker)", statistics.median(tv), "≤ 0.4 ms"))
+    rows.append(("env.step, vision-raw camera (detector alone)", statistics.median(tr), ""))
+    rows += reset_rows(gym, pipe, ideal, args.repeats)
+    rows += tracker_rows(args.repeats)
     vec = PipelineFollowingVectorEnv(16, pipe, episode_seconds=86_400.0, camera="vision")
     vec.reset(seed=0)
     zeros = np.zeros(16)

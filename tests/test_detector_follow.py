@@ -134,3 +134,20 @@ def test_walk_does_not_follow_a_single_edge_or_texture():
     for seed in range(5):
         noise = (np.random.default_rng(seed).random((96, 64)) < 0.03).astype(np.uint8) * 255
         assert follow_pipe(noise, 0.0, 0.5, 0.0, 1.0, 4 * PX, 1.0, 3.0, 100)[2] <= 1
+
+
+@pytest.mark.parametrize("turn", [110.0, 135.0, 150.0])
+def test_far_end_of_a_rendered_hook_lies_after_the_corner(turn):
+    # a hook sharper than the walk can turn: the second leg that starts at the walk's stop carries
+    # the far end on to where the exact camera has it (the first leg's corner is ≥ 0.8 m from it)
+    renderer = Renderer(WATER_PRESETS["clear"])
+    for seed in range(8):
+        rng = np.random.default_rng(seed)
+        lat0, vertex_fwd = rng.uniform(-0.2, 0.2), rng.uniform(1.6, 2.4)
+        pts, cum = l_bend(turn, lat0, vertex_fwd)
+        seen, x1, y1, x2, y_near, _, _ = observe(pts, cum, 0.0, 0.0, 0.0, 20.0, PAPER_CAMERA)
+        assert seen and math.hypot(x1 - lat0, y1 - vertex_fwd) > 0.8
+        det = detect_pipe(renderer.render(pts, cum, (0.0, 0.0, 0.0), make_textures(rng), rng))
+        assert det.found
+        assert math.hypot(det.x1 - x1, det.y1 - y1) < 0.2, seed
+        assert math.hypot(det.x2 - x2, det.y_near - y_near) < 0.2, seed

@@ -227,3 +227,27 @@ def test_tracking_adds_no_false_detections_on_frames_without_pipe():
         # the previous frame saw the pipe where it was; this one has none
         false += detect_pipe(empty, previous=detector.Detection(True, x1, y1, x2, y_near, 1.0)).found
     assert false / len(frames) <= 0.02
+
+
+def test_texture_cache_gives_a_fresh_draws_tiles_and_leaves_the_generator_where_it_would():
+    from pipefollow.perception.image import TextureCache
+
+    cache = TextureCache(size=2)
+    for growth in (True, False):
+        fresh = np.random.default_rng(11)
+        want = make_textures(fresh, growth)
+        after = fresh.random(3)
+        for _ in range(2):  # a miss, then a hit
+            rng = np.random.default_rng(11)
+            got = cache.draw(rng, growth)
+            np.testing.assert_array_equal(got.seabed, want.seabed)
+            np.testing.assert_array_equal(got.growth, want.growth)
+            np.testing.assert_array_equal(rng.random(3), after)
+    # without growth the seabed is the same tile and the growth tile is blank
+    np.testing.assert_array_equal(
+        make_textures(np.random.default_rng(4), False).seabed, make_textures(np.random.default_rng(4)).seabed
+    )
+    assert not make_textures(np.random.default_rng(4), False).growth.any()
+    # the oldest scene leaves when a third comes
+    cache.draw(np.random.default_rng(12))
+    assert len(cache._scenes) == 2

@@ -142,3 +142,35 @@ def test_cli_suite_errors_are_one_line_and_write_nothing(tmp_path, args):
     assert res.exit_code == 2
     assert res.stderr.startswith("pipefollow: error: ") and res.stderr.count("\n") == 1
     assert not out.exists() or not any(out.iterdir())
+
+
+def test_sharp_pipes_have_corners_of_90_to_150_degrees_short_straights_and_never_cross():
+    from pipefollow.sim.suites import SHARP_MAX_HEADING_DEG, _segment_gap
+
+    lv = LEVELS["sharp"]
+    suite = get_suite("heldout-sharp")
+    assert suite.count == 100 and not suite.is_training
+    for pipe in suite.pipes(30):
+        p = pipe.points
+        h = _headings(p)
+        turns = np.degrees(np.abs(np.angle(np.exp(1j * np.diff(h)))))
+        assert turns.min() >= 90.0 - 1e-9 and turns.max() <= 150.0 + 1e-9  # corners only, no arcs
+        assert np.degrees(np.abs(h)).max() <= SHARP_MAX_HEADING_DEG + 1e-9
+        seg = np.hypot(*np.diff(p, axis=0).T)
+        assert seg.min() >= lv.straight_m[0] - 1e-9 and seg.max() <= lv.straight_m[1] + 1e-9
+        # straights that do not meet stay apart (no crossing): at a hook of ≤ 150° after a straight
+        # of ≥ 3 m the next-but-one straight passes 3·sin(30°) = 1.5 m from the first at the least
+        for j in range(len(p) - 1):
+            for i in range(j - 1):
+                assert _segment_gap(p[i], p[i + 1], p[j], p[j + 1]) > 1.5 - 1e-9
+    np.testing.assert_array_equal(suite.pipe(3).points, suite.pipe(3).points)
+    long = suite.pipe(3, min_length=200.0)
+    np.testing.assert_array_equal(long.points[: len(suite.pipe(3).points)], suite.pipe(3).points)
+
+
+def test_segment_gap_against_hand_values():
+    from pipefollow.sim.suites import _segment_gap
+
+    assert _segment_gap((0, 0), (2, 0), (1, -1), (1, 1)) == 0.0  # crossing
+    assert _segment_gap((0, 0), (2, 0), (0, 1), (2, 1)) == 1.0  # parallel, 1 apart
+    assert math.isclose(_segment_gap((0, 0), (1, 0), (2, 1), (3, 2)), math.sqrt(2.0))  # end to end

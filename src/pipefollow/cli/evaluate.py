@@ -131,7 +131,7 @@ def _settings(disturbance, camera, warnings: list[str]) -> dict:
     if disturbance != _disturbance.NO_DISTURBANCE:
         out["disturbance"] = _disturbance.to_dict(disturbance)
     if camera:
-        out["camera"] = "vision"
+        out["camera"] = camera["camera"]
         out["water"] = camera["water"]._asdict()
     if warnings:
         out["warnings"] = warnings

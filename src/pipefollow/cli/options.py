@@ -239,24 +239,27 @@ def camera_options(fn):
         }
         if camera == "ideal":
             if settings or water is not None:
-                raise UserError("--water, --turbidity, --burial and --growth need --camera vision")
+                raise UserError(
+                    "--water, --turbidity, --burial and --growth need --camera vision (or vision-raw)"
+                )
             return fn(*args, camera=None, **kwargs)
         from pipefollow.perception.camera import camera_settings
 
         try:
-            chosen = camera_settings("vision", water={"preset": water or "clear", **settings})
+            chosen = camera_settings(camera, water={"preset": water or "clear", **settings})
         except (ValueError, ImportError) as e:
             raise UserError(str(e)) from None
-        return fn(*args, camera={"camera": "vision", "water": chosen.water}, **kwargs)
+        return fn(*args, camera={"camera": camera, "water": chosen.water}, **kwargs)
 
     number = click.FloatRange(min=0.0)
     options = [
         click.option(
             "--camera",
-            type=click.Choice(["ideal", "vision"]),
+            type=click.Choice(["ideal", "vision", "vision-raw"]),
             default="ideal",
             show_default=True,
-            help="ideal: the exact visible piece (the paper's); vision: a pipe detector on the camera image.",
+            help="ideal: the exact visible piece (the paper's); vision: a pipe detector on the camera image "
+            "and a tracker over the frames; vision-raw: the detector alone, frame by frame.",
         ),
         click.option(
             "--water",

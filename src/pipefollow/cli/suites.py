@@ -53,7 +53,7 @@ def _suite_table(rows: list[dict]) -> str:
         count = "∞" if r["count"] is None else str(r["count"])
         turns = "{:g}–{:g}°".format(*r["turn_deg"])
         straights = "{:g}–{:g} m".format(*r["straight_m"])
-        radii = "{:g}–{:g} m".format(*r["arc_radius_m"])
+        radii = "{:g}–{:g} m".format(*r["arc_radius_m"]) if max(r["arc_radius_m"]) > 0 else "corners"
         cells = (r["name"], r["kind"], count, turns, straights, radii, r["description"])
         lines.append("{:<15} {:<8} {:>5} {:>9} {:>10} {:>10}  {}".format(*cells))
     return "\n".join(lines)

@@ -133,7 +133,9 @@ class PipelineFollowingEnv(gym.Env):
       most neural-network policies take; the observation rounded to float32).
     * ``camera``: ``"ideal"`` (default: the exact visible piece, the paper's) or ``"vision"``: the
       observation and the in-view decision come from a pipe detector on the rendered camera image
-      (:mod:`pipefollow.perception`; needs the extra ``vision``); "not found" is a lost pipe.
+      and a tracker that carries the pipe from frame to frame by the vehicle's navigation
+      (:mod:`pipefollow.perception`; needs the extra ``vision``); a pipe out of the tracked view is
+      a lost pipe. ``"vision-raw"``: the detector alone, each frame's detection as it is.
     * ``observation``: ``"state"`` (default, ``Box(4)``) or ``"image"``: the camera image,
       ``Box(0, 255, (H, W, 1), uint8)``.
     * ``reward_from``: ``"truth"`` (default: eq. 19 from the true geometry; a lost detection still
@@ -167,8 +169,9 @@ class PipelineFollowingEnv(gym.Env):
     last step (``terminated or truncated``) the whole episode's, which clients that log per episode
     read there; steps past the end repeat them. With the vision camera also ``detected``,
     ``detection_confidence``, ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the
-    exact camera's); the episode's summary is then the exact camera's too. ``reached_pipe_end`` (a 0-d
-    bool) is in every info too: True once the episode has ended at the pipe's far end.
+    exact camera's; with the tracker also ``track_confidence``); the episode's summary is then the
+    exact camera's too. ``reached_pipe_end`` (a 0-d bool) is in every info too: True once the
+    episode has ended at the pipe's far end.
 
     ## Registered ids
 

@@ -2,10 +2,13 @@
 
 With ``camera="vision"`` the observation slots of the simulation state (``x1, y1, x2, y_near``,
 ``e_dist``, ``e_angl``, the in-view flag and the side of the last sighting) come from
-:func:`~pipefollow.perception.detector.detect_pipe` on the rendered image instead of from the
-exact geometry; "not found" is a lost pipe, so the next decision runs the search behaviour and
-this one gets the lost reward. The reward (eq. 19) stays computed from the true geometry
-(``reward_from="truth"``, docs/design.md says why) unless ``reward_from="detected"``.
+:func:`~pipefollow.perception.detector.detect_pipe` on the rendered image, through the pipe tracker
+(:mod:`pipefollow.perception.tracker`: the pipe carried from frame to frame by the vehicle's
+navigation, detections gated), instead of from the exact geometry; ``camera="vision-raw"`` takes
+each frame's detection as it is. A pipe out of the tracked (or raw) view is a lost pipe, so the
+next decision runs the search behaviour and this one gets the lost reward. The reward (eq. 19)
+stays computed from the true geometry (``reward_from="truth"``, docs/design.md says why) unless
+``reward_from="detected"``.
 ``observation="image"`` hands the image itself to the agent, with either camera.
 
 The environments call :meth:`VisionCamera.reset` after their reset and :meth:`VisionCamera.step`
@@ -20,14 +23,24 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from pipefollow.perception.detector import NOT_FOUND, Detection, detect_pipe, require_cv2
-from pipefollow.perception.image import Renderer, Textures, make_textures
+from pipefollow.perception.image import SCENES, Renderer, Textures
 from pipefollow.perception.pixels import column_at, pixel_grid, row_at
+from pipefollow.perception.tracker import (
+    OUT_IN_VIEW,
+    OUT_SIDE,
+    OUT_X1,
+    OUT_X2,
+    OUT_Y1,
+    OUT_Y_NEAR,
+    PipeTracker,
+)
 from pipefollow.perception.water import Water, water_from
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams, tracking_errors
 from pipefollow.sim.reward import reward
 
-CAMERAS = ("ideal", "vision")
+CAMERAS = ("ideal", "vision", "vision-raw")
+VISION_CAMERAS = ("vision", "vision-raw")  # the cameras that detect the pipe in the image
 OBSERVATIONS = ("state", "image")
 REWARD_FROM = ("truth", "detected")
 
@@ -36,7 +49,7 @@ REWARD_FROM = ("truth", "detected")
 class CameraSettings:
     """How the environment sees: the camera, what the agent observes, the reward's source, the water."""
 
-    camera: str = "ideal"  # "ideal" (the paper's exact visible piece) or "vision" (the detector)
+    camera: str = "ideal"  # "ideal" (the paper's exact piece), "vision" (detector + tracker), "vision-raw"
     observation: str = "state"  # "state" (x1, y1, x2, v_x) or "image" (the camera image, (H, W, 1))
     reward_from: str = "truth"  # eq. 19 from the true geometry, or from the detection
     water: Water = Water()  # water and camera settings of the image
@@ -44,7 +57,17 @@ class CameraSettings:
     @property
     def renders(self) -> bool:
         """Whether the environment renders camera images at all."""
-        return self.camera == "vision" or self.observation == "image"
+        return self.detects or self.observation == "image"
+
+    @property
+    def detects(self) -> bool:
+        """Whether the observation comes from the detector (``vision`` or ``vision-raw``)."""
+        return self.camera in VISION_CAMERAS
+
+    @property
+    def tracks(self) -> bool:
+        """Whether the detections go through the pipe tracker (``vision``)."""
+        return self.camera == "vision"
 
 
 class Sighting(NamedTuple):
@@ -87,12 +110,22 @@ def camera_settings(
     ):
         if value not in allowed:
             raise ValueError(f"{name} must be one of {', '.join(allowed)}; got {value!r}")
-    if reward_from == "detected" and camera != "vision":
-        raise ValueError("reward_from='detected' needs camera='vision' (the ideal camera detects nothing)")
+    if reward_from == "detected" and camera not in VISION_CAMERAS:
+        raise ValueError(
+            "reward_from='detected' needs camera='vision' or 'vision-raw' (the ideal camera detects nothing)"
+        )
     settings = CameraSettings(camera, observation, reward_from, water_from(water))
-    if camera == "vision":
+    if camera in VISION_CAMERAS:
         require_cv2()
     return settings
+
+
+def _spawn(rng: np.random.Generator) -> np.random.Generator:
+    """A child generator of ``rng``, leaving ``rng``'s stream as it is (one draw if it cannot spawn)."""
+    try:
+        return rng.spawn(1)[0]
+    except (TypeError, ValueError):  # a bit generator without a seed sequence
+        return np.random.default_rng(int(rng.integers(2**63)))
 
 
 class VisionCamera:
@@ -108,13 +141,24 @@ class VisionCamera:
         self.truth = TrueView(False, 0.0, 0.0, 0.0, 0.0)
         self._textures: Textures | None = None
         self._last = Sighting()  # the last detection's slots
+        self.tracker = PipeTracker(camera.half_width, camera.depth) if settings.tracks else None
 
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
-        """A new scene (seabed and growth textures from ``rng``) and its first image."""
-        self._textures = make_textures(rng)
+        """A new scene (seabed and growth textures from ``rng``) and its first image.
+
+        The textures come from :data:`~pipefollow.perception.image.SCENES`: a seed's scene is made
+        once (the generator left as drawing it leaves it), and without marine growth its tile stays blank.
+        """
+        self._textures = SCENES.draw(rng, growth=self.settings.water.growth > 0.0)
         self._last = Sighting()
         self.detection = NOT_FOUND  # no tracking across episodes
+        if self.tracker is not None:
+            self.tracker.start()
         self._look(state, points, cum, rng)
+        if self.tracker is not None:
+            # the navigation's errors from a generator of the environment's own, spawned so that
+            # the frames draw what they would without the tracker
+            self.tracker.navigation.reset(_spawn(rng))
 
     def step(
         self,
@@ -132,7 +176,7 @@ class VisionCamera:
         """
         self._look(state, points, cum, rng)
         s = state
-        if self.settings.camera != "vision":
+        if not self.settings.detects:
             return sim_reward
         if s[sim.OVERRIDDEN] != 0.0 or s[sim.IN_VIEW] == 0.0:
             return self.lost_reward
@@ -145,11 +189,14 @@ class VisionCamera:
         self._true_errors = (s[sim.E_DIST], s[sim.E_ANGL])
         pose = (s[sim.X], s[sim.Y], s[sim.PSI])
         self.renderer.render(points, cum, pose, self._textures, rng, out=self.image)
-        if self.settings.camera != "vision":
+        if not self.settings.detects:
             return
         wt, cam = self.settings.water, self.camera
         det = detect_pipe(self.image, cam.half_width, cam.depth, wt.pipe_diameter, previous=self.detection)
         self.detection = det
+        if self.tracker is not None:
+            self._track(s, pose, det)
+            return
         if det.found:
             e_dist, e_angl = tracking_errors(det.x1, det.y1, det.x2, det.y_near)
             side = 1.0 if det.x1 >= 0.0 else -1.0
@@ -160,6 +207,21 @@ class VisionCamera:
         s[sim.E_DIST], s[sim.E_ANGL], s[sim.LAST_SIDE] = last.e_dist, last.e_angl, last.side
         s[sim.IN_VIEW] = 1.0 if det.found else 0.0
 
+    def _track(self, s: np.ndarray, pose: tuple[float, float, float], det: Detection) -> None:
+        """The observation slots from the tracker fed with this frame's detection."""
+        out = self.tracker.step(pose, det.found, (det.x1, det.y1, det.x2, det.y_near))
+        seen = out[OUT_IN_VIEW] != 0.0
+        if seen:
+            x1, y1, x2, y_near = out[OUT_X1], out[OUT_Y1], out[OUT_X2], out[OUT_Y_NEAR]
+            e_dist, e_angl = tracking_errors(x1, y1, x2, y_near)
+            self._last = Sighting(x1, y1, x2, y_near, e_dist, e_angl, out[OUT_SIDE])
+        else:  # the last sighting stays; the side is the tracker's (towards a turn it saw)
+            self._last = self._last._replace(side=out[OUT_SIDE])
+        last = self._last
+        s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR] = last.x1, last.y1, last.x2, last.y_near
+        s[sim.E_DIST], s[sim.E_ANGL], s[sim.LAST_SIDE] = last.e_dist, last.e_angl, last.side
+        s[sim.IN_VIEW] = 1.0 if seen else 0.0
+
     def observation(self, state: np.ndarray, dtype=np.float64, slots: np.ndarray | None = None) -> np.ndarray:
         """The observation: ``state[:4]`` or ``state[slots]`` as ``dtype``, or the image ``(H, W, 1)``."""
         if self.settings.observation == "image":
@@ -169,9 +231,11 @@ class VisionCamera:
     def info(self) -> dict[str, np.ndarray]:
         """The camera's entries of ``info`` (0-d arrays): the detection and the exact camera's view."""
         out: dict[str, np.ndarray] = {"true_pipe_in_view": np.array(self.truth.in_view)}
-        if self.settings.camera == "vision":
+        if self.settings.detects:
             out["detected"] = np.array(self.detection.found, dtype=bool)
             out["detection_confidence"] = np.array(float(self.detection.confidence))
+            if self.tracker is not None:
+                out["track_confidence"] = np.array(self.tracker.confidence)
             out["true_e_dist"] = np.array(float(self._true_errors[0]))
             out["true_e_angl"] = np.array(float(self._true_errors[1]))
         return out

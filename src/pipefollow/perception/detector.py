@@ -56,6 +56,8 @@ MIN_FIT_PIXELS = 6  # edge pixels an edge's refit needs; with fewer the Hough li
 MIN_FIT_SPREAD = 0.05  # share of the extent the pixels must spread along (s.d.) to tilt the line (a blob)
 EXTEND = 0.4  # m: how far edge pixels may lengthen the Hough segments' extent (and the walk starts back)
 SNAP_PX = 4.0  # pixels: an end this near the border goes onto it (Canny loses the last pixels at the border)
+HOOK_MIN_TURN = math.radians(20.0)  # rad: a second leg's segments turn at least this from the first leg
+HOOK_JOIN = 0.45  # m: a second leg starting this near an end stopped inside the view continues the pipe
 _CV2 = None
 
 
@@ -205,7 +207,9 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     found, ends, confidence, sep = leg(segs, edges, half_width, depth, diameter, min_confidence)
     if not found:
         return Detection(False, 0.0, 0.0, 0.0, 0.0, confidence)
+    direction = math.atan2(ends[1, 1] - ends[0, 1], ends[1, 0] - ends[0, 0])
     extend_ends(ends, edges, 0.5 * sep, half_width, depth, EXTEND)
+    join_hook(ends, segs, edges, direction, half_width, depth, diameter, min_confidence)
     xa, ya, xb, yb = ends[0, 0], ends[0, 1], ends[1, 0], ends[1, 1]
     # the near end is the one nearer the AUV (the footprint's origin): the pipe comes from behind
     # it, also when it runs across the view after a turn
@@ -216,6 +220,44 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     x2 = min(max(xa, -half_width), half_width)
     y_near = min(max(ya, 0.0), depth)
     return Detection(True, x1, y1, x2, y_near, confidence)
+
+
+@njit(cache=True)
+def join_hook(ends, segs, edges, direction, half_width, depth, diameter, min_confidence):
+    """Carry an end that stops inside the footprint on along a second leg that starts there (in place).
+
+    The walk along the edges turns at most 60° a step and stops at a corner sharper than about
+    100°. There the pipe goes on as a second straight leg in another direction: the strongest leg
+    among the Hough segments more than :data:`HOOK_MIN_TURN` off the first leg's ``direction``
+    (rad); if one of its ends lies within :data:`HOOK_JOIN` of the stopped end, that end moves to
+    the second leg's other end.
+    """
+    h, w = edges.shape
+    reach = SNAP_PX * pixel_pitch(pixel_grid(half_width, depth, h, w))
+    inner = -1
+    for e in range(2):
+        x, y = ends[e, 0], ends[e, 1]
+        if min(half_width - abs(x), y, depth - y) > reach:
+            inner = e if inner < 0 else 2  # both inside: a short piece, no hook to follow
+    if inner < 0 or inner == 2:
+        return
+    keep = np.zeros(segs.shape[0], dtype=np.bool_)
+    for i in range(segs.shape[0]):
+        # pixel rows run against y: the segment's direction in metres has its row difference negated
+        t = math.atan2(-(segs[i, 3] - segs[i, 1]), segs[i, 2] - segs[i, 0])
+        diff = abs((t - direction + 0.5 * math.pi) % math.pi - 0.5 * math.pi)
+        keep[i] = diff > HOOK_MIN_TURN
+    if keep.sum() < 2:
+        return
+    found, second, _, _ = leg(segs[keep], edges, half_width, depth, diameter, min_confidence)
+    if not found:
+        return
+    x, y = ends[inner, 0], ends[inner, 1]
+    da = math.hypot(second[0, 0] - x, second[0, 1] - y)
+    db = math.hypot(second[1, 0] - x, second[1, 1] - y)
+    if min(da, db) < HOOK_JOIN:
+        o = 1 if da < db else 0
+        ends[inner, 0], ends[inner, 1] = second[o, 0], second[o, 1]
 
 
 class Leg(NamedTuple):

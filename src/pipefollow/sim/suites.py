@@ -14,7 +14,15 @@ level         turns (deg)  straights (m)    arc share   arc radius (m)
 ``easy``      10 – 30      6 – 12           50 %        3 – 6
 ``medium``    30 – 60      4 – 8            50 %        2 – 4
 ``hard``      45 – 90      2 – 4            25 %        1 – 2
+``sharp``     90 – 150     3 – 5            0 %         –
 ============  ===========  ===============  ==========  =================
+
+``sharp`` (only the held-out suite ``heldout-sharp``) has corners only, hooks up to 150°; its
+heading may go to ±:data:`SHARP_MAX_HEADING_DEG` (a hook from a straight north needs 150°), and a
+bend whose next straight (at its longest) would pass within :data:`SHARP_CLEARANCE_M` of the pipe
+before its last corner turns the other way, or is drawn anew from the same stream (at most
+:data:`SHARP_ATTEMPTS` times), so the pipe never crosses itself; over the 100 held-out pipes no two
+straights that do not meet come closer than 1.67 m (the legs either side of a 150° hook).
 
 Every pipe is a pure function of its seed: pipe ``k`` of stream ``S`` and family ``F`` comes from
 ``SeedSequence([SUITE_ROOT, S, F, k])``. Two streams exist: :data:`TRAIN_STREAM` for the
@@ -41,6 +49,8 @@ ARC_STEP_DEG = 10.0  # largest turn of one piece of a discretized arc
 MAX_HEADING_DEG = 100.0  # bends keep the heading within ± this of the start heading
 MIN_LENGTH_M = 46.0  # default pipe length: 60 s at 0.6 m/s (cruise is 0.48 m/s) plus 10 m
 CRUISE_MARGIN = 0.6  # m/s used to size pipes for long episodes (above the 0.48 m/s cruise speed)
+SHARP_MAX_HEADING_DEG = 165.0  # the sharp level's heading bound: both sides of a hook of ≤ 150° stay in it
+SHARP_CLEARANCE_M = 3.0  # the sharp level: a new straight keeps this far from the pipe before its last corner
 
 
 class SuiteError(PipelineError):
@@ -56,14 +66,19 @@ class Level:
     straight_m: tuple[float, float]
     arc_share: float
     radius_m: tuple[float, float]
+    max_heading_deg: float = MAX_HEADING_DEG  # bends keep the heading within ± this of the start's
+    clearance_m: float = 0.0  # > 0: a bend turns the other way if its straight would pass this near the pipe
 
 
 LEVELS = {
     "easy": Level("easy", (10.0, 30.0), (6.0, 12.0), 0.5, (3.0, 6.0)),
     "medium": Level("medium", (30.0, 60.0), (4.0, 8.0), 0.5, (2.0, 4.0)),
     "hard": Level("hard", (45.0, 90.0), (2.0, 4.0), 0.25, (1.0, 2.0)),
+    "sharp": Level(
+        "sharp", (90.0, 150.0), (3.0, 5.0), 0.0, (0.0, 0.0), SHARP_MAX_HEADING_DEG, SHARP_CLEARANCE_M
+    ),
 }
-FAMILY_IDS = {"easy": 1, "medium": 2, "hard": 3, "mixed": 4}  # entropy word of each family
+FAMILY_IDS = {"easy": 1, "medium": 2, "hard": 3, "mixed": 4, "sharp": 5}  # entropy word of each family
 _LEVEL_ORDER = ("easy", "medium", "hard")
 
 
@@ -146,6 +161,13 @@ SUITES = {
         Suite("heldout-easy", "easy", HELDOUT_STREAM, HELDOUT_COUNT, "held-out test, easy pipes"),
         Suite("heldout-medium", "medium", HELDOUT_STREAM, HELDOUT_COUNT, "held-out test, medium pipes"),
         Suite("heldout-hard", "hard", HELDOUT_STREAM, HELDOUT_COUNT, "held-out test, hard pipes"),
+        Suite(
+            "heldout-sharp",
+            "sharp",
+            HELDOUT_STREAM,
+            HELDOUT_COUNT,
+            "held-out test: corners of 90–150°, short straights",
+        ),
     )
 }
 
@@ -193,19 +215,19 @@ def suite_pipe(
     x = y = heading = 0.0
     pts = [(0.0, 0.0)]
     length = 0.0
-    max_heading = math.radians(MAX_HEADING_DEG)
+    max_heading = math.radians(lv.max_heading_deg)
     step = math.radians(ARC_STEP_DEG)
-    for u_len, u_turn, u_side, u_arc, u_rad, _ in _draws(rng, 16):
+    draws = _draws(rng, 16)
+    for u_len, u_turn, u_side, u_arc, u_rad, _ in draws:
         straight = lv.straight_m[0] + u_len * (lv.straight_m[1] - lv.straight_m[0])
         x, y = x + straight * math.cos(heading), y + straight * math.sin(heading)
         pts.append((x, y))
         length += straight
         if length >= min_length:
             break
-        turn = math.radians(lv.turn_deg[0] + u_turn * (lv.turn_deg[1] - lv.turn_deg[0]))
-        turn = turn if u_side < 0.5 else -turn
-        if abs(heading + turn) > max_heading:
-            turn = -turn
+        turn = _turn(lv, heading, u_turn, u_side, max_heading)
+        if lv.clearance_m > 0.0:
+            turn = _clear_turn(lv, pts, heading, turn, draws, max_heading)
         if u_arc < lv.arc_share:
             radius = lv.radius_m[0] + u_rad * (lv.radius_m[1] - lv.radius_m[0])
             pieces = max(1, math.ceil(abs(turn) / step - 1e-9))
@@ -222,6 +244,72 @@ def suite_pipe(
     return Pipeline(np.array(pts), name or f"{family}-{stream}-{k}")
 
 
+
+
+def _turn(lv: Level, heading: float, u_turn: float, u_side: float, max_heading: float) -> float:
+    """A bend's turn (rad) from its two uniforms.
+
+    Its size in the level's range, its side at random unless that breaks the heading bound.
+    """
+    turn = math.radians(lv.turn_deg[0] + u_turn * (lv.turn_deg[1] - lv.turn_deg[0]))
+    turn = turn if u_side < 0.5 else -turn
+    if abs(heading + turn) > max_heading:
+        turn = -turn
+    return turn
+
+
+SHARP_ATTEMPTS = 32  # bends drawn at most for one corner of the sharp level before the clearest is kept
+
+
+def _clear_turn(lv: Level, pts: list, heading: float, turn: float, draws, max_heading: float) -> float:
+    """A bend whose next straight (at its longest) keeps ``lv.clearance_m`` from the pipe laid so far.
+
+    ``turn`` is tried first, then its other side, then new bends from ``draws`` (the same stream,
+    so a longer pipe still extends a shorter one); after :data:`SHARP_ATTEMPTS` the clearest bend
+    tried is kept.
+    """
+    best_turn, best_gap = turn, -1.0
+    for attempt in range(SHARP_ATTEMPTS):
+        if attempt > 0:
+            _, u_turn, u_side, *_ = next(draws)
+            turn = _turn(lv, heading, u_turn, u_side, max_heading)
+        for t in (turn, -turn):
+            if abs(heading + t) > max_heading + 1e-12:
+                continue
+            gap = _gap_ahead(pts, heading + t, lv.straight_m[1])
+            if gap >= lv.clearance_m:
+                return t
+            if gap > best_gap:
+                best_turn, best_gap = t, gap
+    return best_turn
+
+
+def _gap_ahead(pts: list, heading: float, reach: float) -> float:
+    """The distance from a straight of ``reach`` (from the last point at ``heading``) to the pipe.
+
+    The pipe before the last straight: that one meets the new straight at the corner by construction.
+    """
+    x, y = pts[-1]
+    end = (x + reach * math.cos(heading), y + reach * math.sin(heading))
+    return min((_segment_gap(pts[i], pts[i + 1], (x, y), end) for i in range(len(pts) - 2)), default=math.inf)
+
+
+def _segment_gap(a, b, c, d):
+    """The shortest distance between segments a–b and c–d (0 if they cross)."""
+
+    def point_to(p, q, r):  # distance from p to segment q–r
+        qx, qy, rx, ry = q[0], q[1], r[0], r[1]
+        ex, ey = rx - qx, ry - qy
+        n2 = ex * ex + ey * ey
+        t = 0.0 if n2 == 0.0 else min(max(((p[0] - qx) * ex + (p[1] - qy) * ey) / n2, 0.0), 1.0)
+        return math.hypot(p[0] - qx - t * ex, p[1] - qy - t * ey)
+
+    def side(p, q, r):
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+
+    if side(a, b, c) * side(a, b, d) < 0.0 and side(c, d, a) * side(c, d, b) < 0.0:
+        return 0.0
+    return min(point_to(a, c, d), point_to(b, c, d), point_to(c, a, b), point_to(d, a, b))
 
 
 def export_suite(suite: Suite, folder, n: int | None = None, min_length: float = MIN_LENGTH_M) -> list:

@@ -1,0 +1,214 @@
+"""The pipe tracker: its Kalman steps against textbook and numerical answers, its gate, its misses."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from pipefollow.perception import tracker as tk
+from pipefollow.perception.tracker import Navigation, NavParams, PipeTracker
+
+
+def moved(px, py, dl, df, dpsi):
+    """A world point's camera coordinates after the vehicle moved (Δl, Δf) and turned Δψ (to starboard)."""
+    qx, qy = px - dl, py - df
+    return math.cos(dpsi) * qx - math.sin(dpsi) * qy, math.sin(dpsi) * qx + math.cos(dpsi) * qy
+
+
+def line_through(ax, ay, bx, by):
+    """(θ, d) of the line a → b: θ from forward to starboard, d the offset along n = (cos θ, −sin θ)."""
+    th = math.atan2(bx - ax, by - ay)
+    return th, ax * math.cos(th) - ay * math.sin(th)
+
+
+def test_prediction_moves_the_line_as_the_world_fixed_points_on_it_move():
+    th, d = 0.3, 0.2
+    T = tk.new_track()
+    T[tk.TH], T[tk.D] = th, d
+    dl, df, dpsi = 0.1, 0.5, 0.05
+    tk.predict(T, tk.TH, dl, df, dpsi, np.zeros(3), 0.0, 0.0)
+    a = moved(*tk.on_line(th, d, -1.0), dl, df, dpsi)
+    b = moved(*tk.on_line(th, d, 2.0), dl, df, dpsi)
+    assert (T[tk.TH], T[tk.D]) == pytest.approx(line_through(*a, *b), abs=1e-12)
+
+
+def test_prediction_covariance_is_the_jacobians_sandwich():
+    # F P Fᵀ + G Σ Gᵀ + Q with F and G by central differences of the geometric motion
+    th, d = -0.4, 0.35
+    P = np.array([[0.01, 0.002], [0.002, 0.004]])
+    motion = np.array([0.07, 0.45, -0.03])
+    nav_var = np.array([1e-4, 2e-4, 3e-5])
+    q_t, q_d = 0.002, 0.0005
+
+    def f(x, m):
+        a = moved(*tk.on_line(x[0], x[1], -1.0), *m)
+        b = moved(*tk.on_line(x[0], x[1], 2.0), *m)
+        return np.array(line_through(*a, *b))
+
+    h = 1e-6
+    x0 = np.array([th, d])
+    F = np.column_stack([(f(x0 + h * e, motion) - f(x0 - h * e, motion)) / (2 * h) for e in np.eye(2)])
+    G = np.column_stack([(f(x0, motion + h * e) - f(x0, motion - h * e)) / (2 * h) for e in np.eye(3)])
+    expected = F @ P @ F.T + G @ np.diag(nav_var) @ G.T + np.diag([q_t, q_d])
+    T = tk.new_track()
+    T[tk.TH], T[tk.D], T[tk.P], T[tk.P + 1], T[tk.P + 2] = th, d, P[0, 0], P[0, 1], P[1, 1]
+    tk.predict(T, tk.TH, *motion, nav_var, q_t, q_d)
+    got = np.array([[T[tk.P], T[tk.P + 1]], [T[tk.P + 1], T[tk.P + 2]]])
+    np.testing.assert_allclose(got, expected, rtol=1e-6, atol=1e-12)
+
+
+def test_line_update_is_the_textbook_kalman_step():
+    T = tk.new_track()
+    x = np.array([0.1, -0.05])
+    P = np.array([[0.02, -0.003], [-0.003, 0.01]])
+    T[tk.TH], T[tk.D], T[tk.P], T[tk.P + 1], T[tk.P + 2] = x[0], x[1], P[0, 0], P[0, 1], P[1, 1]
+    z = np.array([0.16, 0.02])
+    R = np.array([[0.004, -0.001], [-0.001, 0.003]])
+    nu_t, nu_d, s_tt, s_td, s_dd, m2 = tk.innovation(T, tk.TH, z[0], z[1], R[0, 0], R[0, 1], R[1, 1])
+    S = P + R
+    assert m2 == pytest.approx((z - x) @ np.linalg.solve(S, z - x), rel=1e-12)
+    tk.correct(T, tk.TH, nu_t, nu_d, s_tt, s_td, s_dd, R[0, 0], R[0, 1], R[1, 1])
+    K = P @ np.linalg.inv(S)
+    np.testing.assert_allclose([T[tk.TH], T[tk.D]], x + K @ (z - x), rtol=1e-12)
+    P_post = (np.eye(2) - K) @ P
+    np.testing.assert_allclose(
+        [T[tk.P], T[tk.P + 1], T[tk.P + 2]], [P_post[0, 0], P_post[0, 1], P_post[1, 1]], rtol=1e-10
+    )
+
+
+def test_point_update_is_the_extended_kalman_step_of_a_point_on_the_line():
+    th, d = 0.25, 0.1
+    P = np.array([[0.01, 0.001], [0.001, 0.02]])
+    p = np.array([0.3, 1.2])  # a detected end, off the line by a little
+    sd = 0.05
+
+    def r(x):  # the point's offset from the line
+        return p[0] * math.cos(x[0]) - p[1] * math.sin(x[0]) - x[1]
+
+    h = 1e-7
+    x0 = np.array([th, d])
+    J = np.array([(r(x0 + h * e) - r(x0 - h * e)) / (2 * h) for e in np.eye(2)])
+    S = J @ P @ J + sd * sd
+    K = P @ J / S
+    T = tk.new_track()
+    T[tk.TH], T[tk.D], T[tk.P], T[tk.P + 1], T[tk.P + 2] = th, d, P[0, 0], P[0, 1], P[1, 1]
+    nu, j, s, m2 = tk.point_innovation(T, tk.TH, p[0], p[1], sd)
+    assert s == pytest.approx(S, rel=1e-6) and m2 == pytest.approx(r(x0) ** 2 / S, rel=1e-6)
+    tk.point_correct(T, tk.TH, nu, j, s)
+    np.testing.assert_allclose([T[tk.TH], T[tk.D]], x0 - K * r(x0), rtol=1e-6)
+    P_post = P - np.outer(K, K) * S
+    np.testing.assert_allclose(
+        [T[tk.P], T[tk.P + 1], T[tk.P + 2]], [P_post[0, 0], P_post[0, 1], P_post[1, 1]], rtol=1e-6
+    )
+
+
+def test_measured_line_covariance_matches_the_ends_noise():
+    rng = np.random.default_rng(3)
+    a, b, sd = np.array([0.2, 0.3]), np.array([-0.4, 2.8]), 0.05
+    th0, d0, r_tt, r_td, r_dd = tk.measured_line(*a, *b, sd)
+    assert (th0, d0) == pytest.approx(line_through(*a, *b), abs=1e-12)
+    n = 40_000
+    ea, eb = a + sd * rng.standard_normal((n, 2)), b + sd * rng.standard_normal((n, 2))
+    th = np.arctan2(eb[:, 0] - ea[:, 0], eb[:, 1] - ea[:, 1])
+    d = ea[:, 0] * np.cos(th) - ea[:, 1] * np.sin(th)
+    cov = np.cov(np.vstack([th, d]))
+    np.testing.assert_allclose([cov[0, 0], cov[0, 1], cov[1, 1]], [r_tt, r_td, r_dd], rtol=0.05)
+
+
+def straight_detections(tracker, frames, offset=0.1, step=0.5):
+    """Frames of a straight pipe along the vehicle's axis ``offset`` m to starboard; the vehicle surges."""
+    out = None
+    for k in range(frames):
+        pose = (k * step, 0.0, 0.0)  # heading north; camera x is east
+        out = tracker.step(pose, True, (offset, 3.0, offset, 0.0)).copy()
+    return out, (frames * step, 0.0, 0.0)
+
+
+def quiet_tracker():
+    nav = NavParams(dvl_sd=0.0, dvl_scale_sd=0.0, gyro_arw=0.0, gyro_bias_sd=0.0, gyro_bias_walk=0.0)
+    t = PipeTracker(nav=nav)
+    t.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
+    t.start()
+    return t
+
+
+def test_the_gate_rejects_a_detection_off_the_pipe_and_keeps_the_line():
+    t = quiet_tracker()
+    out, pose = straight_detections(t, 6)
+    assert out[tk.OUT_IN_VIEW] == 1.0 and out[tk.OUT_X1] == pytest.approx(0.1, abs=1e-3)
+    before = t.state[[tk.TH, tk.D]].copy()
+    # a texture line parallel to the pipe, 0.6 m to port: rejected, the observation stays on the pipe
+    out = t.step(pose, True, (-0.5, 3.0, -0.5, 0.0))
+    assert t.event == tk.REJECTED
+    np.testing.assert_allclose(t.state[[tk.TH, tk.D]], before, atol=1e-12)
+    assert out[tk.OUT_IN_VIEW] == 1.0 and out[tk.OUT_X1] == pytest.approx(0.1, abs=1e-3)
+
+
+def test_swapped_ends_are_put_back_in_the_pipes_direction():
+    t = quiet_tracker()
+    _, pose = straight_detections(t, 6, offset=0.0)
+    # the pipe turns slightly to starboard ahead; the detector gives its ends the wrong way round
+    out = t.step(pose, True, (0.0, 0.0, 0.15, 3.0))
+    assert t.event == tk.ACCEPTED
+    assert out[tk.OUT_Y1] == pytest.approx(3.0, abs=1e-6) and out[tk.OUT_X1] > 0.05
+    assert out[tk.OUT_Y_NEAR] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_uncertainty_grows_through_misses_until_the_pipe_is_lost():
+    t = quiet_tracker()
+    _, pose = straight_detections(t, 6)
+    variances, confidences, seen = [], [], []
+    for k in range(1, 7):
+        out = t.step((pose[0] + 0.5 * k, 0.0, 0.0), False, (0.0, 0.0, 0.0, 0.0))
+        variances.append(t.state[tk.P + 2])
+        confidences.append(t.confidence)
+        seen.append(out[tk.OUT_IN_VIEW])
+    m = int(t.params.max_misses)
+    assert all(b > a for a, b in zip(variances[:m], variances[1 : m + 1], strict=True))
+    assert all(b <= a for a, b in zip(confidences[:-1], confidences[1:], strict=True))
+    assert confidences[m - 1] < confidences[0]
+    assert seen[:m] == [1.0] * m and seen[m:] == [0.0] * (6 - m)  # carried max_misses frames, then lost
+    # while carried, the prediction stays on the pipe (straight, the vehicle on it)
+    assert t.state[tk.ACTIVE] == 0.0
+
+
+def test_a_corner_seen_ahead_is_shown_by_its_far_end_beyond_the_bend():
+    t = quiet_tracker()
+    _, pose = straight_detections(t, 6, offset=0.0)
+    # the pipe runs ahead to a corner at 1.5 m and turns 135° to port, out of view at the left border
+    out = t.step(pose, True, (-1.0, 0.5, 0.0, 0.0))
+    assert t.event == tk.BEND
+    assert (out[tk.OUT_X1], out[tk.OUT_Y1]) == pytest.approx((-1.0, 0.5))
+    # a frame in which the detector stops at the corner keeps the far end beyond it
+    out = t.step(pose, True, (0.0, 1.5, 0.0, 0.0))
+    assert (out[tk.OUT_X1], out[tk.OUT_Y1]) == pytest.approx((-1.0, 0.5))
+
+
+def test_navigation_without_errors_reports_the_true_motion():
+    nav = Navigation(
+        NavParams(dvl_sd=0.0, dvl_scale_sd=0.0, gyro_arw=0.0, gyro_bias_sd=0.0, gyro_bias_walk=0.0)
+    )
+    nav.reset(np.random.default_rng(1))
+    psi = math.radians(30.0)
+    before, after = (1.0, 2.0, psi), (1.0 + 0.4, 2.0 + 0.3, psi + 0.1)
+    dl, df, dpsi = nav.motion(before, after)
+    # forward along (cos ψ, sin ψ), starboard along (−sin ψ, cos ψ)
+    assert df == pytest.approx(0.4 * math.cos(psi) + 0.3 * math.sin(psi))
+    assert dl == pytest.approx(-0.4 * math.sin(psi) + 0.3 * math.cos(psi))
+    assert dpsi == pytest.approx(0.1)
+
+
+def test_navigation_errors_come_from_the_seeded_generator_and_have_their_spread():
+    def run(seed):
+        nav = Navigation()
+        nav.reset(np.random.default_rng(seed))
+        return np.array([nav.motion((0.0, 0.0, 0.0), (0.5, 0.0, 0.0)).copy() for _ in range(4000)])
+
+    a, b = run(7), run(7)
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a, run(8))
+    nav = Navigation()
+    # the lateral error of a 0.5 m surge: the pings' noise only (no heading error within a step)
+    assert np.std(a[:, 0]) == pytest.approx(nav.disp_sd, rel=0.1)
