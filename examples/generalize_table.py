@@ -18,9 +18,12 @@ import argparse
 import csv
 import json
 import re
+import shlex
+import sys
 from pathlib import Path
 
 from pipefollow.evaluation.benchmark import benchmark, load_controller
+from pipefollow.files.machine import write_provenance
 from pipefollow.sim.decision import PAPER_SIM
 from pipefollow.sim.disturbance import make_disturbance
 from pipefollow.sim.suites import get_suite
@@ -121,6 +124,9 @@ def main() -> None:
             w.writeheader()
             for r in table:
                 w.writerow({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()})
+        # beside the CSV: the command, the date, the code and the machine (the results page cites it)
+        command = shlex.join(["python", "examples/generalize_table.py", *sys.argv[1:]])
+        write_provenance(args.csv.parent, command)
     print(markdown(table))
 
 

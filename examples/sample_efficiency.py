@@ -30,6 +30,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import shlex
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -40,6 +42,7 @@ from pipefollow.evaluation.benchmark import run_episodes
 from pipefollow.evaluation.stats import bootstrap_ci, paired_difference
 from pipefollow.evaluation.success import SUCCESS_IN_VIEW
 from pipefollow.files.atomic import write_text_atomic
+from pipefollow.files.machine import write_provenance
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim.decision import PAPER_SIM
 from pipefollow.sim.disturbance import check, make_disturbance
@@ -200,6 +203,7 @@ def run_all(out: Path, variants, budgets, seeds, judge_on: str = TEST_SUITE) -> 
                 result = {"variant": variant, "budget": budget, "seed": seed, "steps": steps, "wall_s": wall}
                 result |= judge(agent, judge_on)
                 write_text_atomic(path, json.dumps(result))
+                write_provenance(out, shlex.join(["python", "examples/sample_efficiency.py", *sys.argv[1:]]))
                 print(f"{variant:24s} {budget:>7} seed {seed}: {wall:6.1f} s, calm "
                       f"{np.mean(result['calm']['returns']):7.2f}, disturbed "
                       f"{np.mean(result['disturbed']['returns']):7.2f}", flush=True)  # fmt: skip

@@ -383,3 +383,28 @@ def test_a_changed_verdict_makes_the_readme_stale_and_the_command_rewrites_it(tm
     copy.write_text("no markers\n")
     with pytest.raises(results_pages.PageError, match="marker lines"):
         readme.render(copy, docs)
+
+
+# ---------------------------------------------------------------------------------------------
+# Provenance of the stored outputs
+
+
+def test_a_stored_provenance_file_is_cited_on_the_page(tmp_path):
+    import json
+
+    from pipefollow.files.machine import PROVENANCE_FILE, provenance
+    from pipefollow.files.sources import package_modules, source_hash
+
+    record = provenance("python examples/generalize_table.py runs/generalize --csv out/heldout.csv")
+    assert record["code"]["sources"] == source_hash(package_modules()) and len(record["code"]["sources"]) == 16
+    assert record["date"].endswith(" UTC") and record["machine"]["numba_cpu_target"]
+    docs = tmp_path / "docs"
+    (docs / "generalize").mkdir(parents=True)
+    (docs / "generalize" / "heldout.csv").write_bytes((DOCS / "generalize" / "heldout.csv").read_bytes())
+    before = results_pages.render("generalization", docs)
+    assert "| `docs/generalize/heldout.csv` | not recorded |" in before
+    (docs / "generalize" / PROVENANCE_FILE).write_text(json.dumps(record))
+    after = results_pages.render("generalization", docs)
+    assert "not recorded |" not in after.split("\n\n")[3]  # the provenance table
+    assert "`python examples/generalize_table.py runs/generalize --csv out/heldout.csv`" in after
+    assert record["code"]["sources"] in after and record["machine"]["numba_cpu_target"] in after

@@ -174,7 +174,9 @@ def test_cli_writes_the_tables_and_the_figure(tmp_path):
     assert res.exit_code == 0, res.output
     result = json.loads(res.stdout)
     assert sorted(p.name for p in out.iterdir()) == sorted(["curve.csv", "scenarios.csv", "robustness.json",
-                                                            "robustness.png"])  # fmt: skip
+                                                            "robustness.png", "provenance.json"])  # fmt: skip
+    record = json.loads((out / "provenance.json").read_text())
+    assert record["command"].startswith("pipefollow ") and record["code"]["sources"]
     with open(out / "curve.csv") as f:
         curve = list(csv.DictReader(f))
     assert [(r["current_speed"], r["controller"]) for r in curve] == [

@@ -202,3 +202,11 @@ def disturbance_text(d, prefix: str = "; disturbances: ") -> str:
     return prefix + (", ".join(parts) or "varying current")
 
 
+
+
+def command_line() -> str:
+    """The command as the user typed it (``pipefollow`` and its arguments), for provenance records."""
+    import shlex
+    import sys
+
+    return shlex.join(["pipefollow", *sys.argv[1:]])

@@ -10,6 +10,7 @@ import click
 from pipefollow.cli.common import (
     SEED,
     UserError,
+    command_line,
     finite,
     guard,
     load_controller,
@@ -19,7 +20,7 @@ from pipefollow.cli.common import (
 from pipefollow.cli.options import MAX_EPISODE_SECONDS, pipes_option, suite_option
 from pipefollow.files.paper_training import TEST_EPISODE_SECONDS
 
-OUTPUTS = ("curve.csv", "scenarios.csv", "robustness.json", "robustness.png")
+OUTPUTS = ("curve.csv", "scenarios.csv", "robustness.json", "robustness.png", "provenance.json")
 
 
 def _numbers(text: str, option: str) -> list[float]:
@@ -118,10 +119,12 @@ def robustness(controllers, suite_specs, pipes, seconds, speeds, sets, seed, out
     result = {"suite": suite.name, "pipes": n, "seconds": seconds, "curve": curve, "scenarios": table}
     if folder is not None:
         from pipefollow.files.atomic import write_text_atomic
+        from pipefollow.files.machine import write_provenance
 
         write_text_atomic(folder / "curve.csv", rb.to_csv(curve, "current_speed"))
         write_text_atomic(folder / "scenarios.csv", rb.to_csv(table, "scenarios"))
         write_text_atomic(folder / "robustness.json", json.dumps(result, indent=1) + "\n")
+        write_provenance(folder, command_line())
         if curve:
             rb.plot_curve(curve, folder / "robustness.png", f"'{suite.name}', {n} pipes × {seconds:g} s")
         result["files"] = [str(folder / name) for name in OUTPUTS if curve or name != "robustness.png"]

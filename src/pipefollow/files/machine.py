@@ -45,6 +45,48 @@ def machine_stamp() -> dict:
     }
 
 
+PROVENANCE_FILE = "provenance.json"
+
+
+def provenance(command: str) -> dict:
+    """What a stored output was computed by: the command, the UTC date, the code and the machine.
+
+    The code is the package's version and a hash of all its sources (``files.sources``), so two
+    outputs with the same stamp were computed by the same code.
+    """
+    import datetime
+
+    import pipefollow
+    from pipefollow.files.sources import package_modules, source_hash
+
+    return {
+        "command": command,
+        "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        "code": {"version": pipefollow.__version__, "sources": source_hash(package_modules())},
+        "machine": machine_stamp(),
+    }
+
+
+def write_provenance(folder, command: str) -> None:
+    """``folder/provenance.json``: :func:`provenance` of ``command``, written atomically."""
+    import json
+    from pathlib import Path
+
+    from pipefollow.files.atomic import write_text_atomic
+
+    write_text_atomic(Path(folder) / PROVENANCE_FILE, json.dumps(provenance(command), indent=1) + "\n")
+
+
+def describe_provenance(record: dict) -> str:
+    """One line for a page: the command, the date, the code stamp and the machine."""
+    code = record.get("code", {})
+    return (
+        f"`{record.get('command', '?')}` on {record.get('date', '?')}, pipefollow "
+        f"{code.get('version', '?')} (sources {code.get('sources', '?')}); "
+        + describe(record.get("machine", {}))
+    )
+
+
 def describe(stamp: dict) -> str:
     """One line for a report: numba's CPU target, the host, the platform, Python and the package versions."""
     versions = ", ".join(f"{k} {v}" for k, v in stamp.get("packages", {}).items())

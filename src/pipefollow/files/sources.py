@@ -93,6 +93,15 @@ def imported_modules(module: str) -> tuple[str, ...]:
     return tuple(sorted(seen))
 
 
+def package_modules() -> tuple[str, ...]:
+    """Every module of the package (the code stamp of a result computed by any of it)."""
+    names = []
+    for path in sorted(ROOT.rglob("*.py")):
+        rel = path.relative_to(ROOT).with_suffix("")
+        names.append(".".join((PACKAGE, *rel.parts)).removesuffix(".__init__"))
+    return tuple(names)
+
+
 def compiled_modules() -> tuple[str, ...]:
     """The modules that define numba-compiled functions."""
     names = []

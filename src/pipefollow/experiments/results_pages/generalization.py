@@ -9,7 +9,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pipefollow.experiments.results_pages.markdown import ci, fill, num, page, pct, read_csv, table
+from pipefollow.experiments.results_pages.markdown import (
+    ci,
+    fill,
+    num,
+    page,
+    pct,
+    read_csv,
+    stored_provenance,
+    table,
+)
 
 TITLE = "Results: training that generalizes"
 SOURCES = ("generalize/heldout.csv",)
@@ -114,4 +123,5 @@ def render(docs: Path) -> str:
         los_worse=sum(float(r["mean_diff"]) < 0 for r in los),
         lowest_diff=num(min(float(r["ci95_diff_low"]) for r in learned), 1, sign=True),
     )
-    return page(TITLE, __name__, SOURCES, [("generalize/heldout.csv", "not recorded")], body)
+    provenance = [("generalize/heldout.csv", stored_provenance(docs / "generalize"))]
+    return page(TITLE, __name__, SOURCES, provenance, body)

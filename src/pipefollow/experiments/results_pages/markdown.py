@@ -202,6 +202,14 @@ REGENERATE = (
 )
 
 
+def stored_provenance(folder: Path) -> str:
+    """Where the outputs in ``folder`` were computed, from its ``provenance.json`` (if it has one)."""
+    from pipefollow.files.machine import PROVENANCE_FILE, describe_provenance
+
+    path = Path(folder) / PROVENANCE_FILE
+    return describe_provenance(read_json(path)) if path.is_file() else NOT_RECORDED
+
+
 def report_provenance(path: Path) -> str:
     """Where a run of ``pipefollow reproduce`` was computed, from its report's "Started on" line."""
     m = re.search(r"^Started on (.+?)\.?$", read_text(path), flags=re.MULTILINE)

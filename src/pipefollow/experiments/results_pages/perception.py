@@ -20,6 +20,7 @@ from pipefollow.experiments.results_pages.markdown import (
     pct,
     read_csv,
     read_json,
+    stored_provenance,
     table,
 )
 from pipefollow.perception.water import CLEAR, RANGES, WATER_PRESETS, Water
@@ -325,5 +326,5 @@ def render(docs: Path) -> str:
             ),
         ),
     )
-    provenance = [(s, "not recorded") for s in SOURCES]
+    provenance = [(s, stored_provenance(docs / "vision")) for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)

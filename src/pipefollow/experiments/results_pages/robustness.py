@@ -19,6 +19,7 @@ from pipefollow.experiments.results_pages.markdown import (
     pct,
     read_csv,
     read_json,
+    stored_provenance,
     table,
 )
 
@@ -251,5 +252,5 @@ def render(docs: Path) -> str:
         ppo_calm_max=ret_succ("ppo"),
         ppo_sea=num(ppo_d[sea], 1, True),
     )
-    provenance = [(s, "not recorded") for s in SOURCES]
+    provenance = [(s, stored_provenance(docs / s)) for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)

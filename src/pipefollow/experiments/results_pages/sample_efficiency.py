@@ -22,6 +22,7 @@ from pipefollow.experiments.results_pages.markdown import (
     pct,
     read_json,
     report_table,
+    stored_provenance,
     table,
 )
 
@@ -319,7 +320,7 @@ def render(docs: Path) -> str:
             t_rows,
         ),
     )
-    provenance = [(s, "not recorded") for s in SOURCES]
+    provenance = [(s, stored_provenance(folder)) for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)
 
 
