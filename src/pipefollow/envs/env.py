@@ -24,7 +24,8 @@ from pipefollow.envs.shell import (
     state_infos,
 )
 from pipefollow.files.paper_training import EPISODE_SECONDS
-from pipefollow.perception.camera import VisionCamera, camera_settings
+from pipefollow.perception.camera import camera_settings
+from pipefollow.perception.sensor import make_sensor, start_sensor
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
 from pipefollow.sim.disturbance import Disturbance
@@ -208,6 +209,7 @@ class PipelineFollowingEnv(gym.Env):
         observation: str = "state",
         reward_from: str = "truth",
         water: Any = None,
+        sensor: str = "camera",
         randomization: Randomization | str | dict[str, Any] | None = None,
         strict_reset: bool = False,
         state: str = "paper",
@@ -234,12 +236,11 @@ class PipelineFollowingEnv(gym.Env):
         self.observation_space = setup.observation_space
         self.action_space = setup.action_space
         # the vision camera (pipefollow.perception.camera): None with the ideal camera's state
-        self.camera_settings = camera_settings(camera, observation, reward_from, water)
-        self._vision = None
-        if self.camera_settings.renders:
-            self._vision = VisionCamera(self.camera_settings, self.params.camera, self.params.lost_reward)
-            if observation == "image":
-                self.observation_space = image_space(self.camera_settings.water)
+        # and the sonar (pipefollow.perception.sensor) with sensor="sonar" or "fused"
+        self.camera_settings = camera_settings(camera, observation, reward_from, water, sensor)
+        self._vision = make_sensor(self.camera_settings, self.params.camera, self.params.lost_reward)
+        if observation == "image":
+            self.observation_space = image_space(self.camera_settings.water)
         self.state = np.zeros(sim.STATE_SIZE)
         self._z = np.zeros(setup.noise_count)  # standard normals of one camera reading
         self._book = ep.new_book()  # the episode's counts (pipefollow.sim.episode)
@@ -275,7 +276,8 @@ class PipelineFollowingEnv(gym.Env):
         self.trail = [(s[sim.X], s[sim.Y], s[sim.PSI])]
         self.last_reward, self.episode_return = None, 0.0
         if self._vision is not None:
-            self._vision.reset(self.state, self.pipeline.points, self.pipeline.cumulative, self.np_random)
+            pipe, disturbance = self.pipeline, self.episode_setup.params.disturbance
+            start_sensor(self._vision, self.state, pipe.points, pipe.cumulative, self.np_random, disturbance)
         if self.render_mode == "human":
             self.render()
         return self._observation(), self._info()
