@@ -68,8 +68,10 @@ def main() -> None:
                 "water": water, "burial": burial, "sensor": name, "camera": camera,
                 "mean_return": round(s["mean_return"], 2), "ci95_low": round(s["ci95_mean"][0], 2),
                 "ci95_high": round(s["ci95_mean"][1], 2), "success_rate": round(s["success_rate"], 3),
-                "pipe_in_view": round(s["mean_pipe_in_view"], 4), "loss_vs_ideal": round(-diff["mean_diff"], 2),
-                "loss_ci95_low": round(-diff["ci95_diff"][1], 2), "loss_ci95_high": round(-diff["ci95_diff"][0], 2),
+                "pipe_in_view": round(s["mean_pipe_in_view"], 4),
+                "loss_vs_ideal": round(-diff["mean_diff"], 2),
+                "loss_ci95_low": round(-diff["ci95_diff"][1], 2),
+                "loss_ci95_high": round(-diff["ci95_diff"][0], 2),
             }  # fmt: skip
             rows.append(row)
             print(",".join(str(row[c]) for c in COLUMNS), flush=True)

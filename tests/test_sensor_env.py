@@ -53,7 +53,8 @@ def test_sonar_and_fusion_follow_in_turbid_water_where_the_vision_camera_fails()
         ("sonar", {"sensor": "sonar"}),
         ("fused", {"camera": "vision", "sensor": "fused"}),
     ):
-        out = [episode(PipelineFollowingEnv(p, 60.0, water="turbid", **kwargs), k) for k, p in enumerate(pipes)]
+        envs = [PipelineFollowingEnv(p, 60.0, water="turbid", **kwargs) for p in pipes]
+        out = [episode(env, k) for k, env in enumerate(envs)]
         runs[name] = np.array(out).mean(axis=0)  # mean return, share truly in view, decisions lost
     # the detector misses most turbid frames and the track drifts (measured: mean return −193,
     # 12 decisions lost; the sonar −60 and 4, fused −74 and 4); the sonar does not see the water

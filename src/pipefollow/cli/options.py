@@ -223,7 +223,9 @@ def complete_suite(ctx, param, incomplete: str):
 
 
 def camera_options(fn):
-    """Decorate a command with ``--camera``, ``--sensor``, ``--water``, ``--turbidity``, ``--burial``, ``--growth``.
+    """Decorate a command with ``--camera``, ``--sensor`` and the water's options.
+
+    The water's: ``--water``, ``--turbidity``, ``--burial`` and ``--growth``.
 
     The command receives one keyword argument ``camera``: ``None`` for the ideal camera alone, else
     the environment's camera arguments (``camera``, ``water`` and, unless it is ``camera``,

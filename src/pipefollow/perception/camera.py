@@ -122,7 +122,9 @@ def camera_settings(
             "reward_from='detected' needs camera='vision' or 'vision-raw' (the ideal camera detects nothing)"
         )
     if sensor == "sonar" and camera != "ideal":
-        raise ValueError(f"sensor='sonar' observes with the sonar alone: camera must be 'ideal', got {camera!r}")
+        raise ValueError(
+            f"sensor='sonar' observes with the sonar alone: camera must be 'ideal', got {camera!r}"
+        )
     settings = CameraSettings(camera, observation, reward_from, water_from(water), sensor)
     if camera in VISION_CAMERAS:
         require_cv2()

@@ -121,7 +121,7 @@ class SonarSensors:
         return self.sonar.step(points, cum, pose, self._rng, *self.buried)
 
     def _look(self, s: np.ndarray, points: np.ndarray, cum: np.ndarray) -> None:
-        """The slots from the sonar (``"sonar"``), or the exact camera's else the sonar's (ideal, ``"fused"``)."""
+        """The slots from the sonar (``"sonar"``), or the exact camera's, else the sonar's (ideal, fused)."""
         if self.fused and self.settings.detects:  # the reset's first frame: the vision camera's alone
             self._ping(s, points, cum)
             return
@@ -141,13 +141,13 @@ class SonarSensors:
         s[sim.IN_VIEW] = 1.0 if view.in_view else 0.0
 
     def observation(self, state: np.ndarray, dtype=np.float64, slots: np.ndarray | None = None) -> np.ndarray:
-        """The observation: ``state[:4]`` or ``state[slots]``, or the camera image with ``observation="image"``."""
+        """The observation: ``state[:4]`` or ``state[slots]``, or the image with ``observation="image"``."""
         if self.vision is not None:
             return self.vision.observation(state, dtype, slots)
         return (state[:4] if slots is None else state[slots]).astype(dtype)
 
     def info(self) -> dict[str, np.ndarray]:
-        """The camera's entries (the vision camera's, if any) and the sonar's: ``sonar_detected``, ``sonar_in_view``."""
+        """The camera's entries (the vision camera's, if any), ``sonar_detected`` and ``sonar_in_view``."""
         out: dict[str, np.ndarray] = {}
         if self.vision is not None:
             out.update(self.vision.info())
