@@ -25,7 +25,7 @@ from pipefollow.sim.suites import get_suite
 
 COLUMNS = (
     "water", "burial", "sensor", "camera", "mean_return", "ci95_low", "ci95_high", "success_rate",
-    "pipe_in_view", "loss_vs_ideal", "loss_ci95_low", "loss_ci95_high",
+    "pipe_in_view", "turned_back", "loss_vs_ideal", "loss_ci95_low", "loss_ci95_high",
 )  # fmt: skip
 
 SENSORS = (  # (row name, sensor, camera)
@@ -69,6 +69,7 @@ def main() -> None:
                 "mean_return": round(s["mean_return"], 2), "ci95_low": round(s["ci95_mean"][0], 2),
                 "ci95_high": round(s["ci95_mean"][1], 2), "success_rate": round(s["success_rate"], 3),
                 "pipe_in_view": round(s["mean_pipe_in_view"], 4),
+                "turned_back": s["turned_back"],
                 "loss_vs_ideal": round(-diff["mean_diff"], 2),
                 "loss_ci95_low": round(-diff["ci95_diff"][1], 2),
                 "loss_ci95_high": round(-diff["ci95_diff"][0], 2),

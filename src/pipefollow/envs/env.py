@@ -143,7 +143,16 @@ class PipelineFollowingEnv(gym.Env):
       gives −10) or ``"detected"`` (eq. 19 from the detection).
     * ``water``: the image's water and camera settings: a
       :class:`~pipefollow.perception.water.Water`, a preset name (``clear``, ``moderate``,
-      ``turbid``) or a dict of its fields (``preset`` allowed); ``clear`` by default.
+      ``turbid``) or a dict of its fields (``preset`` allowed); ``clear`` by default. Its ``burial``
+      (share of the pipe's width under sand) is the sonar's buried share of the diameter too.
+    * ``sensor``: what writes the observation (:mod:`pipefollow.perception.sensor`): ``"camera"``
+      (default: the camera of ``camera``, exactly as without this argument), ``"sonar"`` (a
+      multibeam sonar whose fan meets the seabed 2 m ahead, alone; turbidity does not reach it; a
+      lost pipe is −10 and the search, as with the vision camera; only with ``camera="ideal"``) or
+      ``"fused"`` (each decision the camera's detection when it finds the pipe, else the sonar's
+      view, fed to the vision camera's pipe tracker — or, with the ideal camera, the sonar's view
+      while the exact camera sees no pipe). The sonar draws from a generator spawned from
+      ``np_random`` at each reset, so the camera's draws stay what they are.
     * ``randomization``: domain randomization, a
       :class:`~pipefollow.sim.randomization.Randomization`, a preset name (``mild``, ``moderate``,
       ``vision``, ``harsh``) or a table of its keys: every reset draws the episode's disturbances from
@@ -171,7 +180,10 @@ class PipelineFollowingEnv(gym.Env):
     read there; steps past the end repeat them. With the vision camera also ``detected``,
     ``detection_confidence``, ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the
     exact camera's; with the tracker also ``track_confidence``); the episode's summary is then the
-    exact camera's too. ``reached_pipe_end`` (a 0-d bool) is in every info too: True once the
+    exact camera's too. With ``sensor="sonar"`` or ``"fused"`` also ``sonar_detected`` (the ping
+    found the pipe anywhere in its swath), ``sonar_in_view`` (its line crosses the footprint) and
+    the exact camera's ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl``.
+    ``reached_pipe_end`` (a 0-d bool) is in every info too: True once the
     episode has ended at the pipe's far end.
 
     ## Registered ids
@@ -190,7 +202,8 @@ class PipelineFollowingEnv(gym.Env):
     * v0: the first release. Before it (unreleased): the episode's summary joined every step's
       info (it was at the last step only); ``observation="image"`` became ``(H, W, 1)`` (was
       ``(1, H, W)``); the ids got their episodes' ``max_episode_steps`` (was 86,400 for one id); reaching
-      a finite pipe's far end terminates the episode (``reached_pipe_end``).
+      a finite pipe's far end terminates the episode (``reached_pipe_end``); ``sensor="sonar"``
+      and ``"fused"`` (the default ``"camera"`` unchanged).
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 2}
