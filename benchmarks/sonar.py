@@ -1,4 +1,4 @@
-"""Benchmarks of the multibeam profiler: render a ping, detect the pipe, beside env.step of the ideal camera.
+"""Benchmarks of the multibeam profiler: render a ping, detect the pipe; env.step with and without it.
 
 Usage: ``python benchmarks/sonar.py [--repeats N] [--cpu]``
 
@@ -70,22 +70,27 @@ def main() -> None:
     def decision():
         sensor.step(pipe.points, pipe.cumulative, poses[next(it) % 200], rng)
 
-    e = gym.make("pipefollow/PipelineFollowing-v0", pipeline=pipe, episode_seconds=600.0)
-    last = list(e.reset(seed=0))
+    def stepper(**kwargs):
+        """One decision of the heuristic following the pipe (as in a real run) with the given sensor."""
+        e = gym.make("pipefollow/PipelineFollowing-v0", pipeline=pipe, episode_seconds=600.0, **kwargs)
+        last = list(e.reset(seed=0))
 
-    def step():
-        """One decision of the heuristic following the pipe on the ideal camera (as in a real run)."""
-        o, info = last[0], last[-1]
-        a = math.atan2(o[0], o[1]) / (0.5 * math.pi) if info["pipe_in_view"] else 0.0
-        o, _, terminated, truncated, info = e.step([a])
-        last[:] = e.reset() if terminated or truncated else (o, info)
+        def step():
+            o, info = last[0], last[-1]
+            a = math.atan2(o[0], o[1]) / (0.5 * math.pi) if info["pipe_in_view"] else 0.0
+            o, _, terminated, truncated, info = e.step([a])
+            last[:] = e.reset() if terminated or truncated else (o, info)
+
+        return step
 
     stages = (
         ("render_ping (128 beams)", render, ""),
         ("detect_profile", detect, ""),
         ("SonarTrack.update (line through the last pings)", follow, ""),
         ("SonarSensor.step: render + detect + track, one decision", decision, "≤ 0.1 ms"),
-        ("env.step, ideal camera", step, ""),
+        ("env.step, ideal camera", stepper(), ""),
+        ('env.step, sensor="sonar"', stepper(sensor="sonar"), ""),
+        ('env.step, sensor="fused" (ideal camera)', stepper(sensor="fused"), ""),
     )
     times: dict[str, list[float]] = {name: [] for name, _, _ in stages}
     for _, fn, _ in stages:

@@ -370,10 +370,29 @@ def test_a_vision_camera_trial_trains_on_the_ideal_camera_and_evaluates_through_
     assert turbid.evaluation == run_trial(t, 3).evaluation  # seeded
 
 
+def test_the_sensor_of_a_trial_is_its_evaluation_episodes(tmp_path):
+    import dataclasses
+
+    from pipefollow.experiments.trial import run_trial
+
+    # the sonar in turbid water: its evaluation episode differs from the ideal camera's, training does not
+    text = MINIMAL + "phases = [{ pipeline = 'paper-left', episodes = 2 }]\nsensor = 'sonar'\n"
+    text += "water = 'turbid'\n"
+    t = load_experiment(write_toml(tmp_path, text)).trials[0]
+    assert (t.sensor, t.camera, t.water) == ("sonar", "ideal", "turbid")
+    sonar = run_trial(t, 3)
+    ideal = run_trial(dataclasses.replace(t, sensor="camera", water=None), 3)
+    np.testing.assert_array_equal(sonar.weights, ideal.weights)
+    assert sonar.evaluation["heuristic"] != ideal.evaluation["heuristic"]
+    assert sonar.evaluation == run_trial(t, 3).evaluation  # seeded
+
+
 @pytest.mark.parametrize(
     "lines, pattern",
     [
-        ("water = 'clear'\n", r"key 'water': water settings need camera = 'vision', got camera = 'ideal'"),
+        ("water = 'clear'\n", r"key 'water': water settings need camera = 'vision' or sensor = 'sonar' or"),
+        ("sensor = 'radar'\n", r"key 'sensor' must be one of camera, sonar, fused, got 'radar'"),
+        ("camera = 'vision'\nsensor = 'sonar'\n", r"key 'camera' must be 'ideal' with sensor = 'sonar'"),
         ("camera = 'laser'\n", r"key 'camera' must be one of ideal, vision, got 'laser'"),
         ("camera = 'vision'\nwater = 'murky'\n", r"key 'water': water preset 'murky': unknown"),
         ("camera = 'vision'\nwater = { turbidity = -1 }\n", r"'water': water setting turbidity must be in"),

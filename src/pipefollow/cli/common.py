@@ -178,7 +178,9 @@ def camera_text(camera, prefix: str = "\n") -> str:
         return ""
     from pipefollow.perception.water import describe
 
-    return f"{prefix}camera {camera['camera']}, {describe(camera['water'])}"
+    sensor = camera.get("sensor", "camera")
+    sensor = "" if sensor == "camera" else f"sensor {sensor}, "
+    return f"{prefix}{sensor}camera {camera['camera']}, {describe(camera['water'])}"
 
 
 def disturbance_text(d, prefix: str = "; disturbances: ") -> str:

@@ -132,6 +132,8 @@ def _settings(disturbance, camera, warnings: list[str]) -> dict:
         out["disturbance"] = _disturbance.to_dict(disturbance)
     if camera:
         out["camera"] = camera["camera"]
+        if camera.get("sensor", "camera") != "camera":
+            out["sensor"] = camera["sensor"]
         out["water"] = camera["water"]._asdict()
     if warnings:
         out["warnings"] = warnings

@@ -223,33 +223,39 @@ def complete_suite(ctx, param, incomplete: str):
 
 
 def camera_options(fn):
-    """Decorate a command with ``--camera``, ``--water``, ``--turbidity``, ``--burial`` and ``--growth``.
+    """Decorate a command with ``--camera``, ``--sensor`` and the water's options.
 
-    The command receives one keyword argument ``camera``: ``None`` for the ideal camera, else the
-    environment's camera arguments (``camera``, ``water``). A bad value is a one-line error naming
-    the setting (exit status 2).
+    The water's: ``--water``, ``--turbidity``, ``--burial`` and ``--growth``.
+
+    The command receives one keyword argument ``camera``: ``None`` for the ideal camera alone, else
+    the environment's camera arguments (``camera``, ``water`` and, unless it is ``camera``,
+    ``sensor``). A bad value is a one-line error naming the setting (exit status 2).
     """
 
     @functools.wraps(fn)
-    def wrapper(*args, camera, water, turbidity, burial, growth, **kwargs):
+    def wrapper(*args, camera, sensor, water, turbidity, burial, growth, **kwargs):
         settings = {
             k: v
             for k, v in (("turbidity", turbidity), ("burial", burial), ("growth", growth))
             if v is not None
         }
-        if camera == "ideal":
+        if camera == "ideal" and sensor == "camera":
             if settings or water is not None:
                 raise UserError(
-                    "--water, --turbidity, --burial and --growth need --camera vision (or vision-raw)"
+                    "--water, --turbidity, --burial and --growth need --camera vision (or vision-raw) "
+                    "or --sensor sonar (or fused)"
                 )
             return fn(*args, camera=None, **kwargs)
         from pipefollow.perception.camera import camera_settings
 
         try:
-            chosen = camera_settings(camera, water={"preset": water or "clear", **settings})
+            chosen = camera_settings(camera, water={"preset": water or "clear", **settings}, sensor=sensor)
         except (ValueError, ImportError) as e:
             raise UserError(str(e)) from None
-        return fn(*args, camera={"camera": camera, "water": chosen.water}, **kwargs)
+        chosen_args = {"camera": camera, "water": chosen.water}
+        if sensor != "camera":  # the camera alone keeps its arguments as they were
+            chosen_args["sensor"] = sensor
+        return fn(*args, camera=chosen_args, **kwargs)
 
     number = click.FloatRange(min=0.0)
     options = [
@@ -260,6 +266,15 @@ def camera_options(fn):
             show_default=True,
             help="ideal: the exact visible piece (the paper's); vision: a pipe detector on the camera image "
             "and a tracker over the frames; vision-raw: the detector alone, frame by frame.",
+        ),
+        click.option(
+            "--sensor",
+            type=click.Choice(["camera", "sonar", "fused"]),
+            default="camera",
+            show_default=True,
+            help="camera: the --camera alone; sonar: a forward-tilted multibeam sonar alone (with --camera "
+            "ideal; turbidity does not reach it); fused: the camera's detections, the sonar's where the "
+            "camera finds no pipe, in one track.",
         ),
         click.option(
             "--water",

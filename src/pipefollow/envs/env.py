@@ -24,7 +24,8 @@ from pipefollow.envs.shell import (
     state_infos,
 )
 from pipefollow.files.paper_training import EPISODE_SECONDS
-from pipefollow.perception.camera import VisionCamera, camera_settings
+from pipefollow.perception.camera import camera_settings
+from pipefollow.perception.sensor import make_sensor, start_sensor
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
 from pipefollow.sim.disturbance import Disturbance
@@ -142,7 +143,16 @@ class PipelineFollowingEnv(gym.Env):
       gives −10) or ``"detected"`` (eq. 19 from the detection).
     * ``water``: the image's water and camera settings: a
       :class:`~pipefollow.perception.water.Water`, a preset name (``clear``, ``moderate``,
-      ``turbid``) or a dict of its fields (``preset`` allowed); ``clear`` by default.
+      ``turbid``) or a dict of its fields (``preset`` allowed); ``clear`` by default. Its ``burial``
+      (share of the pipe's width under sand) is the sonar's buried share of the diameter too.
+    * ``sensor``: what writes the observation (:mod:`pipefollow.perception.sensor`): ``"camera"``
+      (default: the camera of ``camera``, exactly as without this argument), ``"sonar"`` (a
+      multibeam sonar whose fan meets the seabed 2 m ahead, alone; turbidity does not reach it; a
+      lost pipe is −10 and the search, as with the vision camera; only with ``camera="ideal"``) or
+      ``"fused"`` (each decision the camera's detection when it finds the pipe, else the sonar's
+      view, fed to the vision camera's pipe tracker — or, with the ideal camera, the sonar's view
+      while the exact camera sees no pipe). The sonar draws from a generator spawned from
+      ``np_random`` at each reset, so the camera's draws stay what they are.
     * ``randomization``: domain randomization, a
       :class:`~pipefollow.sim.randomization.Randomization`, a preset name (``mild``, ``moderate``,
       ``vision``, ``harsh``) or a table of its keys: every reset draws the episode's disturbances from
@@ -170,7 +180,10 @@ class PipelineFollowingEnv(gym.Env):
     read there; steps past the end repeat them. With the vision camera also ``detected``,
     ``detection_confidence``, ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the
     exact camera's; with the tracker also ``track_confidence``); the episode's summary is then the
-    exact camera's too. ``reached_pipe_end`` (a 0-d bool) is in every info too: True once the
+    exact camera's too. With ``sensor="sonar"`` or ``"fused"`` also ``sonar_detected`` (the ping
+    found the pipe anywhere in its swath), ``sonar_in_view`` (its line crosses the footprint) and
+    the exact camera's ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl``.
+    ``reached_pipe_end`` (a 0-d bool) is in every info too: True once the
     episode has ended at the pipe's far end.
 
     ## Registered ids
@@ -189,7 +202,8 @@ class PipelineFollowingEnv(gym.Env):
     * v0: the first release. Before it (unreleased): the episode's summary joined every step's
       info (it was at the last step only); ``observation="image"`` became ``(H, W, 1)`` (was
       ``(1, H, W)``); the ids got their episodes' ``max_episode_steps`` (was 86,400 for one id); reaching
-      a finite pipe's far end terminates the episode (``reached_pipe_end``).
+      a finite pipe's far end terminates the episode (``reached_pipe_end``); ``sensor="sonar"``
+      and ``"fused"`` (the default ``"camera"`` unchanged).
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 2}
@@ -208,6 +222,7 @@ class PipelineFollowingEnv(gym.Env):
         observation: str = "state",
         reward_from: str = "truth",
         water: Any = None,
+        sensor: str = "camera",
         randomization: Randomization | str | dict[str, Any] | None = None,
         strict_reset: bool = False,
         state: str = "paper",
@@ -234,12 +249,11 @@ class PipelineFollowingEnv(gym.Env):
         self.observation_space = setup.observation_space
         self.action_space = setup.action_space
         # the vision camera (pipefollow.perception.camera): None with the ideal camera's state
-        self.camera_settings = camera_settings(camera, observation, reward_from, water)
-        self._vision = None
-        if self.camera_settings.renders:
-            self._vision = VisionCamera(self.camera_settings, self.params.camera, self.params.lost_reward)
-            if observation == "image":
-                self.observation_space = image_space(self.camera_settings.water)
+        # and the sonar (pipefollow.perception.sensor) with sensor="sonar" or "fused"
+        self.camera_settings = camera_settings(camera, observation, reward_from, water, sensor)
+        self._vision = make_sensor(self.camera_settings, self.params.camera, self.params.lost_reward)
+        if observation == "image":
+            self.observation_space = image_space(self.camera_settings.water)
         self.state = np.zeros(sim.STATE_SIZE)
         self._z = np.zeros(setup.noise_count)  # standard normals of one camera reading
         self._book = ep.new_book()  # the episode's counts (pipefollow.sim.episode)
@@ -275,7 +289,8 @@ class PipelineFollowingEnv(gym.Env):
         self.trail = [(s[sim.X], s[sim.Y], s[sim.PSI])]
         self.last_reward, self.episode_return = None, 0.0
         if self._vision is not None:
-            self._vision.reset(self.state, self.pipeline.points, self.pipeline.cumulative, self.np_random)
+            pipe, disturbance = self.pipeline, self.episode_setup.params.disturbance
+            start_sensor(self._vision, self.state, pipe.points, pipe.cumulative, self.np_random, disturbance)
         if self.render_mode == "human":
             self.render()
         return self._observation(), self._info()

@@ -43,7 +43,7 @@ SHARED_ARGUMENTS = (
     "state",
 )
 # the camera's arguments (pipefollow.perception.camera.camera_settings), shared too
-CAMERA_ARGUMENTS = ("camera", "observation", "reward_from", "water")
+CAMERA_ARGUMENTS = ("camera", "observation", "reward_from", "water", "sensor")
 
 RESET_OPTIONS = ("pipeline", "lateral_offset", "heading_offset_deg")
 

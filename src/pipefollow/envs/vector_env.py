@@ -42,6 +42,8 @@ single environment draws them.
   same numbers.
 * **Vision camera** (``camera="vision"``, ``observation="image"``): supported; after the batched
   decision each sub-environment renders and detects with its own generator, as the single one does.
+* **Sonar** (``sensor="sonar"`` or ``"fused"``): supported the same way; each sub-environment's
+  sonar draws from a generator spawned from its own, as in the single environment.
 """
 
 from __future__ import annotations
@@ -71,7 +73,8 @@ from pipefollow.envs.shell import (
     start_episode,
     state_infos,
 )
-from pipefollow.perception.camera import VisionCamera, camera_settings
+from pipefollow.perception.camera import camera_settings
+from pipefollow.perception.sensor import make_sensor, start_sensor
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
 from pipefollow.sim.pipe_names import is_points, pipeline_source
@@ -240,10 +243,10 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self._no_skip = np.zeros(n, dtype=bool)
         self._ends = np.zeros(n, dtype=np.int64)
         # the vision camera renders and detects per sub-environment after the batched decision
-        self._cams = None
-        if self.camera_settings.renders:
-            cam, lost = self.params.camera, self.params.lost_reward
-            self._cams = [VisionCamera(self.camera_settings, cam, lost) for _ in range(n)]
+        # (and the sonar with sensor="sonar" or "fused": pipefollow.perception.sensor)
+        cam, lost = self.params.camera, self.params.lost_reward
+        cams = [make_sensor(self.camera_settings, cam, lost) for _ in range(n)]
+        self._cams = cams if cams[0] is not None else None
 
     def _load_pipe(self, i: int, pipe: Pipeline) -> None:
         m = len(pipe.points)
@@ -332,7 +335,8 @@ class PipelineFollowingVectorEnv(VectorEnv):
         if self._cams is not None:
             m = self._n_points[i]
             pts, cum = self._points[i, :m], self._cum[i, :m]
-            self._cams[i].reset(self.states[i], pts, cum, self.np_random_generators[i])
+            rng, disturbance = self.np_random_generators[i], setup.params.disturbance
+            start_sensor(self._cams[i], self.states[i], pts, cum, rng, disturbance)
 
     def step(self, actions):
         """One 1-s decision of every sub-environment, autoresetting by :attr:`autoreset_mode`."""

@@ -275,6 +275,8 @@ def benchmark(
 
         settings = camera_settings(**camera)
         summary["camera"] = settings.camera
+        if settings.sensor != "camera":
+            summary["sensor"] = settings.sensor
         summary["water"] = settings.water._asdict()
     summary["episodes"] = [
         {

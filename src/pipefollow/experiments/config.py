@@ -83,7 +83,8 @@ def _coerce(cls, data: dict, where: str):
             kwargs[f.name] = dict(value)
             continue
         if f.name == "water":
-            kwargs[f.name] = _check_water(value, key, data.get("camera", "ideal"))
+            camera, sensor = data.get("camera", "ideal"), data.get("sensor", "camera")
+            kwargs[f.name] = _check_water(value, key, camera, sensor)
             continue
         if f.name == "randomization":
             kwargs[f.name] = _check_randomization(value, key, data.get("disturbance"))
@@ -135,12 +136,15 @@ def _check_randomization(value, where: str, disturbance) -> dict:
     return dict(table)
 
 
-def _check_water(value, where: str, camera) -> dict | str:
-    """A water preset name or table, checked (one-line errors); only with the vision camera."""
+def _check_water(value, where: str, camera, sensor="camera") -> dict | str:
+    """A water preset name or table, checked (one-line errors); only with the vision camera or the sonar."""
     from pipefollow.perception.water import WaterError, water_from
 
-    if camera != "vision":
-        raise ConfigError(f"{where}: water settings need camera = 'vision', got camera = {camera!r}")
+    if camera != "vision" and sensor == "camera":
+        raise ConfigError(
+            f"{where}: water settings need camera = 'vision' or sensor = 'sonar' or 'fused', "
+            f"got camera = {camera!r}"
+        )
     if not isinstance(value, (str, dict)):
         raise ConfigError(f"{where} must be a preset name or a table, got {value!r}")
     try:

@@ -93,6 +93,12 @@ class TrialConfig:
         "water and camera settings of the vision camera: a preset name (clear, moderate, turbid) or a "
         "table of pipefollow.perception.water.Water fields (preset key allowed); clear by default",
     )
+    sensor: str = _f(
+        "camera",
+        "sensor of the evaluation episode: camera (the camera alone), sonar (the look-ahead multibeam "
+        "alone, with camera ideal) or fused (the camera's detections, the sonar's where it finds none)",
+        choices=("camera", "sonar", "fused"),
+    )
     evaluate_on: str = _f("", "after training, evaluate deterministically on this pipeline ('' = none)")
     evaluate_seconds: float = _f(60.0, "length of the evaluation episode (s) (paper §4.2)")
     figures: tuple[str, ...] = _f(
@@ -178,6 +184,8 @@ def validate(obj, where: str) -> None:
         except ValueError as e:
             raise ConfigError(f"{where}: {_keyed(e)}") from None
         check_readings(obj.readings, f"{where}: key 'readings'")
+        if obj.sensor == "sonar" and obj.camera != "ideal":
+            raise bad("camera", "'ideal' with sensor = 'sonar' (the sonar observes alone)", obj.camera)
         for key in ("episode_seconds", "evaluate_seconds"):
             if not 1.0 <= getattr(obj, key) <= MAX_SECONDS:
                 raise bad(key, f"from 1 to {MAX_SECONDS:g} (s)", getattr(obj, key))

@@ -101,8 +101,9 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
     if isinstance(eval_pipe, Suite):  # trained on random pipes only: the family's first pipe
         eval_pipe = eval_pipe.pipe(0, min_length_for(eval_seconds))
     env = PipelineFollowingEnv(
-        eval_pipe, eval_seconds, params=params, camera=config.camera, water=config.water, state=agent.state
-    )
+        eval_pipe, eval_seconds, params=params, camera=config.camera, water=config.water, state=agent.state,
+        sensor=config.sensor,
+    )  # fmt: skip
     controllers = {"learned": agent, "heuristic": Heuristic()}
     if agent.supervised:
         controllers["actor"] = ActorOnly(agent)

@@ -40,6 +40,7 @@ from pipefollow.sim.camera import CameraParams, tracking_errors
 from pipefollow.sim.reward import reward
 
 CAMERAS = ("ideal", "vision", "vision-raw")
+SENSORS = ("camera", "sonar", "fused")  # what writes the observation: the camera, the sonar or both
 VISION_CAMERAS = ("vision", "vision-raw")  # the cameras that detect the pipe in the image
 OBSERVATIONS = ("state", "image")
 REWARD_FROM = ("truth", "detected")
@@ -53,6 +54,7 @@ class CameraSettings:
     observation: str = "state"  # "state" (x1, y1, x2, v_x) or "image" (the camera image, (H, W, 1))
     reward_from: str = "truth"  # eq. 19 from the true geometry, or from the detection
     water: Water = Water()  # water and camera settings of the image
+    sensor: str = "camera"  # "camera", "sonar" (the multibeam sonar alone) or "fused" (both, one track)
 
     @property
     def renders(self) -> bool:
@@ -97,8 +99,12 @@ def camera_settings(
     observation: str = "state",
     reward_from: str = "truth",
     water: Water | str | dict[str, Any] | None = None,
+    sensor: str = "camera",
 ) -> CameraSettings:
     """Checked settings; a one-line ``ValueError`` naming the argument otherwise.
+
+    ``sensor="sonar"`` observes with the sonar alone, so it takes the ideal camera only (whose
+    exact view then serves the reward and the info's ``true_*``).
 
     The vision camera needs OpenCV (the extra ``vision``); without it this raises the one-line
     ``ImportError`` of :func:`~pipefollow.perception.detector.require_cv2`.
@@ -107,6 +113,7 @@ def camera_settings(
         ("camera", camera, CAMERAS),
         ("observation", observation, OBSERVATIONS),
         ("reward_from", reward_from, REWARD_FROM),
+        ("sensor", sensor, SENSORS),
     ):
         if value not in allowed:
             raise ValueError(f"{name} must be one of {', '.join(allowed)}; got {value!r}")
@@ -114,7 +121,11 @@ def camera_settings(
         raise ValueError(
             "reward_from='detected' needs camera='vision' or 'vision-raw' (the ideal camera detects nothing)"
         )
-    settings = CameraSettings(camera, observation, reward_from, water_from(water))
+    if sensor == "sonar" and camera != "ideal":
+        raise ValueError(
+            f"sensor='sonar' observes with the sonar alone: camera must be 'ideal', got {camera!r}"
+        )
+    settings = CameraSettings(camera, observation, reward_from, water_from(water), sensor)
     if camera in VISION_CAMERAS:
         require_cv2()
     return settings
@@ -142,6 +153,9 @@ class VisionCamera:
         self._textures: Textures | None = None
         self._last = Sighting()  # the last detection's slots
         self.tracker = PipeTracker(camera.half_width, camera.depth) if settings.tracks else None
+        # a second detector's pipe (sensor="fused": the sonar's), set before each frame by its owner;
+        # the tracker (or the raw observation) takes it when the image's detector finds nothing
+        self.fallback: Detection | None = None
 
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
         """A new scene (seabed and growth textures from ``rng``) and its first image.
@@ -194,6 +208,8 @@ class VisionCamera:
         wt, cam = self.settings.water, self.camera
         det = detect_pipe(self.image, cam.half_width, cam.depth, wt.pipe_diameter, previous=self.detection)
         self.detection = det
+        if not det.found and self.fallback is not None:
+            det = self.fallback
         if self.tracker is not None:
             self._track(s, pose, det)
             return

@@ -1,0 +1,175 @@
+"""The sensor of the environments: the camera, the multibeam sonar, or both into one estimate.
+
+``sensor="camera"`` (the default) is the camera of ``camera=`` alone: the environments then hold
+a :class:`~pipefollow.perception.camera.VisionCamera` (or nothing for the ideal camera's state),
+exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"`` hold a
+:class:`SonarSensors`, which has the vision camera's interface (``reset``, ``step``,
+``observation``, ``info``, ``panel``):
+
+* ``"sonar"``: the observation slots (``x1, y1, x2, y_near``, ``e_dist``, ``e_angl``, in view, the
+  side of the last sighting) come from :class:`~pipefollow.perception.sonar_track.SonarSensor`
+  (the look-ahead fan): the water's turbidity does not reach it. A lost pipe keeps the last
+  sighting, is a lost decision (−10) and the next decision searches, as with the vision camera.
+* ``"fused"``: one estimate from both sensors. Each decision the camera's own measurement comes
+  first; when it finds no pipe the sonar's view of the pipe is the measurement instead
+  (:attr:`VisionCamera.fallback`): with ``camera="vision"`` that measurement feeds the same pipe
+  tracker (:mod:`pipefollow.perception.tracker`) with its gates, with ``"vision-raw"`` it is the
+  observation, and with the ideal camera the sonar's view fills the slots while the exact camera
+  does not see the pipe.
+
+The sonar draws its noise (128 normals a ping) from a generator of its own, spawned from the
+environment's at each reset after the camera's draws (:func:`spawn`): the camera's frames, the
+tracker's navigation and every other draw stay what they are without the sonar.
+
+Burial: the image's ``Water.burial`` (the share of the pipe's width covered by sand, from its
+starboard edge: pixels more than ``R(1 − 2b)`` across from the axis) and the sonar's (the share
+of the diameter below the seabed: the axis ``R(1 − 2b)`` above it) are the same number
+(:func:`sonar_burial`): the same share of the pipe's section hidden, measured along each sensor's
+line of sight. The buried stretches of the disturbance bury the pipe fully for both.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipefollow.perception.camera import CameraSettings, Sighting, TrueView, VisionCamera, _spawn
+from pipefollow.perception.detector import Detection
+from pipefollow.perception.sonar_track import SonarSensor
+from pipefollow.perception.water import Water
+from pipefollow.sim import decision as sim
+from pipefollow.sim.camera import CameraParams, tracking_errors
+from pipefollow.sim.disturbance import NO_BURIAL
+
+
+def sonar_burial(water: Water) -> float:
+    """The sonar's buried share of the diameter for the image's ``water.burial`` (the same share)."""
+    return float(water.burial)
+
+
+def make_sensor(settings: CameraSettings, camera: CameraParams, lost_reward: float):
+    """What an environment observes with: None (the ideal camera's state), a vision camera, or sonar."""
+    if settings.sensor != "camera":
+        return SonarSensors(settings, camera, lost_reward)
+    if settings.renders:
+        return VisionCamera(settings, camera, lost_reward)
+    return None
+
+
+def start_sensor(sensor, state, points, cum, rng, disturbance) -> None:
+    """:meth:`reset` of an environment's sensor, the sonar told the episode's buried stretches."""
+    if isinstance(sensor, SonarSensors):
+        sensor.buried = (tuple(disturbance.buried_from), tuple(disturbance.buried_to))
+    sensor.reset(state, points, cum, rng)
+
+
+class SonarSensors:
+    """``sensor="sonar"`` or ``"fused"`` of one environment (see the module docstring)."""
+
+    def __init__(self, settings: CameraSettings, camera: CameraParams, lost_reward: float) -> None:
+        self.settings = settings
+        self.camera = camera
+        self.lost_reward = lost_reward
+        self.fused = settings.sensor == "fused"
+        # the camera: its image (observation="image"), and with "fused" its detections too
+        self.vision = VisionCamera(settings, camera, lost_reward) if settings.renders else None
+        self.sonar = SonarSensor(diameter=settings.water.pipe_diameter, burial=sonar_burial(settings.water),
+                                 camera=camera)  # fmt: skip
+        self.buried = (NO_BURIAL, NO_BURIAL)
+        self.truth = TrueView(False, 0.0, 0.0, 0.0, 0.0)
+        self._true_errors = (0.0, 0.0)
+        self._last = Sighting()
+        self._rng: np.random.Generator | None = None
+
+    def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
+        """A new episode: the camera's reset (its draws first), then the sonar's generator spawned."""
+        self.sonar.reset()
+        self._last = Sighting()
+        if self.vision is not None:
+            self.vision.fallback = None  # the first frame: no ping yet
+            self.vision.reset(state, points, cum, rng)
+        self._rng = _spawn(rng)
+        self._look(state, points, cum)
+
+    def step(
+        self,
+        state: np.ndarray,
+        points: np.ndarray,
+        cum: np.ndarray,
+        rng: np.random.Generator,
+        sim_reward: float,
+        previous_action: float,
+    ) -> float:
+        """After a decision: ping (and frame); returns the decision's reward (as the vision camera's)."""
+        s = state
+        if self.fused and self.settings.detects:  # the vision camera writes the slots, fed the ping
+            view = self._ping(s, points, cum)
+            self.vision.fallback = _as_detection(view) if view.in_view else None
+            return self.vision.step(s, points, cum, rng, sim_reward, previous_action)
+        if self.vision is not None:  # the image only (observation="image"): the slots are ours
+            self.vision.step(s, points, cum, rng, sim_reward, previous_action)
+        self._look(s, points, cum)
+        if s[sim.OVERRIDDEN] != 0.0 or s[sim.IN_VIEW] == 0.0:
+            return self.lost_reward
+        return sim_reward
+
+    def _keep_truth(self, s: np.ndarray) -> None:
+        self.truth = TrueView(bool(s[sim.IN_VIEW]), s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR])
+        self._true_errors = (s[sim.E_DIST], s[sim.E_ANGL])
+
+    def _ping(self, s: np.ndarray, points: np.ndarray, cum: np.ndarray):
+        pose = (s[sim.X], s[sim.Y], s[sim.PSI])
+        return self.sonar.step(points, cum, pose, self._rng, *self.buried)
+
+    def _look(self, s: np.ndarray, points: np.ndarray, cum: np.ndarray) -> None:
+        """The slots from the sonar (``"sonar"``), or the exact camera's, else the sonar's (ideal, fused)."""
+        if self.fused and self.settings.detects:  # the reset's first frame: the vision camera's alone
+            self._ping(s, points, cum)
+            return
+        self._keep_truth(s)
+        view = self._ping(s, points, cum)
+        if self.fused and s[sim.IN_VIEW] != 0.0:  # the exact camera sees the pipe: its slots stay
+            return
+        if view.in_view:
+            e_dist, e_angl = tracking_errors(view.x1, view.y1, view.x2, view.y_near)
+            side = 1.0 if view.x1 >= 0.0 else -1.0
+            self._last = Sighting(view.x1, view.y1, view.x2, view.y_near, e_dist, e_angl, side)
+        elif self.fused:  # neither sees it: the exact camera's last sighting stays
+            return
+        last = self._last
+        s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR] = last.x1, last.y1, last.x2, last.y_near
+        s[sim.E_DIST], s[sim.E_ANGL], s[sim.LAST_SIDE] = last.e_dist, last.e_angl, last.side
+        s[sim.IN_VIEW] = 1.0 if view.in_view else 0.0
+
+    def observation(self, state: np.ndarray, dtype=np.float64, slots: np.ndarray | None = None) -> np.ndarray:
+        """The observation: ``state[:4]`` or ``state[slots]``, or the image with ``observation="image"``."""
+        if self.vision is not None:
+            return self.vision.observation(state, dtype, slots)
+        return (state[:4] if slots is None else state[slots]).astype(dtype)
+
+    def info(self) -> dict[str, np.ndarray]:
+        """The camera's entries (the vision camera's, if any), ``sonar_detected`` and ``sonar_in_view``."""
+        out: dict[str, np.ndarray] = {}
+        if self.vision is not None:
+            out.update(self.vision.info())
+        if not self.settings.detects:
+            out["true_pipe_in_view"] = np.array(self.truth.in_view)
+            out["true_e_dist"] = np.array(float(self._true_errors[0]))
+            out["true_e_angl"] = np.array(float(self._true_errors[1]))
+        view = self.sonar.view
+        out["sonar_detected"] = np.array(bool(view.detected))
+        out["sonar_in_view"] = np.array(bool(view.in_view))
+        return out
+
+    def panel(self, height: int) -> np.ndarray:
+        """The camera's panel (``observation="image"`` or ``"fused"`` with a vision camera), else none."""
+        if self.vision is not None:
+            return self.vision.panel(height)
+        return np.zeros((height, 0, 3), dtype=np.uint8)
+
+
+def _as_detection(view) -> Detection:
+    """The sonar's view as a detection of the pipe's centre line in the camera's footprint."""
+    return Detection(True, view.x1, view.y1, view.x2, view.y_near, 1.0)
+
+
+__all__ = ["SonarSensors", "make_sensor", "sonar_burial", "start_sensor"]

@@ -1,0 +1,197 @@
+"""The environments with ``sensor="sonar"`` and ``sensor="fused"`` (pipefollow.perception.sensor)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from pipefollow.cli import main
+from pipefollow.envs.env import PipelineFollowingEnv
+from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
+from pipefollow.learners.heuristic import heuristic_action
+from pipefollow.perception.sonar_detect import MIN_HEIGHT_SHARE
+from pipefollow.sim.pipeline import Pipeline
+from pipefollow.sim.suites import get_suite, min_length_for
+
+STRAIGHT = Pipeline(np.array([[0.0, 0.0], [40.0, 0.0]]), name="straight")
+
+
+def act(obs):
+    return [heuristic_action(obs[0], obs[1])]
+
+
+def episode(env, seed=0):
+    """The heuristic's episode: (return, share of decisions with the pipe truly in view, decisions lost)."""
+    obs, info = env.reset(seed=seed)
+    ret, n, seen, lost, done = 0.0, 0, 0, 0, False
+    while not done:
+        obs, r, terminated, truncated, info = env.step(act(obs))
+        ret += r
+        n += 1
+        seen += bool(info.get("true_pipe_in_view", info["pipe_in_view"]))
+        lost += not info["pipe_in_view"]
+        done = terminated or truncated
+    return ret, seen / n, lost
+
+
+def test_sonar_follows_a_paper_pipe_in_clear_water_like_the_ideal_camera():
+    ideal = episode(PipelineFollowingEnv("paper-validation", 60.0))
+    sonar = episode(PipelineFollowingEnv("paper-validation", 60.0, sensor="sonar"))
+    assert sonar[1] >= 0.95 and ideal[1] >= 0.95
+    # a few decisions lost at the corners (−10 each), against two for the exact camera
+    assert abs(sonar[0] - ideal[0]) <= 20.0 and sonar[2] <= ideal[2] + 2
+
+
+def test_sonar_and_fusion_follow_in_turbid_water_where_the_vision_camera_fails():
+    pipes = get_suite("heldout").pipes(3, min_length_for(60.0))
+    runs = {}
+    for name, kwargs in (
+        ("vision", {"camera": "vision"}),
+        ("sonar", {"sensor": "sonar"}),
+        ("fused", {"camera": "vision", "sensor": "fused"}),
+    ):
+        envs = [PipelineFollowingEnv(p, 60.0, water="turbid", **kwargs) for p in pipes]
+        out = [episode(env, k) for k, env in enumerate(envs)]
+        runs[name] = np.array(out).mean(axis=0)  # mean return, share truly in view, decisions lost
+    # the detector misses most turbid frames and the track drifts (measured: mean return −193,
+    # 12 decisions lost; the sonar −60 and 4, fused −74 and 4); the sonar does not see the water
+    assert runs["vision"][2] >= 2 * runs["sonar"][2] and runs["sonar"][1] >= 0.95
+    assert runs["sonar"][0] >= runs["vision"][0] + 60.0
+    assert runs["fused"][2] < runs["vision"][2] and runs["fused"][0] >= runs["vision"][0] + 60.0
+
+
+def test_the_sonar_draws_from_a_generator_of_its_own():
+    # camera noise draws normals from np_random every decision: with or without the sonar the same count
+    kwargs = {"disturbance": {"camera_noise": 0.05}}
+    plain = PipelineFollowingEnv(STRAIGHT, 10.0, **kwargs)
+    sonar = PipelineFollowingEnv(STRAIGHT, 10.0, sensor="sonar", **kwargs)
+    assert plain._vision is None  # sensor="camera" with the ideal camera: nothing renders, nothing pings
+    for env in (plain, sonar):
+        env.reset(seed=7)
+        for _ in range(8):
+            env.step([0.2])
+    assert plain.np_random.bit_generator.state == sonar.np_random.bit_generator.state
+    # the fused camera renders the frames the vision camera alone renders (fixed actions, same poses)
+    vision = PipelineFollowingEnv(STRAIGHT, 10.0, camera="vision")
+    fused = PipelineFollowingEnv(STRAIGHT, 10.0, camera="vision", sensor="fused")
+    vision.reset(seed=3)
+    fused.reset(seed=3)
+    for _ in range(3):
+        np.testing.assert_array_equal(vision._vision.image, fused._vision.vision.image)
+        vision.step([0.3])
+        fused.step([0.3])
+    np.testing.assert_array_equal(vision._vision.image, fused._vision.vision.image)
+
+
+@pytest.mark.parametrize("kwargs", [{"sensor": "sonar"}, {"sensor": "fused"}])
+def test_the_sonar_is_deterministic_with_the_seed(kwargs):
+    def observations(seed):
+        env = PipelineFollowingEnv("paper-validation", 15.0, start_lateral_noise=0.3, **kwargs)
+        obs, _ = env.reset(seed=seed)
+        out = [obs]
+        for _ in range(15):
+            obs, *_ = env.step(act(obs))
+            out.append(obs)
+        return np.array(out)
+
+    np.testing.assert_array_equal(observations(4), observations(4))
+    assert not np.array_equal(observations(4), observations(5))
+
+
+@pytest.mark.parametrize("sensor", ["sonar", "fused"])
+def test_vector_env_with_the_sonar_equals_single_environments(sensor):
+    kwargs = {"episode_seconds": 5.0, "sensor": sensor, "start_lateral_noise": 0.4}
+    vec = PipelineFollowingVectorEnv(3, "random:medium", **kwargs)
+    singles = [PipelineFollowingEnv("random:medium", **kwargs) for _ in range(3)]
+    obs, infos = vec.reset(seed=10)
+    single_obs = [e.reset(seed=10 + i)[0] for i, e in enumerate(singles)]
+    ended = [False] * len(singles)
+    for _ in range(7):  # across an autoreset
+        assert np.array_equal(obs, np.array(single_obs))
+        actions = np.array([act(o)[0] for o in obs])
+        obs, rewards, _, _, infos = vec.step(actions)
+        stepped = []
+        for i, e in enumerate(singles):
+            if ended[i]:
+                (o, _), ended[i] = e.reset(), False
+            else:
+                o, r, _, ended[i], info = e.step([actions[i]])
+                assert rewards[i] == r and infos["sonar_in_view"][i] == info["sonar_in_view"]
+            stepped.append(o)
+        single_obs = stepped
+
+
+def test_the_ideal_camera_fused_with_the_sonar_is_the_sonar_when_the_camera_misses_everything():
+    # miss_prob 1: the exact camera never reports the pipe, so the fused estimate is the sonar's
+    kwargs = {"start_lateral_noise": 0.3, "disturbance": {"miss_prob": 1.0}}
+    fused = PipelineFollowingEnv("paper-validation", 20.0, sensor="fused", **kwargs)
+    sonar = PipelineFollowingEnv("paper-validation", 20.0, sensor="sonar", **kwargs)
+    obs_f, _ = fused.reset(seed=2)
+    obs_s, _ = sonar.reset(seed=2)
+    seen = 0
+    for _ in range(20):
+        obs_f, r_f, _, _, info_f = fused.step(act(obs_f))
+        obs_s, r_s, _, _, info_s = sonar.step(act(obs_s))
+        np.testing.assert_array_equal(obs_f, obs_s)
+        assert r_f == r_s and info_f["pipe_in_view"] == info_s["pipe_in_view"]
+        seen += bool(info_f["pipe_in_view"])
+    assert seen >= 15  # the sonar saw the pipe the camera missed
+
+
+def test_burial_of_the_water_buries_the_pipe_for_the_sonar():
+    # the same share for both sensors: at 0.8 the pipe stands 0.2 D = 5 cm proud, below the
+    # detector's minimum height (¼ D = 6.25 cm), so the sonar loses it; at 0 it sees it every ping
+    assert 1.0 - 0.8 < MIN_HEIGHT_SHARE
+    share = {}
+    for burial in (0.0, 0.8):
+        env = PipelineFollowingEnv(STRAIGHT, 10.0, sensor="sonar", water={"burial": burial})
+        env.reset(seed=0)
+        detected = [bool(env.step([0.0])[4]["sonar_detected"]) for _ in range(10)]
+        share[burial] = np.mean(detected)
+    assert share[0.0] == 1.0 and share[0.8] <= 0.1
+
+
+def test_buried_stretches_hide_the_pipe_from_the_sonar():
+    env = PipelineFollowingEnv(STRAIGHT, 10.0, sensor="sonar", disturbance={"buried": [[0.0, 40.0]]})
+    env.reset(seed=0)
+    for _ in range(5):
+        _, r, _, _, info = env.step([0.0])
+        assert not info["sonar_detected"] and not info["pipe_in_view"] and r == env.params.lost_reward
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"sensor": "radar"}, "sensor must be one of camera, sonar, fused; got 'radar'"),
+        ({"sensor": "sonar", "camera": "vision"}, "camera must be 'ideal'"),
+    ],
+)
+def test_bad_sensor_arguments_are_one_line_errors(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        PipelineFollowingEnv(**kwargs)
+    with pytest.raises(ValueError, match=message):
+        PipelineFollowingVectorEnv(2, **kwargs)
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--sensor", "radar"], "--sensor"),
+        (["--sensor", "sonar", "--camera", "vision"], "camera must be 'ideal'"),
+    ],
+)
+def test_bad_sensor_options_exit_2_with_one_line(args, message):
+    result = CliRunner().invoke(main, ["benchmark", "--controller", "heuristic", *args])
+    assert result.exit_code == 2
+    assert message in result.output
+
+
+def test_benchmark_with_the_sonar_names_it_and_compares_with_the_ideal_heuristic():
+    args = ["benchmark", "--controller", "heuristic", "--sensor", "sonar", "--pipes", "2", "--seconds", "10"]
+    result = CliRunner().invoke(main, [*args, "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.output)
+    assert summary["sensor"] == "sonar" and summary["camera"] == "ideal" and "vs_heuristic" in summary
