@@ -396,7 +396,8 @@ def test_a_stored_provenance_file_is_cited_on_the_page(tmp_path):
     from pipefollow.files.sources import package_modules, source_hash
 
     record = provenance("python examples/generalize_table.py runs/generalize --csv out/heldout.csv")
-    assert record["code"]["sources"] == source_hash(package_modules()) and len(record["code"]["sources"]) == 16
+    sources = record["code"]["sources"]
+    assert sources == source_hash(package_modules()) and len(sources) == 16
     assert record["date"].endswith(" UTC") and record["machine"]["numba_cpu_target"]
     docs = tmp_path / "docs"
     (docs / "generalize").mkdir(parents=True)
