@@ -4,8 +4,8 @@
 
 The policy sees only the rendered camera image (``observation="image"``, ``Box(0, 255, (96, 64, 1),
 uint8)``, which Stable-Baselines3 moves channel first for its ``CnnPolicy``); the decision "pipe in
-view, or search" comes from the pipe detector (``camera="vision"``),
-as for every other controller in the README's closed-loop table, and the reward from the true
+view, or search" comes from the pipe detector and the pipe tracker (``camera="vision"``),
+as for every other controller in the closed-loop table, and the reward from the true
 geometry. It trains on a new random pipe every 90-s episode (``random:mixed``) in clear water with
 the project's PPO defaults (``pipefollow.training.deep.DEFAULTS``: 8 environments × 128 steps,
 γ = 0.8, 64 × 64 heads) on a small convolutional features extractor (:func:`small_cnn`), then
@@ -27,9 +27,13 @@ import numpy as np
 
 from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
 from pipefollow.evaluation.benchmark import benchmark
+from pipefollow.files.atomic import write_text_atomic
 from pipefollow.perception.water import WATER_PRESETS
 from pipefollow.sim.suites import get_suite
 from pipefollow.training.deep import SB3VecEnv, hyperparameters, make_model
+
+# what "success" meant when the rows were measured (pipefollow.evaluation.success); the results page reads it
+SUCCESS = "in view and followed forward"
 
 
 def small_cnn():
@@ -144,8 +148,11 @@ def main() -> None:
             f"  success {row['success_rate']:.0%}  vs heuristic (ideal) {row['mean_diff']:+.1f}"
         )
     if args.json:
-        record = {"steps": args.steps, "seed": args.seed, "train_seconds": seconds, "rows": rows}
-        Path(args.json).write_text(json.dumps(record, indent=1) + "\n")
+        record = {
+            "steps": args.steps, "seed": args.seed, "train_seconds": seconds,
+            "camera": "vision", "success": SUCCESS, "rows": rows,
+        }  # fmt: skip
+        write_text_atomic(args.json, json.dumps(record, indent=1) + "\n")
 
 
 if __name__ == "__main__":
