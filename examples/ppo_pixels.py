@@ -80,7 +80,7 @@ class PixelAgent:
         return float(np.asarray(action).reshape(-1)[0])
 
 
-def train(out: Path, steps: int, seed: int, water: str):
+def train(out: Path, steps: int, seed: int, water: str, camera: str = "vision"):
     """The model in ``out``, trained first if missing; returns (model, seconds of training)."""
     import torch
     from stable_baselines3 import PPO
@@ -91,7 +91,7 @@ def train(out: Path, steps: int, seed: int, water: str):
         return PPO.load(path, device="cpu"), json.loads((out / "training.json").read_text())["train_seconds"]
     venv = PipelineFollowingVectorEnv(
         num_envs=hyperparameters("ppo")["n_envs"], pipeline="random:mixed", episode_seconds=90.0,
-        camera="vision", observation="image", water=water,
+        camera=camera, observation="image", water=water,
     )  # fmt: skip
     from stable_baselines3.common.vec_env import VecMonitor
 
@@ -124,8 +124,11 @@ def main() -> None:
     parser.add_argument("--pipes", type=int, default=100)
     parser.add_argument("--out", default="runs/ppo-pixels")
     parser.add_argument("--json", default=None, help="Write the rows here.")
+    parser.add_argument(
+        "--camera", default="vision", choices=("vision", "vision-raw"), help="with the tracker, or raw"
+    )
     args = parser.parse_args()
-    model, seconds = train(Path(args.out), args.steps, args.seed, args.water)
+    model, seconds = train(Path(args.out), args.steps, args.seed, args.water, args.camera)
     print(f"trained {args.steps:,} steps in {seconds:.0f} s")
     agent = PixelAgent(model)
     suite = get_suite("heldout")
@@ -134,7 +137,7 @@ def main() -> None:
         if water == "ideal":  # the image of clear water; pipe in view or lost from the exact camera
             camera = {"camera": "ideal", "observation": "image", "water": WATER_PRESETS["clear"]}
         else:
-            camera = {"camera": "vision", "observation": "image", "water": WATER_PRESETS[water]}
+            camera = {"camera": args.camera, "observation": "image", "water": WATER_PRESETS[water]}
         s = benchmark(agent, suite, controller="PPO on pixels", n_pipes=args.pipes, camera=camera).summary
         d = s["vs_heuristic"]
         row = {
@@ -150,7 +153,7 @@ def main() -> None:
     if args.json:
         record = {
             "steps": args.steps, "seed": args.seed, "train_seconds": seconds,
-            "camera": "vision", "success": SUCCESS, "rows": rows,
+            "camera": args.camera, "success": SUCCESS, "rows": rows,
         }  # fmt: skip
         write_text_atomic(args.json, json.dumps(record, indent=1) + "\n")
 
