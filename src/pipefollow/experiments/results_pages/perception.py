@@ -4,7 +4,8 @@ Sources: the code's water presets (:data:`pipefollow.perception.water.WATER_PRES
 ``docs/vision/`` (``pipefollow vision report``: ``report.csv``; ``pipefollow vision calibrate``:
 ``calibration.json``; ``examples/vision_table.py``: ``closed_loop.csv`` and, with ``--suites``,
 ``closed_loop_suites.csv``, both with the raw detector and with the tracker and today's success;
-``examples/ppo_pixels.py``: ``ppo_pixels.json``, measured with the earlier detector and success).
+``examples/ppo_pixels.py``: ``ppo_pixels.json`` with the tracker and ``ppo_pixels_raw.json`` with
+the detector alone; each file says which camera and success it was measured with).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ SOURCES = (
     "vision/closed_loop.csv",
     "vision/closed_loop_suites.csv",
     "vision/ppo_pixels.json",
+    "vision/ppo_pixels_raw.json",
 )
 UNITS = {
     "turbidity": "1/m",
@@ -111,10 +113,12 @@ at ≥ 95 % of the decisions **and** followed forward (`pipefollow.evaluation.su
 
 ## PPO on pixels
 
-`examples/ppo_pixels.py`: "{pixels}" sees only the camera image ({pixel_steps} steps of PPO, seed
-{pixel_seed}, clear water; its training took {pixel_train} s as stored); "in view or search" comes
-from {pixel_camera}. The row "ideal" is the policy on the image of clear water with the exact
-camera's in-view decision.
+`examples/ppo_pixels.py`: "{pixels}" sees only the camera image (PPO with the project's defaults
+on a small convolutional network, `random:mixed` in clear water; {pixel_runs}); "in view or
+search" comes from the camera it was trained with, which also judges it: the tracker
+(`--camera vision`, the default: `ppo_pixels.json`) or the detector alone (`--camera vision-raw`:
+`ppo_pixels_raw.json`). The rows "ideal" are the policy on the image of clear water with the exact
+camera's in-view decision. {pixel_success_text}
 
 {pixel_table}
 
@@ -130,7 +134,7 @@ tracker, sharp turns and the vision reset"), so its rows there are not unbiased 
 
 * `closed_loop.csv`, `closed_loop_suites.csv` (`examples/vision_table.py`): today's success (in view
   ≥ 95 % and followed forward), today's detector, both rendered cameras.
-* `ppo_pixels.json` (`examples/ppo_pixels.py`): {pixel_success}.
+* `ppo_pixels.json`, `ppo_pixels_raw.json` (`examples/ppo_pixels.py`): {pixel_success}.
 * `closed_loop_one_leg.csv`: **historical**, not shown here: the detector before it followed bends
   (one straight leg), an earlier renderer, earlier policies and the earlier success.
 * `report.csv`, `calibration.json`, `samples.png` (`pipefollow vision report`, `pipefollow vision
@@ -166,7 +170,7 @@ def render(docs: Path) -> str:
     report = read_csv(v / "report.csv")
     cal = read_json(v / "calibration.json")
     loop = read_csv(v / "closed_loop.csv")
-    pixels = read_json(v / "ppo_pixels.json")
+    pixel_runs = [read_json(v / "ppo_pixels.json"), read_json(v / "ppo_pixels_raw.json")]
     suites = read_csv(v / "closed_loop_suites.csv")
 
     rep = table(
@@ -275,28 +279,34 @@ def render(docs: Path) -> str:
         cam: [g(c, "ideal", "ideal") - g(c, cam, "turbid") for c in controllers] for cam in (raw, tracked)
     }
     view = [g(c, cam, "turbid", "pipe_in_view") for c in controllers for cam in (raw, tracked)]
-    now = pixels.get("success") == PIXELS_NOW and pixels.get("camera") == "vision"
+
+    def camera_of(run: dict) -> str:
+        now = run.get("success") == PIXELS_NOW and "camera" in run
+        return f"`{run['camera']}`" if now else "the detector then (earlier success)"
+
     pixel_table = table(
         (
+            "trained and judged with",
             "camera",
             "mean return [95 % CI]",
-            "success" if now else "success (earlier)",
+            "success",
             "pipe in view",
             "vs heuristic, ideal camera [95 % CI]",
         ),
         (
             (
-                "ideal (image of clear water)"
-                if p["water"] == "ideal"
-                else f"{'`vision`' if now else 'detector then'}, {p['water']} water",
+                camera_of(run),
+                "ideal (image of clear water)" if p["water"] == "ideal" else f"{p['water']} water",
                 f"{num(p['mean_return'])} {ci(*p['ci95_mean'])}",
                 pct(p["success_rate"]),
                 pct(p["pipe_in_view"], 1),
                 num(p["mean_diff"], 1, True) + " " + ci(*p["ci95_diff"], sign=True),
             )
-            for p in pixels["rows"]
+            for run in pixel_runs
+            for p in run["rows"]
         ),
     )
+    all_now = all(run.get("success") == PIXELS_NOW and "camera" in run for run in pixel_runs)
     body = fill(
         TEXT,
         presets=presets_table(),
@@ -305,22 +315,24 @@ def render(docs: Path) -> str:
         preset_models=preset_models,
         frames=count(float(report[0]["frames_without_pipe"])),
         pixels=PIXELS,
-        pixel_steps=count(pixels["steps"]),
-        pixel_seed=pixels["seed"],
-        pixel_train=f"{pixels['train_seconds']:.0f}",
+        pixel_runs="; ".join(
+            f"{camera_of(run)}: {count(run['steps'])} steps, seed {run['seed']}, "
+            f"training {run['train_seconds']:.0f} s as stored"
+            for run in pixel_runs
+        ),
         pixel_table=pixel_table,
-        pixel_camera=(
-            "the detector and the pipe tracker (`vision`)"
-            if now
-            else "the detector **before it joined hooks, without the tracker** (the `vision` of then is "
-            "today's `vision-raw`), and success was the earlier one (the pipe in view at ≥ 95 % of the "
-            "decisions, not yet asked to be followed forward): not comparable row by row with the table above"
+        pixel_success_text=(
+            "Success is today's."
+            if all_now
+            else "A file without its camera and success was measured with the detector before it "
+            "joined hooks, without the tracker, and the earlier success (in view ≥ 95 % only): not "
+            "comparable row by row with the table above."
         ),
         pixel_success=(
-            "today's success, the detector and the tracker"
-            if now
-            else "the earlier success (in view ≥ 95 % only) and the detector before it joined hooks, "
-            "without the tracker"
+            "today's success, each with the camera it names"
+            if all_now
+            else "a file that names no camera and success: the earlier success (in view ≥ 95 % only) and "
+            "the detector before it joined hooks, without the tracker"
         ),
         closed_loop=closed,
         tracker_vs_raw="; ".join(
