@@ -4,7 +4,8 @@
 
 The policy sees only the rendered camera image (``observation="image"``, ``Box(0, 255, (96, 64, 1),
 uint8)``, which Stable-Baselines3 moves channel first for its ``CnnPolicy``); the decision "pipe in
-view, or search" comes from the pipe detector and the pipe tracker (``camera="vision"``),
+view, or search" comes from the pipe detector and the pipe tracker (``camera="vision"``; with
+``--camera vision-raw`` from the detector alone),
 as for every other controller in the closed-loop table, and the reward from the true
 geometry. It trains on a new random pipe every 90-s episode (``random:mixed``) in clear water with
 the project's PPO defaults (``pipefollow.training.deep.DEFAULTS``: 8 environments × 128 steps,
