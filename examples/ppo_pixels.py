@@ -4,8 +4,9 @@
 
 The policy sees only the rendered camera image (``observation="image"``, ``Box(0, 255, (96, 64, 1),
 uint8)``, which Stable-Baselines3 moves channel first for its ``CnnPolicy``); the decision "pipe in
-view, or search" comes from the pipe detector (``camera="vision"``),
-as for every other controller in the README's closed-loop table, and the reward from the true
+view, or search" comes from the pipe detector and the pipe tracker (``camera="vision"``; with
+``--camera vision-raw`` from the detector alone),
+as for every other controller in the closed-loop table, and the reward from the true
 geometry. It trains on a new random pipe every 90-s episode (``random:mixed``) in clear water with
 the project's PPO defaults (``pipefollow.training.deep.DEFAULTS``: 8 environments × 128 steps,
 γ = 0.8, 64 × 64 heads) on a small convolutional features extractor (:func:`small_cnn`), then
@@ -27,9 +28,13 @@ import numpy as np
 
 from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
 from pipefollow.evaluation.benchmark import benchmark
+from pipefollow.files.atomic import write_text_atomic
 from pipefollow.perception.water import WATER_PRESETS
 from pipefollow.sim.suites import get_suite
 from pipefollow.training.deep import SB3VecEnv, hyperparameters, make_model
+
+# what "success" meant when the rows were measured (pipefollow.evaluation.success); the results page reads it
+SUCCESS = "in view and followed forward"
 
 
 def small_cnn():
@@ -76,7 +81,7 @@ class PixelAgent:
         return float(np.asarray(action).reshape(-1)[0])
 
 
-def train(out: Path, steps: int, seed: int, water: str):
+def train(out: Path, steps: int, seed: int, water: str, camera: str = "vision"):
     """The model in ``out``, trained first if missing; returns (model, seconds of training)."""
     import torch
     from stable_baselines3 import PPO
@@ -87,7 +92,7 @@ def train(out: Path, steps: int, seed: int, water: str):
         return PPO.load(path, device="cpu"), json.loads((out / "training.json").read_text())["train_seconds"]
     venv = PipelineFollowingVectorEnv(
         num_envs=hyperparameters("ppo")["n_envs"], pipeline="random:mixed", episode_seconds=90.0,
-        camera="vision", observation="image", water=water,
+        camera=camera, observation="image", water=water,
     )  # fmt: skip
     from stable_baselines3.common.vec_env import VecMonitor
 
@@ -120,8 +125,11 @@ def main() -> None:
     parser.add_argument("--pipes", type=int, default=100)
     parser.add_argument("--out", default="runs/ppo-pixels")
     parser.add_argument("--json", default=None, help="Write the rows here.")
+    parser.add_argument(
+        "--camera", default="vision", choices=("vision", "vision-raw"), help="with the tracker, or raw"
+    )
     args = parser.parse_args()
-    model, seconds = train(Path(args.out), args.steps, args.seed, args.water)
+    model, seconds = train(Path(args.out), args.steps, args.seed, args.water, args.camera)
     print(f"trained {args.steps:,} steps in {seconds:.0f} s")
     agent = PixelAgent(model)
     suite = get_suite("heldout")
@@ -130,7 +138,7 @@ def main() -> None:
         if water == "ideal":  # the image of clear water; pipe in view or lost from the exact camera
             camera = {"camera": "ideal", "observation": "image", "water": WATER_PRESETS["clear"]}
         else:
-            camera = {"camera": "vision", "observation": "image", "water": WATER_PRESETS[water]}
+            camera = {"camera": args.camera, "observation": "image", "water": WATER_PRESETS[water]}
         s = benchmark(agent, suite, controller="PPO on pixels", n_pipes=args.pipes, camera=camera).summary
         d = s["vs_heuristic"]
         row = {
@@ -144,8 +152,11 @@ def main() -> None:
             f"  success {row['success_rate']:.0%}  vs heuristic (ideal) {row['mean_diff']:+.1f}"
         )
     if args.json:
-        record = {"steps": args.steps, "seed": args.seed, "train_seconds": seconds, "rows": rows}
-        Path(args.json).write_text(json.dumps(record, indent=1) + "\n")
+        record = {
+            "steps": args.steps, "seed": args.seed, "train_seconds": seconds,
+            "camera": args.camera, "success": SUCCESS, "rows": rows,
+        }  # fmt: skip
+        write_text_atomic(args.json, json.dumps(record, indent=1) + "\n")
 
 
 if __name__ == "__main__":

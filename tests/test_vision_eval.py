@@ -90,3 +90,23 @@ def test_evaluate_takes_the_vision_camera_and_counts_the_true_pipe_in_view():
     # at the pipe's start, has the true pipe in view
     assert blind["mean_return"] == pytest.approx(-10.0 * 20)
     assert blind["mean_pipe_in_view"] > 0.0 and ideal["mean_return"] > blind["mean_return"]
+
+
+@pytest.mark.parametrize("camera", ["vision", "vision-raw"])
+def test_closed_loop_runs_the_camera_it_is_given(camera):
+    from pipefollow.evaluation.benchmark import load_controller
+    from pipefollow.evaluation.vision import closed_loop
+
+    blind = WATER_PRESETS["turbid"]._replace(turbidity=3.0)
+    agent = load_controller("heuristic")
+    s = closed_loop(agent, get_suite("heldout"), blind, "h", n_pipes=2, seconds=5.0, camera=camera)
+    assert s.summary["camera"] == camera
+    # at 3/m nothing is ever detected, so nothing is tracked either: every decision is a search, −10
+    assert s.summary["mean_return"] == pytest.approx(-10.0 * 5)
+
+
+def test_closed_loop_refuses_another_camera_in_one_line():
+    from pipefollow.evaluation.vision import closed_loop
+
+    with pytest.raises(ValueError, match="camera must be 'vision' or 'vision-raw', got 'ideal'"):
+        closed_loop(None, get_suite("heldout"), WATER_PRESETS["clear"], "h", camera="ideal")

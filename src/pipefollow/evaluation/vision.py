@@ -12,7 +12,7 @@
   errors below :data:`GROSS_M` (the median is no use: ends on the footprint's border are often
   exact for both); gross errors (the detector's line on one leg of a bend, where the exact camera
   reports the chord to the far end) are counted apart, since the Gaussian model has none.
-* :func:`closed_loop` runs controllers with the vision camera on the held-out suite
+* :func:`closed_loop` runs controllers with a rendered camera (the tracker or the raw detector) on a suite
   (:func:`~pipefollow.evaluation.benchmark.benchmark`, compared with the heuristic on the ideal camera).
 
 Every frame draws from ``default_rng(SeedSequence([seed, condition, pipe]))``.
@@ -204,11 +204,19 @@ def sample_figure(
     save_figure(fig, path)
 
 
-def closed_loop(agent, suite: Suite, water: Water, controller: str, n_pipes=None, seconds=60.0, seed=0):
-    """:func:`~pipefollow.evaluation.benchmark.benchmark` of ``agent`` with the vision camera in ``water``."""
+def closed_loop(
+    agent, suite: Suite, water: Water, controller: str, n_pipes=None, seconds=60.0, seed=0, camera="vision"
+):
+    """:func:`~pipefollow.evaluation.benchmark.benchmark` of ``agent`` with a rendered camera in ``water``.
+
+    ``camera`` is ``"vision"`` (the detector and the pipe tracker) or ``"vision-raw"`` (the detector
+    alone, frame by frame).
+    """
     from pipefollow.evaluation.benchmark import benchmark
 
+    if camera not in ("vision", "vision-raw"):
+        raise ValueError(f"camera must be 'vision' or 'vision-raw', got {camera!r}")
     return benchmark(
         agent, suite, controller=controller, seconds=seconds, n_pipes=n_pipes, seed=seed, noise_seed=seed,
-        camera={"camera": "vision", "water": water},
+        camera={"camera": camera, "water": water},
     )  # fmt: skip
