@@ -6,7 +6,7 @@ pixel ↔ camera-metre conventions, ``image`` renders the footprint as the camer
 walks along the pipe's edges to the ends of the visible piece (and holds the least-squares edge
 fit both use), and ``camera`` joins them to the simulation's observation slots. ``sonar`` renders
 a multibeam profiler's ping, ``sonar_detect`` finds the pipe in it and ``sonar_track`` turns
-successive detections into the camera's observation (not yet used by the environments).
+successive detections into the camera's observation; ``sensor`` gives the environments camera, sonar or both.
 """
 
 from pipefollow.files.compile_cache import configure_numba_cache
