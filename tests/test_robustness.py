@@ -3,6 +3,7 @@
 import csv
 import json
 import math
+import shlex
 
 import numpy as np
 import pytest
@@ -176,7 +177,7 @@ def test_cli_writes_the_tables_and_the_figure(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == sorted(["curve.csv", "scenarios.csv", "robustness.json",
                                                             "robustness.png", "provenance.json"])  # fmt: skip
     record = json.loads((out / "provenance.json").read_text())
-    assert record["command"].startswith("pipefollow ") and record["code"]["sources"]
+    assert record["command"] == shlex.join(["pipefollow", *args]) and record["code"]["sources"]
     with open(out / "curve.csv") as f:
         curve = list(csv.DictReader(f))
     assert [(r["current_speed"], r["controller"]) for r in curve] == [

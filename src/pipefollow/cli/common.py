@@ -207,8 +207,15 @@ def disturbance_text(d, prefix: str = "; disturbances: ") -> str:
 
 
 def command_line() -> str:
-    """The command as the user typed it (``pipefollow`` and its arguments), for provenance records."""
+    """The command as the user gave it (``pipefollow`` and its arguments), for provenance records.
+
+    The arguments the command-line group was called with (also under click's test runner), else
+    the process's own.
+    """
     import shlex
     import sys
 
-    return shlex.join(["pipefollow", *sys.argv[1:]])
+    ctx = click.get_current_context(silent=True)
+    root = ctx.find_root().command if ctx is not None else None
+    args = getattr(root, "invocation", None)
+    return shlex.join(["pipefollow", *(sys.argv[1:] if args is None else args)])

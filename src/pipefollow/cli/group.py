@@ -79,6 +79,7 @@ class OneLineErrors(LazyGroup):
     """Click's own usage errors (a bad option value, a missing option) on one line, exit 2."""
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):  # noqa: D102
+        self.invocation = list(sys.argv[1:] if args is None else args)  # for provenance records
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode, **extra)
         try:
