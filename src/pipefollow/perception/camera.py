@@ -25,6 +25,7 @@ import numpy as np
 from pipefollow.perception.detector import NOT_FOUND, Detection, detect_pipe, require_cv2
 from pipefollow.perception.image import SCENES, Renderer, Textures
 from pipefollow.perception.pixels import column_at, pixel_grid, row_at
+from pipefollow.perception.slots import Sighting, sighting_of, write_sighting
 from pipefollow.perception.tracker import (
     OUT_IN_VIEW,
     OUT_SIDE,
@@ -36,7 +37,7 @@ from pipefollow.perception.tracker import (
 )
 from pipefollow.perception.water import Water, water_from
 from pipefollow.sim import decision as sim
-from pipefollow.sim.camera import CameraParams, tracking_errors
+from pipefollow.sim.camera import CameraParams
 from pipefollow.sim.reward import reward
 
 CAMERAS = ("ideal", "vision", "vision-raw")
@@ -70,18 +71,6 @@ class CameraSettings:
     def tracks(self) -> bool:
         """Whether the detections go through the pipe tracker (``vision``)."""
         return self.camera == "vision"
-
-
-class Sighting(NamedTuple):
-    """The observation slots of the simulation state a detection fills (camera metres, radians)."""
-
-    x1: float = 0.0  # the far end
-    y1: float = 0.0
-    x2: float = 0.0  # the near end's lateral position ...
-    y_near: float = 0.0  # ... and its forward position
-    e_dist: float = 0.0  # tracking errors (sim.camera.tracking_errors)
-    e_angl: float = 0.0
-    side: float = 1.0  # the side the pipe was last seen on: +1 starboard (x1 ≥ 0), −1 port
 
 
 class TrueView(NamedTuple):
@@ -214,29 +203,20 @@ class VisionCamera:
             self._track(s, pose, det)
             return
         if det.found:
-            e_dist, e_angl = tracking_errors(det.x1, det.y1, det.x2, det.y_near)
-            side = 1.0 if det.x1 >= 0.0 else -1.0
-            self._last = Sighting(det.x1, det.y1, det.x2, det.y_near, e_dist, e_angl, side)
+            self._last = sighting_of(det.x1, det.y1, det.x2, det.y_near)
         # a lost pipe keeps the last detection, as the exact camera keeps its last sighting
-        last = self._last
-        s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR] = last.x1, last.y1, last.x2, last.y_near
-        s[sim.E_DIST], s[sim.E_ANGL], s[sim.LAST_SIDE] = last.e_dist, last.e_angl, last.side
-        s[sim.IN_VIEW] = 1.0 if det.found else 0.0
+        write_sighting(s, self._last, det.found)
 
     def _track(self, s: np.ndarray, pose: tuple[float, float, float], det: Detection) -> None:
         """The observation slots from the tracker fed with this frame's detection."""
         out = self.tracker.step(pose, det.found, (det.x1, det.y1, det.x2, det.y_near))
         seen = out[OUT_IN_VIEW] != 0.0
         if seen:
-            x1, y1, x2, y_near = out[OUT_X1], out[OUT_Y1], out[OUT_X2], out[OUT_Y_NEAR]
-            e_dist, e_angl = tracking_errors(x1, y1, x2, y_near)
-            self._last = Sighting(x1, y1, x2, y_near, e_dist, e_angl, out[OUT_SIDE])
+            ends = out[OUT_X1], out[OUT_Y1], out[OUT_X2], out[OUT_Y_NEAR]
+            self._last = sighting_of(*ends, side=out[OUT_SIDE])
         else:  # the last sighting stays; the side is the tracker's (towards a turn it saw)
             self._last = self._last._replace(side=out[OUT_SIDE])
-        last = self._last
-        s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR] = last.x1, last.y1, last.x2, last.y_near
-        s[sim.E_DIST], s[sim.E_ANGL], s[sim.LAST_SIDE] = last.e_dist, last.e_angl, last.side
-        s[sim.IN_VIEW] = 1.0 if seen else 0.0
+        write_sighting(s, self._last, seen)
 
     def observation(self, state: np.ndarray, dtype=np.float64, slots: np.ndarray | None = None) -> np.ndarray:
         """The observation: ``state[:4]`` or ``state[slots]`` as ``dtype``, or the image ``(H, W, 1)``."""

@@ -32,12 +32,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipefollow.perception.camera import CameraSettings, Sighting, TrueView, VisionCamera, _spawn
+from pipefollow.perception.camera import CameraSettings, TrueView, VisionCamera, _spawn
 from pipefollow.perception.detector import Detection
+from pipefollow.perception.slots import Sighting, sighting_of, write_sighting
 from pipefollow.perception.sonar_track import SonarSensor
 from pipefollow.perception.water import Water
 from pipefollow.sim import decision as sim
-from pipefollow.sim.camera import CameraParams, tracking_errors
+from pipefollow.sim.camera import CameraParams
 from pipefollow.sim.disturbance import NO_BURIAL
 
 
@@ -130,15 +131,10 @@ class SonarSensors:
         if self.fused and s[sim.IN_VIEW] != 0.0:  # the exact camera sees the pipe: its slots stay
             return
         if view.in_view:
-            e_dist, e_angl = tracking_errors(view.x1, view.y1, view.x2, view.y_near)
-            side = 1.0 if view.x1 >= 0.0 else -1.0
-            self._last = Sighting(view.x1, view.y1, view.x2, view.y_near, e_dist, e_angl, side)
+            self._last = sighting_of(view.x1, view.y1, view.x2, view.y_near)
         elif self.fused:  # neither sees it: the exact camera's last sighting stays
             return
-        last = self._last
-        s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR] = last.x1, last.y1, last.x2, last.y_near
-        s[sim.E_DIST], s[sim.E_ANGL], s[sim.LAST_SIDE] = last.e_dist, last.e_angl, last.side
-        s[sim.IN_VIEW] = 1.0 if view.in_view else 0.0
+        write_sighting(s, self._last, view.in_view)
 
     def observation(self, state: np.ndarray, dtype=np.float64, slots: np.ndarray | None = None) -> np.ndarray:
         """The observation: ``state[:4]`` or ``state[slots]``, or the image with ``observation="image"``."""

@@ -20,6 +20,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from pipefollow.perception.slots import Sighting, sighting_of, write_sighting
 from pipefollow.perception.sonar import (
     LOOK_AHEAD_SONAR,
     Ping,
@@ -32,7 +33,7 @@ from pipefollow.perception.sonar import (
 )
 from pipefollow.perception.sonar_detect import THRESHOLD, SonarFix, detect_profile
 from pipefollow.sim import decision as sim
-from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, clip_segment, tracking_errors
+from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, clip_segment
 from pipefollow.sim.disturbance import NO_BURIAL
 
 
@@ -182,13 +183,13 @@ class SonarSensor:
         self.ping: Ping | None = None
         self.fix = SonarFix(False)
         self.view = NO_VIEW
-        self._last = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)  # the last sighting's slots (starboard if none)
+        self._last = Sighting()  # the last sighting's slots (starboard if none)
 
     def reset(self) -> None:
         """A new episode: forget the track."""
         self.track.reset()
         self.ping, self.fix, self.view = None, SonarFix(False), NO_VIEW
-        self._last = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+        self._last = Sighting()
 
     def step(
         self,
@@ -228,13 +229,8 @@ class SonarSensor:
             points, cum, (state[sim.X], state[sim.Y], state[sim.PSI]), rng, buried_from, buried_to
         )
         if view.in_view:
-            e_dist, e_angl = tracking_errors(view.x1, view.y1, view.x2, view.y_near)
-            side = 1.0 if view.x1 >= 0.0 else -1.0
-            self._last = (view.x1, view.y1, view.x2, view.y_near, e_dist, e_angl, side)
-        s = state
-        s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR] = self._last[:4]
-        s[sim.E_DIST], s[sim.E_ANGL], s[sim.LAST_SIDE] = self._last[4:]
-        s[sim.IN_VIEW] = 1.0 if view.in_view else 0.0
+            self._last = sighting_of(view.x1, view.y1, view.x2, view.y_near)
+        write_sighting(state, self._last, view.in_view)
         return view
 
 
