@@ -8,7 +8,6 @@ the success rate and the training's wall time), and the paired tables of
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 from pipefollow.experiments.results_pages.markdown import (
@@ -109,24 +108,6 @@ those pipes (its return {t_h_calm} calm, {t_h_dist} disturbed):
 """
 
 
-def label(variant: str) -> str:
-    """``supervised-cacla-td0.9`` → ``supervised CACLA, critic TD(0.9)``."""
-    base, rest = variant, ""
-    for stem, name in (("supervised-cacla", "supervised CACLA"), ("cacla", "CACLA"), ("ppo", "PPO")):
-        if variant == stem or variant.startswith(stem + "-"):
-            base, rest = name, variant[len(stem) + 1 :]
-            break
-    if not rest:
-        return base
-    if rest == "var":
-        return base + "+Var"
-    if m := re.fullmatch(r"sigma([\d.]+)", rest):
-        return f"{base}, σ from {m.group(1)}"
-    if m := re.fullmatch(r"td([\d.]+)", rest):
-        return f"{base}, critic TD({m.group(1)})"
-    return f"{base}, trained under {rest}"
-
-
 def _ci(lo_hi, sign=False) -> str:
     return ci(lo_hi[0], lo_hi[1], sign=sign)
 
@@ -172,13 +153,14 @@ def render(docs: Path) -> str:
             raise PageError(f"summary.json: no row for {v} at {b} ({c})") from None
 
     # the heuristic's return: mean return minus the paired difference (the same on every row)
-    heur = {
-        c: get("cacla", small, c)["mean_return"] - get("cacla", small, c)["vs_heuristic"]
-        for c in ("calm", "disturbed")
-    }
+    heur = {c: heuristic_of(get("cacla", small, c)) for c in CONDITIONS}
 
-    def name_of(v: str) -> str:  # the label the script stored, else one made from the variant's name
-        return next((r["label"] for r in rows if r["variant"] == v and "label" in r), None) or label(v)
+    labels = {r["variant"]: r.get("label") for r in rows}
+
+    def name_of(v: str) -> str:  # the label examples/sample_efficiency.py stored with the row
+        if not labels.get(v):
+            raise PageError(f"summary.json: the rows of {v} have no label")
+        return labels[v]
 
     out = []
     for v in variants:
