@@ -22,6 +22,7 @@ from gymnasium import spaces
 
 from pipefollow.files.limits import MAX_EPISODE_SECONDS
 from pipefollow.files.paper_training import EPISODE_SECONDS
+from pipefollow.perception.slots import observed
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
 from pipefollow.sim.disturbance import Disturbance, check, disturbance_from_dict, noise_count
@@ -263,9 +264,8 @@ def observation(states: np.ndarray, setup: Setup) -> np.ndarray:
 
     ``(x1, y1, x2, v_x)`` under the paper's state, and the measured entries of another.
     """
-    if setup.state == "paper":  # the leading slots: a slice, as cheap as before
-        return (states[:4] if states.ndim == 1 else states[:, :4]).astype(setup.obs_dtype)
-    return states[..., setup.obs_slots].astype(setup.obs_dtype)
+    # the paper's state is the leading slots: a slice, as cheap as before the named states
+    return observed(states, setup.obs_dtype, None if setup.state == "paper" else setup.obs_slots)
 
 
 def image_space(water) -> spaces.Box:

@@ -25,7 +25,7 @@ import numpy as np
 from pipefollow.perception.detector import NOT_FOUND, Detection, detect_pipe, require_cv2
 from pipefollow.perception.image import SCENES, Renderer, Textures
 from pipefollow.perception.pixels import column_at, pixel_grid, row_at
-from pipefollow.perception.slots import Sighting, sighting_of, write_sighting
+from pipefollow.perception.slots import Sighting, observed, sighting_of, write_sighting
 from pipefollow.perception.tracker import (
     OUT_IN_VIEW,
     OUT_SIDE,
@@ -222,7 +222,7 @@ class VisionCamera:
         """The observation: ``state[:4]`` or ``state[slots]`` as ``dtype``, or the image ``(H, W, 1)``."""
         if self.settings.observation == "image":
             return self.image[..., None].copy()
-        return (state[:4] if slots is None else state[slots]).astype(dtype)
+        return observed(state, dtype, slots)
 
     def info(self) -> dict[str, np.ndarray]:
         """The camera's entries of ``info`` (0-d arrays): the detection and the exact camera's view."""

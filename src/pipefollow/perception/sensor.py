@@ -34,7 +34,7 @@ import numpy as np
 
 from pipefollow.perception.camera import CameraSettings, TrueView, VisionCamera, _spawn
 from pipefollow.perception.detector import Detection
-from pipefollow.perception.slots import Sighting, sighting_of, write_sighting
+from pipefollow.perception.slots import Sighting, observed, sighting_of, write_sighting
 from pipefollow.perception.sonar_track import SonarSensor
 from pipefollow.perception.water import Water
 from pipefollow.sim import decision as sim
@@ -140,7 +140,7 @@ class SonarSensors:
         """The observation: ``state[:4]`` or ``state[slots]``, or the image with ``observation="image"``."""
         if self.vision is not None:
             return self.vision.observation(state, dtype, slots)
-        return (state[:4] if slots is None else state[slots]).astype(dtype)
+        return observed(state, dtype, slots)
 
     def info(self) -> dict[str, np.ndarray]:
         """The camera's entries (the vision camera's, if any), ``sonar_detected`` and ``sonar_in_view``."""

@@ -46,4 +46,13 @@ def write_sighting(s: np.ndarray, last: Sighting, in_view: bool) -> None:
     s[sim.IN_VIEW] = 1.0 if in_view else 0.0
 
 
-__all__ = ["Sighting", "sighting_of", "write_sighting"]
+def observed(states: np.ndarray, dtype, slots: np.ndarray | None = None) -> np.ndarray:
+    """The observations of one state or a batch (rows), as a new array of ``dtype``.
+
+    The paper's leading four slots ``(x1, y1, x2, v_x)``, or ``slots`` (a named state's,
+    :mod:`pipefollow.sim.observation`).
+    """
+    return (states[..., :4] if slots is None else states[..., slots]).astype(dtype)
+
+
+__all__ = ["Sighting", "observed", "sighting_of", "write_sighting"]
