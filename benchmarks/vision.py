@@ -103,7 +103,8 @@ def main() -> None:
     import pipefollow.envs  # noqa: F401 (registers the environment)
     from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
     from pipefollow.perception.detector import detect_pipe
-    from pipefollow.perception.image import Renderer, make_textures
+    from pipefollow.perception.image import Renderer
+    from pipefollow.perception.textures import make_textures
     from pipefollow.perception.water import CLEAR
     from pipefollow.sim import decision as sim
     from pipefollow.sim.suites import get_suite, min_length_for

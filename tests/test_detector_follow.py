@@ -9,7 +9,8 @@ import pytest
 
 from pipefollow.perception.detector import detect_pipe
 from pipefollow.perception.follow import STEP_PX, follow_pipe
-from pipefollow.perception.image import Renderer, make_textures
+from pipefollow.perception.image import Renderer
+from pipefollow.perception.textures import make_textures
 from pipefollow.perception.water import WATER_PRESETS
 from pipefollow.sim.camera import PAPER_CAMERA, observe
 

@@ -10,7 +10,8 @@ import pytest
 
 from pipefollow.perception import detector
 from pipefollow.perception.detector import detect_pipe
-from pipefollow.perception.image import Renderer, make_textures, pixel_centres
+from pipefollow.perception.image import Renderer, pixel_centres
+from pipefollow.perception.textures import make_textures
 from pipefollow.perception.water import WATER_PRESETS, Water, WaterError, make_water, water_from
 from pipefollow.sim.camera import PAPER_CAMERA, observe
 
@@ -230,7 +231,7 @@ def test_tracking_adds_no_false_detections_on_frames_without_pipe():
 
 
 def test_texture_cache_gives_a_fresh_draws_tiles_and_leaves_the_generator_where_it_would():
-    from pipefollow.perception.image import TextureCache
+    from pipefollow.perception.textures import TextureCache
 
     cache = TextureCache(size=2)
     for growth in (True, False):

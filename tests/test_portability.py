@@ -53,7 +53,8 @@ FRAMES = """
 import hashlib, sys
 import numpy as np
 from pipefollow.perception.detector import detect_pipe
-from pipefollow.perception.image import Renderer, make_textures
+from pipefollow.perception.image import Renderer
+from pipefollow.perception.textures import make_textures
 from pipefollow.perception.water import WATER_PRESETS
 from pipefollow.sim.suites import get_suite, min_length_for
 

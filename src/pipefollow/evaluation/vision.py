@@ -29,7 +29,8 @@ import numpy as np
 from pipefollow.files.paper_training import TEST_EPISODE_SECONDS
 from pipefollow.learners.heuristic import heuristic_action
 from pipefollow.perception.detector import detect_pipe
-from pipefollow.perception.image import Renderer, make_textures
+from pipefollow.perception.image import Renderer
+from pipefollow.perception.textures import make_textures
 from pipefollow.perception.water import CLEAR, WATER_PRESETS, Water, check
 from pipefollow.sim import decision as sim
 from pipefollow.sim.suites import Suite, min_length_for

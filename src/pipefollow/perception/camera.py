@@ -23,9 +23,10 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from pipefollow.perception.detector import NOT_FOUND, Detection, detect_pipe, require_cv2
-from pipefollow.perception.image import SCENES, Renderer, Textures
+from pipefollow.perception.image import Renderer
 from pipefollow.perception.pixels import column_at, pixel_grid, row_at
 from pipefollow.perception.slots import Sighting, observed, sighting_of, write_sighting
+from pipefollow.perception.textures import SCENES, Textures
 from pipefollow.perception.tracker import (
     OUT_IN_VIEW,
     OUT_SIDE,
@@ -149,7 +150,7 @@ class VisionCamera:
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
         """A new scene (seabed and growth textures from ``rng``) and its first image.
 
-        The textures come from :data:`~pipefollow.perception.image.SCENES`: a seed's scene is made
+        The textures come from :data:`~pipefollow.perception.textures.SCENES`: a seed's scene is made
         once (the generator left as drawing it leaves it), and without marine growth its tile stays blank.
         """
         self._textures = SCENES.draw(rng, growth=self.settings.water.growth > 0.0)

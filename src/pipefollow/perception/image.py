@@ -9,8 +9,8 @@ of 3.125 cm), grey ``uint8``.
 
 Contents, in the order they are made:
 
-* the seabed: a seeded texture tile (:class:`Textures`) fixed in the earth frame, so it moves
-  through the image as the AUV moves;
+* the seabed: a seeded texture tile (:mod:`pipefollow.perception.textures`) fixed in the earth
+  frame, so it moves through the image as the AUV moves;
 * the pipe: a shaded cylinder of ``water.pipe_diameter`` around the pipeline's centre line
   (brightness ∝ 0.55 + 0.45·n_z, n_z the surface normal's vertical part); ``water.burial`` covers
   that share of its width with sand from its starboard edge (looking along the pipe); patches of
@@ -34,12 +34,10 @@ import numpy as np
 from numba import njit
 
 from pipefollow.perception.pixels import column_at, column_x, pixel_grid, row_at, row_y
+from pipefollow.perception.textures import SEABED_ALBEDO, TILE_RES, Textures
 from pipefollow.perception.water import CLEAR, Water
 from pipefollow.sim.camera import PAPER_CAMERA, CameraParams
 
-TILE = 256  # texture tile size (texels)
-TILE_RES = 0.025  # texel size (m): the seabed texture repeats every 6.4 m
-SEABED_ALBEDO = (0.36, 0.07)  # mean and s.d. of the seabed's albedo
 PIPE_ALBEDO = 0.78  # the pipe's coating
 SAND_ALBEDO = 0.44  # sand over a buried pipe
 GROWTH_ALBEDO = 0.22  # marine growth (dark)
@@ -47,13 +45,6 @@ VEIL = 0.6  # backscatter level relative to an albedo of 1
 SCATTER_BLUR = 2.0  # forward-scattering blur σ per unit of turbidity (pixels per 1/m)
 SNOW_LEVEL = (60.0, 140.0)  # grey levels a marine-snow speck adds (uniform range)
 NOISE_BANK = 1 << 18  # standard normals a renderer draws once for its sensor noise
-
-
-class Textures(NamedTuple):
-    """The seabed and marine-growth textures of a scene (``TILE × TILE`` float32 tiles)."""
-
-    seabed: np.ndarray  # albedo, indexed by earth (x, y) / TILE_RES modulo TILE
-    growth: np.ndarray  # ranks in [0, 1), indexed by (arc length, position across the pipe)
 
 
 class FrameSettings(NamedTuple):
@@ -83,69 +74,6 @@ class Lighting(NamedTuple):
 
     gain: np.ndarray  # grey levels per unit of albedo: the light's fall-off and the water's attenuation
     veil: np.ndarray  # grey levels of backscatter
-
-
-def _smooth_noise(rng: np.random.Generator, beta: float) -> np.ndarray:
-    """A periodic ``TILE × TILE`` field of 1/f^beta noise, mean 0 and s.d. 1."""
-    white = rng.standard_normal((TILE, TILE))
-    f = np.fft.fftfreq(TILE)
-    k = np.sqrt(f[:, None] ** 2 + f[None, :] ** 2)
-    k[0, 0] = 1.0
-    field = np.fft.ifft2(np.fft.fft2(white) / k**beta).real
-    field -= field.mean()
-    return field / field.std()
-
-
-def make_textures(rng: np.random.Generator, growth: bool = True) -> Textures:
-    """A new scene's textures drawn from ``rng``.
-
-    ``growth=False`` leaves the marine-growth tile blank (zeros: a renderer without growth never
-    reads it) but draws its normals all the same, so ``rng`` ends where it would have.
-    """
-    seabed = SEABED_ALBEDO[0] + SEABED_ALBEDO[1] * _smooth_noise(rng, 1.2)
-    if not growth:
-        rng.standard_normal((TILE, TILE))
-        return Textures(np.clip(seabed, 0.05, 0.95).astype(np.float32), np.zeros((TILE, TILE), np.float32))
-    field = _smooth_noise(rng, 1.6).ravel()
-    ranks = np.empty(field.size)
-    ranks[np.argsort(field)] = np.arange(field.size) / field.size  # uniform: share g covers g
-    return Textures(
-        np.clip(seabed, 0.05, 0.95).astype(np.float32), ranks.reshape(TILE, TILE).astype(np.float32)
-    )
-
-
-class TextureCache:
-    """A scene's textures made once per generator state: the same seed gives them without the work.
-
-    Drawing a scene's textures costs ≈ 14 ms (two 256 × 256 FFT fields and a sort), most of an
-    environment's reset. The textures are a pure function of the generator's state when they are
-    drawn, so :meth:`draw` keys them by that state: on a hit it returns the stored tiles and moves
-    the generator to the state their drawing left it in, so everything drawn after them (every
-    frame's noise) is what it would have been. A miss draws them (:func:`make_textures`) and keeps
-    them; at most ``size`` scenes are kept, the least recently used leaving first.
-    """
-
-    def __init__(self, size: int = 32) -> None:
-        self.size = size
-        self._scenes: dict[tuple, tuple[Textures, dict]] = {}
-
-    def draw(self, rng: np.random.Generator, growth: bool = True) -> Textures:
-        """The textures :func:`make_textures` would draw from ``rng``, ``rng`` left as it would leave it."""
-        bits = rng.bit_generator
-        key = (growth, repr(bits.state))
-        hit = self._scenes.pop(key, None)
-        if hit is not None:
-            self._scenes[key] = hit  # the most recently used
-            bits.state = hit[1]
-            return hit[0]
-        textures = make_textures(rng, growth)
-        self._scenes[key] = (textures, bits.state)
-        while len(self._scenes) > self.size:
-            del self._scenes[next(iter(self._scenes))]
-        return textures
-
-
-SCENES = TextureCache()  # the process's scenes, shared by the environments' cameras
 
 
 @njit(cache=True)
