@@ -32,33 +32,41 @@ def blocks(fn, repeats: int, inner: int) -> list[float]:
 
 
 def reset_rows(gym, pipe, ideal_step, repeats: int) -> list[tuple[str, float, str]]:
-    """``reset`` of a vision environment beside ``env.step`` of the ideal camera, timed in turns.
+    """``reset`` of vision and image environments beside ``env.step`` of the ideal camera, in turns.
 
     "same seed" resets with one of three seeds in turn, so a scene's textures come from the cache
-    (perception.image.TextureCache); "new seed" resets with a seed never used before, so they are
-    drawn (the growth tile left blank in clear water).
+    (perception.textures.TextureCache); "new seed" resets with a seed never used before, so they are
+    made from the texture banks (clear water: the growth tile left blank; "with marine growth": the
+    growth tile made too). The banks themselves are made once per process, timed once at the end.
     """
-    env = gym.make("pipefollow/PipelineFollowing-v0", pipeline=pipe, camera="vision").unwrapped
+    from pipefollow.perception import textures
+
+    def make(**kw):
+        return gym.make("pipefollow/PipelineFollowing-v0", pipeline=pipe, **kw).unwrapped
+
+    vision, image = make(camera="vision"), make(observation="image")
+    grown = make(camera="vision", water={"preset": "clear", "growth": 0.3})
     seeds = iter(range(10, 10**9))
     same = iter(range(10**9))
-
-    def reset_same():
-        env.reset(seed=next(same) % 3)
-
-    def reset_new():
-        env.reset(seed=next(seeds))
-
-    reset_same(), reset_new()
-    t_same, t_new, t_step = [], [], []
+    cases = {
+        "reset, vision camera, a seed seen before (cached)": lambda: vision.reset(seed=next(same) % 3),
+        "reset, vision camera, a new seed": lambda: vision.reset(seed=next(seeds)),
+        "reset, vision camera with marine growth, a new seed": lambda: grown.reset(seed=next(seeds)),
+        "reset, image observation (ideal camera), a new seed": lambda: image.reset(seed=next(seeds)),
+        "env.step, ideal camera (beside the resets)": ideal_step,
+    }
+    for fn in cases.values():
+        fn(), fn()
+    times: dict[str, list[float]] = {name: [] for name in cases}
     for _ in range(repeats):
-        t_same += blocks(reset_same, 1, 20)
-        t_new += blocks(reset_new, 1, 5)
-        t_step += blocks(ideal_step, 1, 200)
-    return [
-        ("reset, vision camera, a seed seen before (textures cached)", statistics.median(t_same), "≤ 1 ms"),
-        ("reset, vision camera, a new seed (textures drawn)", statistics.median(t_new), ""),
-        ("env.step, ideal camera (beside the resets)", statistics.median(t_step), ""),
-    ]
+        for name, fn in cases.items():
+            times[name] += blocks(fn, 1, 200 if fn is ideal_step else 10)
+    rows = [(name, statistics.median(t), "" if "step" in name else "≤ 1 ms") for name, t in times.items()]
+    textures.bank.cache_clear()
+    t = CLOCK()
+    textures.bank("seabed"), textures.bank("growth")
+    rows.append(("texture banks, made once per process (one call)", CLOCK() - t, ""))
+    return rows
 
 
 def tracker_rows(repeats: int) -> list[tuple[str, float, str]]:

@@ -67,7 +67,7 @@ def bank(kind: str) -> np.ndarray:
     """
     if kind not in ("seabed", "growth"):
         raise ValueError(f"texture bank {kind!r}: unknown (seabed or growth)")
-    rng = np.random.default_rng(np.random.SeedSequence([BANK_SEED, kind == "growth"]))
+    rng = np.random.default_rng(np.random.SeedSequence([BANK_SEED, int(kind == "growth")]))
     if kind == "seabed":
         raw = np.stack([smooth_noise(rng, SEABED_BETA) for _ in range(BANK_FIELDS)])
         fields = np.round(raw * (32_000.0 / np.abs(raw).max())).astype(np.int16)
@@ -77,7 +77,9 @@ def bank(kind: str) -> np.ndarray:
             ranks = np.empty(TILE * TILE, np.uint16)
             ranks[np.argsort(smooth_noise(rng, GROWTH_BETA).ravel(), kind="stable")] = np.arange(TILE * TILE)
             fields[k] = ranks.reshape(TILE, TILE)
-    return np.stack([fields, fields.transpose(0, 2, 1)])
+    both = np.stack([fields, fields.transpose(0, 2, 1)])
+    both.flags.writeable = False  # shared by every scene of the process
+    return both
 
 
 def _texels(shift: int, mirror: bool) -> np.ndarray:
