@@ -4,22 +4,24 @@ A scene's tiles are made from a bank of noise fields drawn once per process from
 (:func:`bank`), so a reset pays for no Fourier transform and no sort:
 
 * the seabed is ``cos θ·A + sin θ·B`` for two different fields A and B of the bank, each rolled
-  by its own offset and turned by its own symmetry of the square (one of 8), brought to mean 0
-  and s.d. 1, then to albedo (mean 0.36, s.d. 0.07, clipped to [0.05, 0.95]). The bank's fields
-  are 1/f^1.2 Gaussian noise, not normalised; a roll or a symmetry of the periodic square leaves
-  that process as it is (white noise and the filter 1/|f|^β are unchanged by them), and
-  ``cos θ·A + sin θ·B`` of two independent copies of a Gaussian field is another copy, so a
-  scene's seabed is distributed as a field drawn afresh (tested: histogram and spectrum). What
-  the bank gives up is independence between scenes: two scenes may share a field, seen shifted,
-  turned and mixed with another partner at another weight.
+  by its own offset and turned its own way (as drawn, transposed, mirrored, or transposed and
+  mirrored: a quarter turn), brought to mean 0 and s.d. 1, then to albedo (mean 0.36, s.d. 0.07,
+  clipped to [0.05, 0.95]). The bank's fields are 1/f^1.2 Gaussian noise, not normalised; a roll
+  or a symmetry of the periodic square leaves that process as it is (white noise and the filter
+  1/|f|^β are unchanged by them), and ``cos θ·A + sin θ·B`` of two independent copies of a
+  Gaussian field is another copy, so a scene's seabed is distributed as a field drawn afresh
+  (tested: histogram and spectrum). What the bank gives up is independence between scenes: two
+  scenes may share a field, seen shifted, turned and mixed with another partner at another weight.
 * the growth tile holds the ranks of a 1/f^1.6 field divided by their number (uniform in [0, 1),
   so a growth share g covers the share g of the pipe); a scene's tile is one field of the bank,
   rolled and turned: a permutation of the texels, still exactly uniform.
 
-A scene draws 13 numbers from the generator it is given, with or without marine growth. The
-tiles are the same bits on every CPU: the bank is rounded to 16-bit integers (its Fourier
-transforms' last bits, which may differ between libraries, are rounded away), and a scene is made
-with + − × / and a square root in a fixed order (no fastmath, no libm).
+The bank stores each field transposed too and each row twice, so a scene's row is a slice of a
+bank row, read by loops the compiler vectorizes. A scene draws 13 numbers from the generator it
+is given, with or without marine growth. The tiles are the same bits on every CPU: the bank is
+rounded to 16-bit integers (a last-bit difference of its Fourier transforms between libraries
+changes a value only on a rounding boundary), and a scene is made with + − × / and a square root
+in a fixed order (no fastmath, no libm).
 """
 
 from __future__ import annotations
@@ -78,32 +80,45 @@ def bank(kind: str) -> np.ndarray:
             ranks[np.argsort(smooth_noise(rng, GROWTH_BETA).ravel(), kind="stable")] = np.arange(TILE * TILE)
             fields[k] = ranks.reshape(TILE, TILE)
     both = np.stack([fields, fields.transpose(0, 2, 1)])
+    both = np.concatenate([both, both], axis=3)  # each row twice: a rolled row is one slice
     both.flags.writeable = False  # shared by every scene of the process
     return both
 
 
-def _texels(shift: int, mirror: bool) -> np.ndarray:
-    """Where a scene's rows (or columns) 0 … TILE − 1 are read in its bank field: rolled, then mirrored."""
-    index = (np.arange(TILE) + shift) & (TILE - 1)
-    return (TILE - index) & (TILE - 1) if mirror else index
+@njit(cache=True)
+def _row(r, shift, mirror):
+    """The bank field's row that a scene's row ``r`` reads: rolled by ``shift``, then mirrored."""
+    i = (r + shift) & (TILE - 1)
+    return (TILE - i) & (TILE - 1) if mirror else i
 
 
 @njit(cache=True)
-def _seabed(field_a, rows_a, cols_a, weight_a, field_b, rows_b, cols_b, weight_b, albedo, out):
+def _seabed(fields, picks, weight_a, weight_b, albedo, out):
     """``out`` = albedo of ``weight_a``·A + ``weight_b``·B brought to mean 0 and s.d. 1.
 
-    A's texel (r, c) is ``field_a[rows_a[r], cols_a[c]]``, B's likewise; ``albedo`` = (mean, s.d.,
-    lowest, highest). The sums run per column, then over the columns, in a fixed order (no
-    fastmath), so the tile is the same on every CPU.
+    ``picks`` as drawn by :func:`make_textures`: A is field ``picks[0]`` of ``fields`` (a
+    :func:`bank`), its texel (r, c) the bank's (row(r), c + roll) in the orientation ``picks[6]``
+    (bit 2: transposed, bit 1: rows mirrored), the rolls ``picks[2:4]``; B the same with
+    ``picks[1]``, ``picks[4:6]``, ``picks[7]``. ``albedo`` = (mean, s.d., lowest, highest). The
+    sums run per column, then over the columns, in a fixed order (no fastmath): the tile is the
+    same on every CPU.
     """
     n = out.shape[0]
-    s1, s2 = np.zeros(n), np.zeros(n)
-    for r in range(n):
-        ra, rb = field_a[rows_a[r]], field_b[rows_b[r]]
+    fa, fb = fields[picks[6] >> 1, picks[0]], fields[picks[7] >> 1, picks[1]]
+    ca, cb = picks[3], picks[5]
+    s1, s2, mix = np.zeros(n), np.zeros(n), np.empty(n)
+    for r in range(n):  # the mix into ``out`` (the fields read once), its sums per column
+        ra = fa[_row(r, picks[2], picks[6] & 1)][ca : ca + n]
+        rb = fb[_row(r, picks[4], picks[7] & 1)][cb : cb + n]
+        o = out[r]
+        # three simple loops, which the compiler vectorizes (one loop doing all three: 3× the time)
         for c in range(n):
-            v = weight_a * ra[cols_a[c]] + weight_b * rb[cols_b[c]]
-            s1[c] += v
-            s2[c] += v * v
+            mix[c] = weight_a * np.float64(ra[c]) + weight_b * np.float64(rb[c])
+        for c in range(n):
+            s1[c] += mix[c]
+            s2[c] += mix[c] * mix[c]
+        for c in range(n):
+            o[c] = mix[c]
     total, squares = 0.0, 0.0
     for c in range(n):
         total += s1[c]
@@ -111,21 +126,24 @@ def _seabed(field_a, rows_a, cols_a, weight_a, field_b, rows_b, cols_b, weight_b
     mu = total / (n * n)
     scale = albedo[1] / math.sqrt(squares / (n * n) - mu * mu)
     lo, hi = albedo[2], albedo[3]
-    for r in range(n):  # the mix again (cheaper than keeping it)
-        ra, rb, o = field_a[rows_a[r]], field_b[rows_b[r]], out[r]
+    for r in range(n):
+        o = out[r]
         for c in range(n):
-            v = weight_a * ra[cols_a[c]] + weight_b * rb[cols_b[c]]
-            o[c] = min(max(albedo[0] + scale * (v - mu), lo), hi)
+            o[c] = min(max(albedo[0] + scale * (o[c] - mu), lo), hi)
 
 
 @njit(cache=True)
-def _placed(field, rows, cols, scale, out):
-    """``out[r, c]`` = ``scale·field[rows[r], cols[c]]``."""
+def _growth(fields, picks, out):
+    """``out`` = ranks / TILE² of the growth field ``picks[8]`` (:func:`make_textures`).
+
+    Rolled by ``picks[9:11]`` and turned by ``picks[11]`` as :func:`_seabed` rolls and turns A.
+    """
     n = out.shape[0]
+    f, c0, scale = fields[picks[11] >> 1, picks[8]], picks[10], np.float32(1.0 / (n * n))
     for r in range(n):
-        f, o = field[rows[r]], out[r]
+        row, o = f[_row(r, picks[9], picks[11] & 1)][c0 : c0 + n], out[r]
         for c in range(n):
-            o[c] = scale * np.float32(f[cols[c]])
+            o[c] = scale * np.float32(row[c])
 
 
 def make_textures(rng: np.random.Generator, growth: bool = True) -> Textures:
@@ -135,27 +153,22 @@ def make_textures(rng: np.random.Generator, growth: bool = True) -> Textures:
     reads it) but draws its numbers all the same, so ``rng`` ends where it would have.
     """
     n = BANK_FIELDS
-    # the seabed's two fields (the second another than the first), their rolls and their symmetries
-    # (bits: 4 transposed, 2 rows mirrored, 1 columns mirrored); the growth's field, roll, symmetry
-    picks = [int(k) for k in rng.integers(0, [n, n - 1, TILE, TILE, TILE, TILE, 8, 8, n, TILE, TILE, 8])]
+    # the seabed's two fields (the second another than the first), their rolls (row, column) and
+    # orientations (bit 2: transposed, bit 1: rows mirrored); the growth's field, roll, orientation
+    picks = rng.integers(0, [n, n - 1, TILE, TILE, TILE, TILE, 4, 4, n, TILE, TILE, 4])
+    picks[1] = (picks[0] + 1 + picks[1]) % n
     # the weights (cos θ, sin θ) for θ = 2·atan(t), t uniform in [−1, 1): θ in [−90°, 90°), written
     # with + − × / only, so they are the same bits on every platform (no libm)
     t = 2.0 * rng.random() - 1.0
-    weight_a, weight_b = (1.0 - t * t) / (1.0 + t * t), 2.0 * t / (1.0 + t * t)
-    a, b, sym_a, sym_b = picks[0], (picks[0] + 1 + picks[1]) % n, picks[6], picks[7]
     seabed = np.empty((TILE, TILE), np.float32)
-    fields = bank("seabed")
-    _seabed(
-        fields[sym_a >> 2, a], _texels(picks[2], sym_a & 2), _texels(picks[3], sym_a & 1), weight_a,
-        fields[sym_b >> 2, b], _texels(picks[4], sym_b & 2), _texels(picks[5], sym_b & 1), weight_b,
-        np.array([*SEABED_ALBEDO, 0.05, 0.95]), seabed,
-    )  # fmt: skip
+    _seabed(bank("seabed"), picks, (1.0 - t * t) / (1.0 + t * t), 2.0 * t / (1.0 + t * t), _ALBEDO, seabed)
     tile = np.zeros((TILE, TILE), np.float32)
     if growth:
-        k, sym = picks[8], picks[11]
-        rows, cols = _texels(picks[9], sym & 2), _texels(picks[10], sym & 1)
-        _placed(bank("growth")[sym >> 2, k], rows, cols, np.float32(1.0 / (TILE * TILE)), tile)
+        _growth(bank("growth"), picks, tile)
     return Textures(seabed, tile)
+
+
+_ALBEDO = np.array([*SEABED_ALBEDO, 0.05, 0.95])  # the seabed's mean, s.d., lowest and highest albedo
 
 
 class TextureCache:
