@@ -60,12 +60,13 @@ def smooth_noise(rng: np.random.Generator, beta: float) -> np.ndarray:
 
 @functools.cache
 def bank(kind: str) -> np.ndarray:
-    """The process's fields of ``kind`` ("seabed" or "growth"), ``(2, BANK_FIELDS, TILE, TILE)``.
+    """The process's fields of ``kind`` ("seabed" or "growth"), ``(2, BANK_FIELDS, TILE, 2·TILE)``.
 
     Drawn on first use from :data:`BANK_SEED`: the seabed's 1/f^1.2 fields as they are, on one
     scale for all as ``int16`` (steps of 1/32,000 of the largest value); the growth's 1/f^1.6
     fields as their ranks, ``uint16``. ``[1]`` holds ``[0]``'s fields transposed (a scene reads
-    either along its rows). Small integers, because a reset's time goes into reading two fields.
+    either along its rows), and every row is stored twice (a rolled row is one slice). Small
+    integers, because a reset's time goes into reading two fields.
     """
     if kind not in ("seabed", "growth"):
         raise ValueError(f"texture bank {kind!r}: unknown (seabed or growth)")
@@ -80,7 +81,7 @@ def bank(kind: str) -> np.ndarray:
             ranks[np.argsort(smooth_noise(rng, GROWTH_BETA).ravel(), kind="stable")] = np.arange(TILE * TILE)
             fields[k] = ranks.reshape(TILE, TILE)
     both = np.stack([fields, fields.transpose(0, 2, 1)])
-    both = np.concatenate([both, both], axis=3)  # each row twice: a rolled row is one slice
+    both = np.concatenate([both, both], axis=3)
     both.flags.writeable = False  # shared by every scene of the process
     return both
 
