@@ -345,8 +345,10 @@ def _reversed(T, x1, y1, x2, y_near, th, d, mode, point_sd):
     between them. Near parallel (within :data:`PARALLEL`): the last line's way. Otherwise the last
     line meets the new one at a corner, from which the pipe runs on: towards the far end seen beyond
     the bend (``TOWARDS_FAR``), else away from the crossing. A crossing *on* the piece seen is no
-    corner (the pipe runs on both sides of it) when the last line was contradicted in view
-    (``CONTRADICTED``): that line was wrong, and the new one takes its nearer way.
+    corner (the pipe runs on both sides of it): the last line was wrong. Contradicted in view
+    (``CONTRADICTED``) it was seen a frame or two before, and the new line takes its nearer way;
+    lost or out of view (``AFTER_LINE``) it was carried blind, and the pipe comes from the piece's
+    end nearer the vehicle.
     """
     if mode == AS_GIVEN or T[HAD_LINE] == 0.0:
         return False
@@ -360,8 +362,10 @@ def _reversed(T, x1, y1, x2, y_near, th, d, mode, point_sd):
     if math.isnan(t_c):
         return nearer_way
     t_near, t_far = along(th, x2, y_near), along(th, x1, y1)
-    if mode == CONTRADICTED and t_near - point_sd < t_c < t_far + point_sd:
-        return nearer_way
+    if t_near - point_sd < t_c < t_far + point_sd:  # on the piece: no corner
+        if mode == CONTRADICTED:
+            return nearer_way
+        return x2 * x2 + y_near * y_near > x1 * x1 + y1 * y1  # from the end nearer the vehicle
     return t_c > 0.5 * (t_near + t_far)
 
 
