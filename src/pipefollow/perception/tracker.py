@@ -32,7 +32,10 @@ line enters the view: the pipe bends in view; that end updates the line and the 
 end beyond the bend. Otherwise the detection is rejected: it starts (or feeds) a candidate line
 that replaces the line when seen :attr:`TrackParams.confirm` times, and at once if it starts
 where the line enters the view (an arc the line cannot follow), ends where the far end beyond a
-bend was seen (the next leg), or if the line is out of view. Through missed detections the
+bend was seen (the next leg), or if the line is out of view. A new line keeps the pipe's way
+(:func:`_reversed`): the last line's when the two are near parallel, else away from the corner
+where they meet, towards the far end beyond the bend for the next leg; never the detector's order
+of the ends, which swaps. Through missed detections the
 prediction goes on and its uncertainty grows; beyond :attr:`TrackParams.max_misses` frames, or an
 offset uncertain by more than :attr:`TrackParams.max_offset_sd`, the pipe is lost.
 
