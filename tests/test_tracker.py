@@ -266,3 +266,19 @@ def test_a_far_end_beyond_a_bend_does_not_turn_a_parallel_line_back():
     assert t.event == tk.REPLACED
     assert direction_of(out) == pytest.approx(0.0, abs=1e-9)
     assert out[tk.OUT_Y1] == pytest.approx(3.0) and out[tk.OUT_Y_NEAR] == pytest.approx(0.0)
+
+
+@pytest.mark.parametrize("swapped", [False, True])
+def test_after_a_lost_line_a_piece_it_crosses_runs_from_the_end_nearer_the_vehicle(swapped):
+    # the line is lost; the pipe is seen again crossing the carried line halfway along the piece:
+    # no corner there, so the pipe comes from the piece's end nearer the vehicle
+    t = quiet_tracker()
+    _, pose = straight_detections(t, 6, offset=0.0)
+    for _ in range(int(t.params.max_misses) + 1):
+        t.step(pose, False, (0.0, 0.0, 0.0, 0.0))
+    assert t.state[tk.ACTIVE] == 0.0
+    near, far = (0.8, 0.5), (-0.7, 2.5)
+    out = t.step(pose, True, (*near, *far) if swapped else (*far, *near))
+    assert t.event == tk.STARTED
+    assert direction_of(out) == pytest.approx(math.atan2(-1.5, 2.0), abs=1e-9)
+    assert (out[tk.OUT_X2], out[tk.OUT_Y_NEAR]) == pytest.approx(near)
