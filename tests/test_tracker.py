@@ -212,3 +212,73 @@ def test_navigation_errors_come_from_the_seeded_generator_and_have_their_spread(
     nav = Navigation()
     # the lateral error of a 0.5 m surge: the pings' noise only (no heading error within a step)
     assert np.std(a[:, 0]) == pytest.approx(nav.disp_sd, rel=0.1)
+
+
+def direction_of(out):
+    """The observation's direction from its near end to its far end (rad from forward to starboard)."""
+    return math.atan2(out[tk.OUT_X1] - out[tk.OUT_X2], out[tk.OUT_Y1] - out[tk.OUT_Y_NEAR])
+
+
+@pytest.mark.parametrize("swapped", [False, True])
+def test_a_line_that_replaces_a_contradicted_one_keeps_the_pipes_way(swapped):
+    # the tracked line runs straight ahead; the detector sees the pipe elsewhere, crossing that line
+    # on the piece it sees (two thirds of the way along): no corner, so the new line keeps the
+    # forward way, whichever way round the detector gives the ends
+    t = quiet_tracker()
+    _, pose = straight_detections(t, 6, offset=0.0)
+    near, far = (-0.9, 0.3), (0.6, 2.3)
+    det = (*near, *far) if swapped else (*far, *near)  # (x1, y1, x2, y_near): far end first
+    t.step(pose, True, det)
+    assert t.event == tk.REJECTED
+    out = t.step(pose, True, det)
+    assert t.event == tk.REPLACED
+    assert direction_of(out) == pytest.approx(math.atan2(1.5, 2.0), abs=1e-9)
+    assert t.state[tk.TH] == pytest.approx(math.atan2(1.5, 2.0), abs=1e-9)
+    assert (out[tk.OUT_X2], out[tk.OUT_Y_NEAR]) == pytest.approx(near)
+
+
+def test_the_leg_after_a_hook_runs_away_from_its_corner():
+    # the pipe turns 135° to port at a corner 2 m ahead, out of the piece seen: after the line is
+    # lost, the next leg (its ends given the wrong way round) runs from the corner, back to port
+    t = quiet_tracker()
+    _, pose = straight_detections(t, 6, offset=0.0)
+    for _ in range(int(t.params.max_misses) + 1):
+        t.step(pose, False, (0.0, 0.0, 0.0, 0.0))
+    assert t.state[tk.ACTIVE] == 0.0
+    out = t.step(pose, True, (-0.3, 1.7, -1.0, 1.0))
+    assert t.event == tk.STARTED
+    assert direction_of(out) == pytest.approx(math.radians(-135.0), abs=1e-9)
+    assert (out[tk.OUT_X2], out[tk.OUT_Y_NEAR]) == pytest.approx((-0.3, 1.7))
+
+
+def test_a_far_end_beyond_a_bend_does_not_turn_a_parallel_line_back():
+    # a corner seen ahead leaves a far end beyond the bend at the left border; the next line, the
+    # pipe 0.6 m to port and parallel to the tracked one, does not run through that far end, so it
+    # takes the tracked line's way (ordered by the far end, it ran backwards)
+    t = quiet_tracker()
+    _, pose = straight_detections(t, 6, offset=0.0)
+    t.step(pose, True, (-1.0, 0.5, 0.0, 0.0))
+    assert t.event == tk.BEND
+    det = (-0.6, 3.0, -0.6, 0.0)
+    t.step(pose, True, det)
+    assert t.event == tk.REJECTED
+    out = t.step(pose, True, det)
+    assert t.event == tk.REPLACED
+    assert direction_of(out) == pytest.approx(0.0, abs=1e-9)
+    assert out[tk.OUT_Y1] == pytest.approx(3.0) and out[tk.OUT_Y_NEAR] == pytest.approx(0.0)
+
+
+@pytest.mark.parametrize("swapped", [False, True])
+def test_after_a_lost_line_a_piece_it_crosses_runs_from_the_end_nearer_the_vehicle(swapped):
+    # the line is lost; the pipe is seen again crossing the carried line halfway along the piece:
+    # no corner there, so the pipe comes from the piece's end nearer the vehicle
+    t = quiet_tracker()
+    _, pose = straight_detections(t, 6, offset=0.0)
+    for _ in range(int(t.params.max_misses) + 1):
+        t.step(pose, False, (0.0, 0.0, 0.0, 0.0))
+    assert t.state[tk.ACTIVE] == 0.0
+    near, far = (0.8, 0.5), (-0.7, 2.5)
+    out = t.step(pose, True, (*near, *far) if swapped else (*far, *near))
+    assert t.event == tk.STARTED
+    assert direction_of(out) == pytest.approx(math.atan2(-1.5, 2.0), abs=1e-9)
+    assert (out[tk.OUT_X2], out[tk.OUT_Y_NEAR]) == pytest.approx(near)

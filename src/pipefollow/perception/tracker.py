@@ -32,7 +32,10 @@ line enters the view: the pipe bends in view; that end updates the line and the 
 end beyond the bend. Otherwise the detection is rejected: it starts (or feeds) a candidate line
 that replaces the line when seen :attr:`TrackParams.confirm` times, and at once if it starts
 where the line enters the view (an arc the line cannot follow), ends where the far end beyond a
-bend was seen (the next leg), or if the line is out of view. Through missed detections the
+bend was seen (the next leg), or if the line is out of view. A new line keeps the pipe's way
+(:func:`_reversed`): the last line's when the two are near parallel, else away from the corner
+where they meet, towards the far end beyond the bend for the next leg; never the detector's order
+of the ends, which swaps. Through missed detections the
 prediction goes on and its uncertainty grows; beyond :attr:`TrackParams.max_misses` frames, or an
 offset uncertain by more than :attr:`TrackParams.max_offset_sd`, the pipe is lost.
 
@@ -329,32 +332,53 @@ def _take_end(T, fx, fy, hw, depth, border):
         T[HAS_END], T[HAS_FAR] = 0.0, 0.0  # the pipe leaves the view straight on
 
 
-@njit(cache=True)
-def _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, order):
-    """The line through a detection, its ends ordered (with ``order``) or as given.
+# how a new line's direction is chosen (_start_line's ``mode``)
+AS_GIVEN = 0  # the ends as given: the caller ordered them
+TOWARDS_FAR = 1  # the leg after a bend, through the far end seen beyond it
+AFTER_LINE = 2  # the line was out of view or lost: the pipe seen again
+CONTRADICTED = 3  # the line in view was contradicted frame after frame: it was wrong, or left behind
 
-    Ordered: the end nearer the far end seen beyond a bend is the far one; else the line runs away
-    from the corner where it meets the last line (or that line's way if they are near parallel).
+
+@njit(cache=True)
+def _reversed(T, x1, y1, x2, y_near, th, d, mode, point_sd):
+    """Whether the line ``(θ, d)`` through a detection, read from its near end to its far end, runs backwards.
+
+    A line fixed in the world keeps its direction: a new line takes the last line's way, never the
+    detector's order of its ends (which swaps where the pipe crosses the view), unless a bend lies
+    between them. Near parallel (within :data:`PARALLEL`): the last line's way. Otherwise the last
+    line meets the new one at a corner, from which the pipe runs on: towards the far end seen beyond
+    the bend (``TOWARDS_FAR``), else away from the crossing. A crossing *on* the piece seen is no
+    corner (the pipe runs on both sides of it): the last line was wrong. Contradicted in view
+    (``CONTRADICTED``) it was seen a frame or two before, and the new line takes its nearer way;
+    lost or out of view (``AFTER_LINE``) it was carried blind, and the pipe comes from the piece's
+    end nearer the vehicle.
     """
-    th, d, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
-    if not order:
-        pass
-    elif T[HAS_FAR] != 0.0:
+    if mode == AS_GIVEN or T[HAD_LINE] == 0.0:
+        return False
+    nearer_way = abs(wrap(th - T[TH])) > 0.5 * math.pi
+    if abs(math.sin(T[TH] - th)) < PARALLEL:
+        return nearer_way
+    if mode == TOWARDS_FAR and T[HAS_FAR] != 0.0:
         # the pipe goes on towards the far end seen beyond the bend: the end nearer it is the far one
-        if math.hypot(x2 - T[FAR_X], y_near - T[FAR_Y]) < math.hypot(x1 - T[FAR_X], y1 - T[FAR_Y]):
-            x1, y1, x2, y_near = x2, y_near, x1, y1
-            th, d, r_td = wrap(th + math.pi), -d, -r_td
-    elif T[HAD_LINE] != 0.0:
-        # after the line tracked before: away from the corner where the two meet, or its way if parallel
-        t_c = crossing(T[TH], T[D], th, d)
-        if abs(math.sin(T[TH] - th)) < PARALLEL or math.isnan(t_c):
-            flip = abs(wrap(th - T[TH])) > 0.5 * math.pi
-        else:
-            cx, cy = on_line(T[TH], T[D], t_c)
-            flip = (0.5 * (x1 + x2) - cx) * math.sin(th) + (0.5 * (y1 + y_near) - cy) * math.cos(th) < 0.0
-        if flip:
-            x1, y1, x2, y_near = x2, y_near, x1, y1
-            th, d, r_td = wrap(th + math.pi), -d, -r_td
+        return math.hypot(x2 - T[FAR_X], y_near - T[FAR_Y]) < math.hypot(x1 - T[FAR_X], y1 - T[FAR_Y])
+    t_c = crossing(th, d, T[TH], T[D])  # along the new line
+    if math.isnan(t_c):
+        return nearer_way
+    t_near, t_far = along(th, x2, y_near), along(th, x1, y1)
+    if t_near - point_sd < t_c < t_far + point_sd:  # on the piece: no corner
+        if mode == CONTRADICTED:
+            return nearer_way
+        return x2 * x2 + y_near * y_near > x1 * x1 + y1 * y1  # from the end nearer the vehicle
+    return t_c > 0.5 * (t_near + t_far)
+
+
+@njit(cache=True)
+def _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, mode):
+    """The line through a detection, its direction chosen by ``mode`` (:func:`_reversed`)."""
+    th, d, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
+    if _reversed(T, x1, y1, x2, y_near, th, d, mode, point_sd):
+        x1, y1, x2, y_near = x2, y_near, x1, y1
+        th, d, r_td = wrap(th + math.pi), -d, -r_td
     _start(T, TH, th, d, r_tt, r_td, r_dd)
     T[ACTIVE], T[MISS], T[C_ACTIVE], T[C_HITS], T[HAD_LINE] = 1.0, 0.0, 0.0, 0.0, 1.0
     T[HAS_FAR], T[HAS_END] = 0.0, 0.0
@@ -458,15 +482,15 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
             if near_end:
                 # it starts where the tracked pipe enters the view: the same pipe, curving away
                 # from the line (an arc the line cannot follow); the line starts again from it
-                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, False)
+                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, AS_GIVEN)
                 T[EVENT] = REPLACED
             elif beyond:
                 # the leg after the bend, where the far end beyond it was seen: the pipe goes on there
-                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, True)
+                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, TOWARDS_FAR)
                 T[EVENT] = REPLACED
             elif not line_in_view:
                 # nothing tracked in view: the detection is the pipe
-                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, True)
+                _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, AFTER_LINE)
                 T[EVENT] = STARTED
             else:
                 th_m, d_m, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
@@ -484,7 +508,7 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
                 T[EVENT] = REJECTED
                 if T[C_HITS] >= confirm:
                     # seen again where the tracked line is not: that line was wrong, or left behind
-                    _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, True)
+                    _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, CONTRADICTED)
                     T[EVENT] = REPLACED
     if T[ACTIVE] != 0.0 and (T[MISS] > max_misses or T[P + 2] > max_offset_sd * max_offset_sd):
         T[ACTIVE] = 0.0
