@@ -32,9 +32,11 @@ recomputes everything without being told. ``--suites``, ``--sensors``, ``--water
 always holds every row whose cells the store has for today's code. ``--jobs N`` runs N cells at a
 time in separate processes.
 
-Run time (2 cores shared with other work, ``--jobs 1``): about 5 s per cell on the ideal
-camera and 15–40 s per rendered or sonar cell of 100 pipes, about 80 min for all 255 cells
-(measured: see docs/decisions.md, "Perception").
+Run time (2 cores shared with other work at a load of 5–11): under 2 s a cell on the ideal
+camera, 2–8 s on the sonar, 10–40 s through the rendered camera (100 pipes each); all 255 cells
+took 45 minutes of wall time with ``--jobs 2`` and a second process beside it (measured: see
+docs/decisions.md, "Every controller through every sensor"), plus about 5 minutes to train the
+three policies when ``--policies`` lacks them.
 """
 
 from __future__ import annotations
