@@ -63,7 +63,8 @@ def main() -> None:
                 camera=cam,
             )  # fmt: skip
             s = run.summary
-            diff = s.get("vs_heuristic", {"mean_diff": 0.0, "ci95_diff": [0.0, 0.0]})
+            zero = {"mean_diff": 0.0, "ci95_diff": [0.0, 0.0]}
+            diff = s.get("vs_heuristic_ideal", zero)  # the heuristic's own row on the ideal camera: none
             row = {
                 "water": water, "burial": burial, "sensor": name, "camera": camera,
                 "mean_return": round(s["mean_return"], 2), "ci95_low": round(s["ci95_mean"][0], 2),

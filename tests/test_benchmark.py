@@ -20,7 +20,7 @@ from pipefollow.training.policy_files import save_policy
 KEYS = {
     "controller", "suite", "n_episodes", "mean_return", "ci95_mean", "iqm_return", "ci95_iqm",
     "success_rate", "mean_pipe_in_view", "rms_e_dist", "mean_progress_m", "episodes",
-    "in_view_rate", "mean_progress_share", "reached_end", "turned_back",
+    "in_view_rate", "mean_progress_share", "reached_end", "turned_back", "lost_pipes",
 }  # fmt: skip
 
 
@@ -71,6 +71,7 @@ def test_summary_matches_an_independent_computation():
     assert s["in_view_rate"] == np.mean(view >= 0.95) and s["reached_end"] == 0
     assert s["mean_progress_share"] == pytest.approx(share.mean(), rel=1e-12)
     assert s["mean_pipe_in_view"] == pytest.approx(view.mean())
+    assert s["lost_pipes"] == np.sum(view < 0.8) and 0 < s["lost_pipes"] < 30
     n_seen = view * 40
     rms = np.array([e["rms_e_dist"] for e in eps], dtype=float)
     pooled = math.sqrt(np.nansum(rms**2 * n_seen) / n_seen.sum())
@@ -217,3 +218,50 @@ def test_cli_benchmark_plot_in_the_format_its_suffix_names(tmp_path):
     res = CliRunner().invoke(main, ["benchmark", "--pipes", "2", "--seconds", "5", "--plot", str(svg)])
     assert res.exit_code == 0, res.output
     assert b"<svg" in svg.read_bytes()[:500]
+
+
+def test_with_a_sensor_the_reference_is_the_heuristic_through_the_same_sensor_and_the_second_the_ideal():
+    from pipefollow.learners.los import LOS
+    from pipefollow.perception.water import CLEAR
+
+    suite, sonar = get_suite("heldout-sharp"), {"camera": "ideal", "sensor": "sonar", "water": CLEAR}
+    kw = {"seconds": 20.0, "n_pipes": 6}
+    run = benchmark(LOS(1.2), suite, controller="los", camera=sonar, **kw)
+    h_sonar = benchmark(Heuristic(), suite, controller="heuristic", camera=sonar, **kw)
+    h_ideal = benchmark(Heuristic(), suite, controller="heuristic", **kw)
+    # each reference is the heuristic's own benchmark with that sensor, on the same pipes and noise
+    np.testing.assert_array_equal(run.heuristic_returns, h_sonar.returns)
+    np.testing.assert_array_equal(run.ideal_returns, h_ideal.returns)
+    assert not np.array_equal(h_sonar.returns, h_ideal.returns)  # the sonar changes the heuristic's episodes
+    s = run.summary
+    for key, ref in (("vs_heuristic", h_sonar.returns), ("vs_heuristic_ideal", h_ideal.returns)):
+        d = run.returns - ref
+        assert s[key]["mean_diff"] == pytest.approx(d.mean(), abs=1e-12)
+        assert s[key]["win_rate"] == np.mean(d > 0)
+    # the heuristic through a sensor: compared with the ideal camera's heuristic only (not with itself)
+    assert "vs_heuristic" not in h_sonar.summary
+    d = h_sonar.returns - h_ideal.returns
+    assert h_sonar.summary["vs_heuristic_ideal"]["mean_diff"] == pytest.approx(d.mean(), abs=1e-12)
+    # without a camera there is one reference, the heuristic on the ideal camera
+    plain = benchmark(LOS(1.2), suite, controller="los", **kw)
+    assert "vs_heuristic_ideal" not in plain.summary
+    np.testing.assert_array_equal(plain.heuristic_returns, h_ideal.returns)
+
+
+def test_cli_benchmark_with_a_sensor_prints_both_references():
+    args = [
+        "benchmark",
+        "--controller",
+        "los",
+        "--sensor",
+        "sonar",
+        "--suite",
+        "heldout-sharp",
+        "--pipes",
+        "3",
+    ]
+    res = CliRunner().invoke(main, [*args, "--seconds", "20"])
+    assert res.exit_code == 0, res.output
+    same = [line for line in res.stdout.splitlines() if "through the same sensor" in line]
+    ideal = [line for line in res.stdout.splitlines() if "on the ideal camera" in line]
+    assert len(same) == 1 and len(ideal) == 1 and same[0].lstrip().startswith("vs heuristic")

@@ -127,6 +127,7 @@ def test_a_changed_validation_return_moves_table_1_and_its_prose(docs_copy):
     )
     values = [float(r["return"]) for r in learned]
     values[0] = -50.0
+
     def change(r):
         if (r["trial"], r["controller"], r["seed"]) == ("validation", "learned", learned[0]["seed"]):
             r["return"] = "-50.0"
@@ -146,7 +147,9 @@ def test_a_changed_verdict_moves_the_readings_page(docs_copy):
 
     _rewrite_csv(docs_copy / "readings" / "readings.csv", change)
     page = results_pages.render("readings", docs_copy)
-    row = "| `default` | 6/10 ✗ | 10/10 ✓ | 10/10 ✓ | 30/40 ✗ | 27/30 ✓ | 18/20 ✗ | 2/10 ✗ | 10/10 ✓ | 2/10 ✗ |"  # noqa: E501
+    row = (
+        "| `default` | 6/10 ✗ | 10/10 ✓ | 10/10 ✓ | 30/40 ✗ | 27/30 ✓ | 18/20 ✗ | 2/10 ✗ | 10/10 ✓ | 2/10 ✗ |"  # noqa: E501
+    )
     assert row in page.splitlines()
     assert "**Claims that fail under every reading**: none." in page  # 4a no longer fails everywhere
     assert "4 of 9 parts hold (1b, 1c, 2b, 4a)" in page
@@ -409,3 +412,106 @@ def test_a_stored_provenance_file_is_cited_on_the_page(tmp_path):
     assert "not recorded |" not in after.split("\n\n")[3]  # the provenance table
     assert "`python examples/generalize_table.py runs/generalize --csv out/heldout.csv`" in after
     assert record["code"]["sources"] in after and record["machine"]["numba_cpu_target"] in after
+
+
+# ---------------------------------------------------------------------------------------------
+# The closed-loop table of every sensor (examples/closed_loop_table.py's CSV)
+
+
+def _sensor_rows() -> list[dict]:
+    """A small table as examples/closed_loop_table.py writes it: one suite, two sensors, one water."""
+    from pipefollow.experiments.results_pages.closed_loop_sensors import NEED
+
+    def row(sensor, water, controller, label, mean, success, lost, same=None, ideal=None):
+        r = dict.fromkeys(NEED, "")
+        r |= {"suite": "heldout", "sensor": sensor, "water": water, "controller": controller, "label": label,
+              "n_pipes": "100", "mean_return": mean, "ci95_low": "-1", "ci95_high": "1",
+              "success_rate": success, "pipe_in_view": "0.9", "turned_back": "0",
+              "lost_pipes": lost}  # fmt: skip
+        for key, v in (("vs_same", same), ("vs_ideal", ideal)):
+            if v is not None:
+                r[key], r[key + "_low"], r[key + "_high"] = v
+        return r
+
+    return [
+        row("ideal", "any", "heuristic", "heuristic", "-41.25", "0.82", "0"),
+        row(
+            "ideal",
+            "any",
+            "ppo",
+            "PPO",
+            "6.5",
+            "1.0",
+            "0",
+            ("47.8", "41.1", "54.4"),
+            ("47.8", "41.1", "54.4"),
+        ),
+        row("sonar", "clear", "heuristic", "heuristic", "-90.0", "0.5", "7", None, ("-48.75", "-55", "-40")),
+        row(
+            "sonar",
+            "clear",
+            "ppo",
+            "PPO",
+            "-88.0",
+            "0.6",
+            "3",
+            ("2.0", "-3.5", "7.5"),
+            ("-46.75", "-50", "-40"),
+        ),
+    ]
+
+
+def _write_rows(path: Path, rows: list[dict]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, list(rows[0]), lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+
+
+def test_the_sensor_section_tables_a_synthetic_csv(tmp_path):
+    from pipefollow.experiments.results_pages.closed_loop_sensors import SOURCE, section
+
+    _write_rows(tmp_path / SOURCE, _sensor_rows())
+    text = section(tmp_path)
+    tables = markdown_tables(text)
+    returns = tables["`heldout`: mean return (success, pipes lost)"][0]
+    diffs = tables["`heldout`: against the heuristic through the same sensor"][0]
+    assert [(r["water"], r["controller"]) for r in returns] == [("clear", "heuristic"), ("clear", "PPO")]
+    # the ideal camera's one row (water "any") stands in every water's rows
+    assert returns[0]["ideal camera"] == f"{MINUS}41.2 (82%, 0 lost)"  # −41.25 to one decimal: even
+    assert returns[1]["sonar"] == f"{MINUS}88.0 (60%, 3 lost)"
+    # PPO against the heuristic through the same sensor; the heuristic against the ideal camera's
+    assert diffs[1]["sonar"] == f"+2.0 [{MINUS}3.5, +7.5]"  # the interval holds 0: not bold
+    assert diffs[1]["ideal camera"] == "**+47.8 [+41.1, +54.4]**"
+    assert diffs[0]["controller"] == "heuristic (vs the ideal camera)"
+    assert (
+        diffs[0]["sonar"] == f"**{MINUS}48.8 [{MINUS}55.0, {MINUS}40.0]**" and diffs[0]["ideal camera"] == "—"
+    )
+    # the prose counts the cells beside the heuristic: PPO better on the ideal camera, undecided on sonar
+    assert "of 2 learned or LOS cells:\n  1 better (interval above 0), 0 worse" in text
+    assert f"`heldout`: sonar {MINUS}48.8" in text
+    assert "ideal camera: PPO (6.5); sonar: PPO (" + MINUS + "88.0)" in text
+
+
+def test_the_sensor_section_refuses_a_table_of_another_script(tmp_path):
+    from pipefollow.experiments.results_pages.closed_loop_sensors import SOURCE, section
+
+    rows = [{k: v for k, v in r.items() if k != "vs_same"} for r in _sensor_rows()]
+    _write_rows(tmp_path / SOURCE, rows)
+    with pytest.raises(
+        PageError, match=r"closed_loop_sensors/table\.csv: not a table of examples/closed_loop_table"
+    ):
+        section(tmp_path)
+
+
+def test_a_changed_sensor_row_moves_the_perception_page(docs_copy):
+    def change(r):
+        if (r["suite"], r["sensor"], r["water"], r["controller"]) == ("heldout", "sonar", "turbid", "ppo"):
+            r["mean_return"] = "-77.77"
+
+    _rewrite_csv(docs_copy / "vision" / "closed_loop_sensors" / "table.csv", change)
+    page = results_pages.render("perception", docs_copy)
+    rows = markdown_tables(page)["`heldout`: mean return (success, pipes lost)"][0]
+    row = next(r for r in rows if (r["water"], r["controller"]) == ("turbid", "PPO"))
+    assert row["sonar"].startswith(f"{MINUS}77.8 (")

@@ -189,9 +189,10 @@ def test_bad_sensor_options_exit_2_with_one_line(args, message):
     assert message in result.output
 
 
-def test_benchmark_with_the_sonar_names_it_and_compares_with_the_ideal_heuristic():
+def test_benchmark_of_the_heuristic_with_the_sonar_names_it_and_compares_with_the_ideal_heuristic():
     args = ["benchmark", "--controller", "heuristic", "--sensor", "sonar", "--pipes", "2", "--seconds", "10"]
     result = CliRunner().invoke(main, [*args, "--json"])
     assert result.exit_code == 0, result.output
     summary = json.loads(result.output)
-    assert summary["sensor"] == "sonar" and summary["camera"] == "ideal" and "vs_heuristic" in summary
+    assert summary["sensor"] == "sonar" and summary["camera"] == "ideal" and "vs_heuristic_ideal" in summary
+    assert "vs_heuristic" not in summary  # the heuristic through the same sensor is itself

@@ -24,8 +24,11 @@ Definitions:
   percentile interval of the IQM, the pipes resampled as rliable resamples runs
   (:mod:`pipefollow.evaluation.compare`).
 * ``vs_heuristic``: *paired* per pipe: ``mean_diff`` and its interval are those of the per-pipe
-  differences (controller − heuristic on the same pipe and noise); ``win_rate`` is the share of
-  pipes where the controller's return is higher than the heuristic's on that pipe.
+  differences (controller − heuristic on the same pipe and noise, the heuristic observing through
+  the same camera or sensor); ``win_rate`` is the share of pipes where the controller's return is
+  higher than the heuristic's on that pipe. ``vs_heuristic_ideal`` (with a camera or sensor other
+  than the ideal camera): the same against the heuristic on the ideal camera.
+* ``lost_pipes``: episodes with the pipe in view at fewer than 80 % of the decisions.
 
 Random disturbances (camera noise, missed detections, a varying current) draw, for pipe ``k``,
 from ``numpy.random.default_rng(SeedSequence([noise_seed, k]))`` in the order the environment
@@ -202,7 +205,12 @@ def _env_episodes(agent, pipes, seconds, params, out, poses, noise_seed: int = 0
 
 @dataclass(frozen=True)
 class BenchmarkRun:
-    """A benchmark's summary (:meth:`to_dict`, the JSON) and the data behind its plot."""
+    """A benchmark's summary (:meth:`to_dict`, the JSON) and the data behind its plot.
+
+    ``heuristic_returns``/``heuristic_poses`` are the reference's: the heuristic through the same
+    camera or sensor (``vs_heuristic``); ``ideal_returns`` the heuristic's on the ideal camera
+    (``vs_heuristic_ideal``; the same as the reference's without a camera).
+    """
 
     summary: dict
     pipes: list[Pipeline]
@@ -210,10 +218,65 @@ class BenchmarkRun:
     heuristic_returns: np.ndarray
     poses: np.ndarray
     heuristic_poses: np.ndarray
+    ideal_returns: np.ndarray | None = None
 
 
 def _rms(sum_e2: float, n: float) -> float | None:
     return math.sqrt(sum_e2 / n) if n > 0 else None
+
+
+LOST_IN_VIEW = 0.8  # an episode with the pipe in view at fewer decisions than this lost its pipe
+
+
+def summarize(
+    res: np.ndarray,
+    pipes: Sequence[Pipeline],
+    *,
+    controller: str,
+    suite: str,
+    seed: int = 0,
+    references: dict[str, np.ndarray] | None = None,
+) -> dict:
+    """The summary of a benchmark's statistics ``res`` (one row per pipe; module docstring).
+
+    ``references`` maps a key of the summary (``vs_heuristic``, ``vs_heuristic_ideal``) to the
+    returns per pipe of a reference run on the same pipes and noise: the paired difference to it.
+    ``lost_pipes`` counts the episodes with the pipe in view at fewer than :data:`LOST_IN_VIEW`
+    of the decisions.
+    """
+    ret = res[:, ep.STAT_RETURN]
+    lengths = np.array([p.length for p in pipes])
+    lo, hi = bootstrap_ci(ret, seed)
+    # the pipes as the runs of one task, in rliable's terms: its percentile interval of the IQM
+    iqm_ci = aggregate_intervals(ret[:, None], seed=seed)["ci95_iqm"]
+    summary = {
+        "controller": controller,
+        "suite": suite,
+        "n_episodes": len(pipes),
+        "mean_return": float(ret.mean()),
+        "ci95_mean": [lo, hi],
+        "iqm_return": iqm(ret),
+        "ci95_iqm": iqm_ci,
+        **sc.summary(res, lengths),
+        "lost_pipes": int(np.sum(res[:, ep.STAT_IN_VIEW] < LOST_IN_VIEW)),
+        "mean_pipe_in_view": float(res[:, ep.STAT_IN_VIEW].mean()),
+        "rms_e_dist": _rms(float(res[:, ep.STAT_SUM_E2].sum()), float(res[:, ep.STAT_N_SEEN].sum())),
+        "mean_progress_m": float(res[:, ep.STAT_PROGRESS].mean()),
+    }
+    for key, ref in (references or {}).items():
+        summary[key] = paired_difference(ret, ref, seed)
+    summary["episodes"] = [
+        {
+            "name": pipe.name,
+            "return": float(row[ep.STAT_RETURN]),
+            "pipe_in_view": float(row[ep.STAT_IN_VIEW]),
+            "progress_m": float(row[ep.STAT_PROGRESS]),
+            "rms_e_dist": _rms(row[ep.STAT_SUM_E2], row[ep.STAT_N_SEEN]),
+            **sc.episode_fields(row, pipe.length),
+        }
+        for pipe, row in zip(pipes, res, strict=True)
+    ]
+    return summary
 
 
 def benchmark(
@@ -230,6 +293,10 @@ def benchmark(
 ) -> BenchmarkRun:
     """Run ``agent`` and the heuristic on the suite's pipes and summarize (module docstring).
 
+    The heuristic runs through the same camera or sensor as ``agent`` (``camera``), on the same
+    pipes and noise: ``vs_heuristic`` is the paired difference to it (absent for the heuristic
+    itself). With a camera, the heuristic also runs on the ideal camera: ``vs_heuristic_ideal``.
+
     Args:
         agent: the controller (an agent with ``act``).
         controller: its label in the summary.
@@ -239,38 +306,24 @@ def benchmark(
         n_pipes: number of pipes (default: the whole held-out suite; 100 of a training family).
         seed: seed of the bootstrap resampling.
         noise_seed: seed of the random disturbances (module docstring), the same for both.
-        camera: the environment's camera arguments for ``agent`` (:func:`run_episodes`); the
-            heuristic it is compared with always runs on the ideal camera.
+        camera: the environment's camera arguments (:func:`run_episodes`), for ``agent`` and the
+            heuristic it is compared with.
     """
     n = n_pipes if n_pipes is not None else (suite.count or 100)
     pipes = suite.pipes(n, min_length_for(seconds))
     res, poses = run_episodes(agent, pipes, seconds, params, noise_seed, camera)
-    is_heuristic = isinstance(agent, Heuristic) and not camera
+    is_heuristic = isinstance(agent, Heuristic)
     if is_heuristic:
         h_res, h_poses = res, poses
     else:
-        h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params, noise_seed)
-    ret = res[:, ep.STAT_RETURN]
-    lengths = np.array([p.length for p in pipes])
-    lo, hi = bootstrap_ci(ret, seed)
-    # the pipes as the runs of one task, in rliable's terms: its percentile interval of the IQM
-    iqm_ci = aggregate_intervals(ret[:, None], seed=seed)["ci95_iqm"]
-    summary = {
-        "controller": controller,
-        "suite": suite.name,
-        "n_episodes": len(pipes),
-        "mean_return": float(ret.mean()),
-        "ci95_mean": [lo, hi],
-        "iqm_return": iqm(ret),
-        "ci95_iqm": iqm_ci,
-        **sc.summary(res, lengths),
-        "mean_pipe_in_view": float(res[:, ep.STAT_IN_VIEW].mean()),
-        "rms_e_dist": _rms(float(res[:, ep.STAT_SUM_E2].sum()), float(res[:, ep.STAT_N_SEEN].sum())),
-        "mean_progress_m": float(res[:, ep.STAT_PROGRESS].mean()),
-    }
-    if not is_heuristic:
-        summary["vs_heuristic"] = paired_difference(ret, h_res[:, ep.STAT_RETURN], seed)
-    if camera:  # the controller's camera and water; the heuristic beside it ran on the ideal camera
+        h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params, noise_seed, camera)
+    references = {} if is_heuristic else {"vs_heuristic": h_res[:, ep.STAT_RETURN]}
+    ideal = h_res[:, ep.STAT_RETURN]
+    if camera:  # the second reference: the heuristic on the ideal camera
+        ideal = run_episodes(Heuristic(), pipes, seconds, params, noise_seed)[0][:, ep.STAT_RETURN]
+        references["vs_heuristic_ideal"] = ideal
+    summary = summarize(res, pipes, controller=controller, suite=suite.name, seed=seed, references=references)
+    if camera:  # the camera and water of the controller and of the heuristic beside it
         from pipefollow.perception.camera import camera_settings
 
         settings = camera_settings(**camera)
@@ -278,18 +331,10 @@ def benchmark(
         if settings.sensor != "camera":
             summary["sensor"] = settings.sensor
         summary["water"] = settings.water._asdict()
-    summary["episodes"] = [
-        {
-            "name": pipe.name,
-            "return": float(row[ep.STAT_RETURN]),
-            "pipe_in_view": float(row[ep.STAT_IN_VIEW]),
-            "progress_m": float(row[ep.STAT_PROGRESS]),
-            "rms_e_dist": _rms(row[ep.STAT_SUM_E2], row[ep.STAT_N_SEEN]),
-            **sc.episode_fields(row, pipe.length),
-        }
-        for pipe, row in zip(pipes, res, strict=True)
-    ]
-    return BenchmarkRun(summary, pipes, ret, h_res[:, ep.STAT_RETURN].copy(), poses, h_poses)
+        episodes = summary.pop("episodes")  # the episodes stay last
+        summary["episodes"] = episodes
+    ret = res[:, ep.STAT_RETURN]
+    return BenchmarkRun(summary, pipes, ret, h_res[:, ep.STAT_RETURN].copy(), poses, h_poses, ideal.copy())
 
 
 def format_summary(r: dict, seconds: float) -> str:
@@ -308,12 +353,18 @@ def format_summary(r: dict, seconds: float) -> str:
         f"  progress       {r['mean_progress_m']:7.2f} m  ({r['mean_progress_share']:.0%} of the reachable)",
         f"  reached end    {r['reached_end']:>9d}  (episodes)",
         f"  turned back    {r['turned_back']:>9d}  (episodes that followed the pipe backwards ≥ 3 m)",
+        f"  lost the pipe  {r['lost_pipes']:>9d}  (episodes with the pipe in view < 80 %)",
     ]
-    if "vs_heuristic" in r:
-        v = r["vs_heuristic"]
-        dlo, dhi = v["ci95_diff"]
-        lines.append(
-            f"  vs heuristic   {v['mean_diff']:+9.2f}  (95 % CI {dlo:+.2f} to {dhi:+.2f}; "
-            f"better on {v['win_rate']:.0%} of the pipes)"
-        )
+    same = "camera" in r  # a camera or sensor: the heuristic beside it observed through the same
+    for key, label, where in (
+        ("vs_heuristic", "vs heuristic", "through the same sensor" if same else ""),
+        ("vs_heuristic_ideal", "vs heuristic", "on the ideal camera"),
+    ):
+        if key in r:
+            v = r[key]
+            dlo, dhi = v["ci95_diff"]
+            lines.append(
+                f"  {label:<14} {v['mean_diff']:+9.2f}  (95 % CI {dlo:+.2f} to {dhi:+.2f}; "
+                f"better on {v['win_rate']:.0%} of the pipes{'; ' + where if where else ''})"
+            )
     return "\n".join(lines)

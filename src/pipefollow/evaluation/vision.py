@@ -13,7 +13,8 @@
   exact for both); gross errors (the detector's line on one leg of a bend, where the exact camera
   reports the chord to the far end) are counted apart, since the Gaussian model has none.
 * :func:`closed_loop` runs controllers with a rendered camera (the tracker or the raw detector) on a suite
-  (:func:`~pipefollow.evaluation.benchmark.benchmark`, compared with the heuristic on the ideal camera).
+  (:func:`~pipefollow.evaluation.benchmark.benchmark`, compared with the heuristic through the same
+  camera and with the heuristic on the ideal camera).
 
 Every frame draws from ``default_rng(SeedSequence([seed, condition, pipe]))``.
 """

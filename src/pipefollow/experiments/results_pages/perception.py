@@ -5,13 +5,16 @@ Sources: the code's water presets (:data:`pipefollow.perception.water.WATER_PRES
 ``calibration.json``; ``examples/vision_table.py``: ``closed_loop.csv`` and, with ``--suites``,
 ``closed_loop_suites.csv``, both with the raw detector and with the tracker and today's success;
 ``examples/ppo_pixels.py``: ``ppo_pixels.json`` with the tracker and ``ppo_pixels_raw.json`` with
-the detector alone; each file says which camera and success it was measured with).
+the detector alone; each file says which camera and success it was measured with;
+``examples/closed_loop_table.py``: ``closed_loop_sensors/table.csv``, the section of
+:mod:`~pipefollow.experiments.results_pages.closed_loop_sensors`).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from pipefollow.experiments.results_pages import closed_loop_sensors
 from pipefollow.experiments.results_pages.markdown import (
     PageError,
     ci,
@@ -25,7 +28,8 @@ from pipefollow.experiments.results_pages.markdown import (
     stored_provenance,
     table,
 )
-from pipefollow.perception.water import CLEAR, RANGES, WATER_PRESETS, Water
+from pipefollow.experiments.results_pages.water_presets import presets_table
+from pipefollow.perception.water import WATER_PRESETS
 
 TITLE = "Results: perception in the loop"
 SOURCES = (
@@ -35,28 +39,17 @@ SOURCES = (
     "vision/closed_loop_suites.csv",
     "vision/ppo_pixels.json",
     "vision/ppo_pixels_raw.json",
+    closed_loop_sensors.SOURCE,
 )
-UNITS = {
-    "turbidity": "1/m",
-    "light_falloff": "share",
-    "blur": "px",
-    "noise": "grey levels",
-    "snow": "per frame",
-    "burial": "share",
-    "growth": "share",
-    "width": "px",
-    "height": "px",
-    "pipe_diameter": "m",
-    "altitude": "m",
-}
 PIXELS = "PPO on pixels"
 PIXELS_NOW = "in view and followed forward"  # examples/ppo_pixels.py's SUCCESS; older files lack the key
 
 TEXT = """\
 Regenerate the stored outputs with `pipefollow vision report --out FOLDER`, `pipefollow vision
-calibrate`, `python examples/vision_table.py` (with and without `--suites`) and `python
-examples/ppo_pixels.py` (the how-to: [Perception in the loop](../guides/vision.md)) and copy them
-to `docs/vision/`.
+calibrate`, `python examples/vision_table.py` (with and without `--suites`), `python
+examples/ppo_pixels.py` and `python examples/closed_loop_table.py` (the how-to: [Perception in the
+loop](../guides/vision.md)) and copy them to `docs/vision/`; the figures of the sonar and the
+tracker with `python examples/perception_figures.py --out docs/vision`.
 
 ## The water presets
 
@@ -85,6 +78,21 @@ camera's visible piece, "gross" = an end more than 30 cm off.
 {calibration}
 
 At the presets' turbidities: {preset_models}.
+
+## What the sonar and the tracker see
+
+The look-ahead multibeam's profiles (`python examples/perception_figures.py`): the beams' heights
+above the mean seabed across the fan, the fitted seabed, the true pipe's section (green) and the
+detection (red), for a pipe lying on a flat and a rough seabed and half buried in it:
+
+![sonar profiles: truth green, detection red](../vision/sonar_profiles.png)
+
+The tracker along one episode of the heuristic through the camera and the tracker on a
+`heldout-sharp` pipe in moderate water: the top view with the detections (red) and the tracked
+line (orange, every third decision), and the pipe's lateral offset 1.5 m ahead, true against
+tracked with the tracker's ±2σ (red ticks: frames without a detection):
+
+![the tracker along an episode](../vision/tracker_episode.png)
 
 ## What imperfect detection does to every controller
 
@@ -131,38 +139,20 @@ tracker, sharp turns and the vision reset"), so its rows there are not unbiased 
 
 {suites}
 
+{sensors}
+
 ## Which success each stored output uses
 
 * `closed_loop.csv`, `closed_loop_suites.csv` (`examples/vision_table.py`): today's success (in view
   ≥ 95 % and followed forward), today's detector, both rendered cameras.
 * `ppo_pixels.json`, `ppo_pixels_raw.json` (`examples/ppo_pixels.py`): {pixel_success}.
+* `closed_loop_sensors/table.csv` (`examples/closed_loop_table.py`): today's success, today's
+  detector, tracker and sonar.
 * `closed_loop_one_leg.csv`: **historical**, not shown here: the detector before it followed bends
   (one straight leg), an earlier renderer, earlier policies and the earlier success.
 * `report.csv`, `calibration.json`, `samples.png` (`pipefollow vision report`, `pipefollow vision
   calibrate`): single frames judged by today's detector; no episodes, no success.
 """
-
-
-def presets_table() -> str:
-    """Every field of :class:`Water` per preset, with the field's unit and range; generated from the code."""
-    rows = []
-    for field in Water._fields:
-        lo, hi, closed = RANGES[field]
-        values = []
-        for w in WATER_PRESETS.values():
-            v = getattr(w, field)
-            text = f"{v:g}"
-            values.append(f"**{text}**" if v != getattr(CLEAR, field) and w is not CLEAR else text)
-        rows.append(
-            (
-                f"`{field}`",
-                UNITS.get(field, ""),
-                f"{'[' if closed else '('}{lo:g}, {hi:g}]",
-                f"{getattr(Water(), field):g}",
-                *values,
-            )
-        )
-    return table(("field", "unit", "range", "default", *(f"`{p}`" for p in WATER_PRESETS)), rows)
 
 
 def render(docs: Path) -> str:
@@ -382,6 +372,7 @@ def render(docs: Path) -> str:
             f"{num(g(calibrated, tracked, w) - g(base, tracked, w), 1, True)} (tracker)"
             for w in waters
         ),
+        sensors=closed_loop_sensors.section(docs),
         suite_names=", ".join(f"`{n}`" for n in dict.fromkeys(s["suite"] for s in suites)),
         suites=table(
             (
@@ -411,5 +402,5 @@ def render(docs: Path) -> str:
             ),
         ),
     )
-    provenance = [(s, stored_provenance(docs / "vision")) for s in SOURCES]
+    provenance = [(s, stored_provenance((docs / s).parent)) for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)
