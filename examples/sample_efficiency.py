@@ -91,16 +91,16 @@ RECIPE = {"critic_lambda": 0.9, "alpha_pi": 0.8, "alpha_v": 0.6, "discount": 0.9
 RECIPE_EPISODES = 30_000 // int(EPISODE_S)  # the recipe's 333 episodes (29,970 decisions)
 
 
-def _recipe_then(steps: dict | None = None, **options) -> Callable[[int, int], tuple[object, int]]:
+def _recipe_then(then: dict | None = None, **options) -> Callable[[int, int], tuple[object, int]]:
     """The recipe for its first :data:`RECIPE_EPISODES` episodes, then the rest of the budget otherwise.
 
     Up to 30,000 decisions it trains exactly as ``supervised-cacla-recipe`` (the same weights); the
-    episodes beyond continue the same agent, its generators and pipe stream, with ``steps``
-    replacing fields of its parameter record (``alpha_pi``, ``alpha_v``) and ``options`` to the
-    training loop (``sigma_start``, ``sigma_end``: σ over the continuation; ``trained_in``,
-    ``randomization``: its disturbances).
+    episodes beyond are a second phase of the same agent, generators and pipe stream, with ``then``
+    (learner options, :data:`pipefollow.learners.options.PHASE_OPTIONS`) in place of the recipe's
+    and ``options`` to its training loop (``sigma_start``, ``sigma_end``: σ over the second phase,
+    from the paper's 1 to 0.01 by default; ``trained_in``, ``randomization``: its disturbances), as
+    an experiment file's phases train (``examples/recipe-100k.toml``).
     """
-    from pipefollow.learners.cacla import pack
 
     def train(budget: int, seed: int):
         rng = np.random.default_rng(seed)
@@ -110,9 +110,8 @@ def _recipe_then(steps: dict | None = None, **options) -> Callable[[int, int], t
         first = min(episodes, RECIPE_EPISODES)
         train_random_compiled(agent, get_suite(TRAIN_FAMILY), first, pipe_rng=pipe_rng, episode_seconds=EPISODE_S)
         if episodes > first:
-            if steps:
-                agent.params = agent.params._replace(**steps)
-                agent._packed = pack(agent.params)
+            if then:
+                agent.retune(make_agent("cacla", supervised=True, **{**RECIPE, **then}).params)
             extra = dict(options)
             if "trained_in" in extra:
                 extra["params"] = CONDITIONS[extra.pop("trained_in")]
@@ -195,7 +194,7 @@ VARIANTS: dict[str, tuple[str, Callable[[int, int], tuple[object, int]]]] = {
     "recipe-td1": ("recipe with TD(1)", _paper(True, {**RECIPE, "critic_lambda": 1.0})),
     "recipe-skew22.5": ("recipe with skew 22.5°", _paper(True, {**RECIPE, "skew_deg": 22.5})),
     "recipe-actor1.0": ("recipe with α_π 1.0", _paper(True, {**RECIPE, "alpha_pi": 1.0})),
-    "recipe-var-then-s1": ("recipe, then σ 1 → 0.01 again with CACLA+Var", _recipe_then({"actor_repeats": 1}) ),
+    "recipe-var-then-s1": ("recipe, then σ 1 → 0.01 again with CACLA+Var", _recipe_then({"actor_repeats": "var"})),
     # the paper's state against it with what the vehicle measures (pipefollow.sim.observation)
     "supervised-cacla-td0.9-drift": (
         "supervised CACLA, TD(0.9), state paper+drift",
