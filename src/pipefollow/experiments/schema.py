@@ -223,8 +223,10 @@ def validate(obj, where: str) -> None:
 
 
 def learner_values(trial: TrialConfig, phase: Phase | None = None) -> dict:
-    """The values of ``trial``'s learner options (:data:`~pipefollow.learners.options.LEARNER_OPTIONS`),
-    with those ``phase`` sets for its episodes in their place."""
+    """The values of ``trial``'s learner options (:data:`~pipefollow.learners.options.LEARNER_OPTIONS`).
+
+    With a ``phase``, those it sets for its episodes (its ``learner`` table) in their place.
+    """
     return {o.name: getattr(trial, o.name) for o in LEARNER_OPTIONS} | dict((phase and phase.learner) or {})
 
 
