@@ -13,7 +13,12 @@ the return of a pipe is the mean over seeds; the 95 % intervals are BCa bootstra
     python examples/sample_efficiency.py --out runs/tuning --judge-on tuning --variants ...  # choose
 
 Options are chosen with ``--judge-on tuning`` (the first 100 pipes of the training family, seeds
-5–9) and only then judged on `heldout` with seeds 0–4.
+5–9) and only then judged on `heldout` with seeds 0–4. The variants ``recipe-then-*`` and
+``supervised-cacla-recipe-100k`` train the recipe's 333 episodes, then the rest of the budget
+another way (at 10,000 and 30,000 decisions they are the recipe); run them at 100,000:
+
+    python examples/sample_efficiency.py --out runs/continuation --budgets 100000 \
+        --variants supervised-cacla-recipe supervised-cacla-recipe-100k recipe-then-s1 ppo
 
     python examples/sample_efficiency.py --out runs/measured-state --budgets 30000 --seeds 0 1 2 \
         --dvl-noise 0.01 --gyro-noise-deg 0.1 --variants supervised-cacla-td0.9 supervised-cacla-td0.9-drift
@@ -354,8 +359,12 @@ def table(rows: list[dict], out: Path) -> str:
 # the curves drawn: the paper's learners, the critic's trace, the recipe and PPO (the table has every row)
 PLOT_VARIANTS = (
     "cacla", "supervised-cacla", "supervised-cacla-td0.9",
-    "cacla-recipe", "supervised-cacla-recipe", "ppo", "sac",
+    "cacla-recipe", "supervised-cacla-recipe", "supervised-cacla-recipe-100k", "ppo", "sac",
 )  # fmt: skip
+
+
+# variants that train another variant's runs first: their curve starts from its last point before theirs
+CONTINUES = {"supervised-cacla-recipe-100k": "supervised-cacla-recipe"}
 
 
 def plot(rows: list[dict], out: Path, path: Path) -> None:
@@ -373,8 +382,12 @@ def plot(rows: list[dict], out: Path, path: Path) -> None:
         ax = fig.add_subplot(1, 2, j + 1)
         ax.axhline(np.mean(h[cond]["returns"]), color="k", lw=1, ls="--", label="heuristic")
         for variant in dict.fromkeys(r["variant"] for r in rows):
-            rs = sorted((r for r in rows if r["variant"] == variant and r["condition"] == cond),
-                        key=lambda r: r["steps"])  # fmt: skip
+            own = [r for r in rows if r["variant"] == variant and r["condition"] == cond]
+            if variant in CONTINUES:  # drawn on from the last budget its first phase is the recipe at
+                first = min(r["budget"] for r in own)
+                own += [max((r for r in rows if r["variant"] == CONTINUES[variant] and r["condition"] == cond
+                             and r["budget"] < first), key=lambda r: r["budget"])]  # fmt: skip
+            rs = sorted(own, key=lambda r: r["steps"])
             x = [r["steps"] for r in rs]
             (line,) = ax.plot(x, [r["mean_return"] for r in rs], marker="o", ms=3, label=VARIANTS[variant][0])
             ax.fill_between(x, [r["ci95"][0] for r in rs], [r["ci95"][1] for r in rs], color=line.get_color(),

@@ -41,8 +41,9 @@ SOURCES = (
 
 TEXT = """\
 Regenerate the stored outputs with `python examples/sample_efficiency.py --out FOLDER --variants ...`
-(the how-to: [Sample efficiency](../guides/sample-efficiency.md)) and copy `summary.json` to
-`docs/sample-efficiency/`.
+(the how-to and the exact commands: [Sample efficiency](../guides/sample-efficiency.md)) and copy
+each folder's `summary.json` to `docs/sample-efficiency/` (`summary.json`, `tuning.json`,
+`continuation.json`), its `provenance.json` beside it (`summary.provenance.json`, …).
 
 ## Every variant at every budget
 
