@@ -86,3 +86,15 @@ def test_retune_refuses_a_change_of_the_heads():
     agent = make_agent("cacla", supervised=True)
     with pytest.raises(ValueError, match="skew or the supervisor"):
         agent.retune(make_agent("cacla", supervised=False).params)
+
+
+def test_trials_lists_a_phases_own_options(tmp_path):
+    from pipefollow.cli.tables import table, trials
+
+    exp = _load(tmp_path, '[{pipeline = "random:mixed", episodes = 2}, '
+                          '{pipeline = "random:mixed", episodes = 3, learner = {actor_repeats = "var"}}]')  # fmt: skip
+    (row,) = trials(exp)
+    assert row["phases"][0] == {"pipeline": "random:mixed", "episodes": 2}
+    assert row["phases"][1]["learner"] == {"actor_repeats": "var"}
+    text = table([row], [("phases", "phases")])
+    assert "random:mixed ×2 then random:mixed ×3 (actor_repeats var)" in text
