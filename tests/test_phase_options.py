@@ -91,8 +91,8 @@ def test_retune_refuses_a_change_of_the_heads():
 def test_trials_lists_a_phases_own_options(tmp_path):
     from pipefollow.cli.tables import table, trials
 
-    exp = _load(tmp_path, '[{pipeline = "random:mixed", episodes = 2}, '
-                          '{pipeline = "random:mixed", episodes = 3, learner = {actor_repeats = "var"}}]')  # fmt: skip
+    second = '{pipeline = "random:mixed", episodes = 3, learner = {actor_repeats = "var"}}'
+    exp = _load(tmp_path, f'[{{pipeline = "random:mixed", episodes = 2}}, {second}]')
     (row,) = trials(exp)
     assert row["phases"][0] == {"pipeline": "random:mixed", "episodes": 2}
     assert row["phases"][1]["learner"] == {"actor_repeats": "var"}
