@@ -13,7 +13,12 @@ the return of a pipe is the mean over seeds; the 95 % intervals are BCa bootstra
     python examples/sample_efficiency.py --out runs/tuning --judge-on tuning --variants ...  # choose
 
 Options are chosen with ``--judge-on tuning`` (the first 100 pipes of the training family, seeds
-5–9) and only then judged on `heldout` with seeds 0–4.
+5–9) and only then judged on `heldout` with seeds 0–4. The variants ``recipe-then-*`` and
+``supervised-cacla-recipe-100k`` train the recipe's 333 episodes, then the rest of the budget
+another way (at 10,000 and 30,000 decisions they are the recipe); run them at 100,000:
+
+    python examples/sample_efficiency.py --out runs/continuation --budgets 100000 \
+        --variants supervised-cacla-recipe supervised-cacla-recipe-100k recipe-then-s1 ppo
 
     python examples/sample_efficiency.py --out runs/measured-state --budgets 30000 --seeds 0 1 2 \
         --dvl-noise 0.01 --gyro-noise-deg 0.1 --variants supervised-cacla-td0.9 supervised-cacla-td0.9-drift
@@ -87,6 +92,44 @@ def _paper(
     return train
 
 
+RECIPE = {"critic_lambda": 0.9, "alpha_pi": 0.8, "alpha_v": 0.6, "discount": 0.9}  # examples/recipe-30k.toml
+RECIPE_EPISODES = 30_000 // int(EPISODE_S)  # the recipe's 333 episodes (29,970 decisions)
+
+
+def _recipe_then(then: dict | None = None, **options) -> Callable[[int, int], tuple[object, int]]:
+    """The recipe for its first :data:`RECIPE_EPISODES` episodes, then the rest of the budget otherwise.
+
+    Up to 30,000 decisions it trains exactly as ``supervised-cacla-recipe`` (the same weights); the
+    episodes beyond are a second phase of the same agent, generators and pipe stream, with ``then``
+    (learner options, :data:`pipefollow.learners.options.PHASE_OPTIONS`) in place of the recipe's
+    and ``options`` to its training loop (``sigma_start``, ``sigma_end``: σ over the second phase,
+    from the paper's 1 to 0.01 by default; ``trained_in``, ``randomization``: its disturbances), as
+    an experiment file's phases train (``examples/recipe-100k.toml``).
+    """
+
+    def train(budget: int, seed: int):
+        rng = np.random.default_rng(seed)
+        agent = make_agent("cacla", supervised=True, rng=rng, **RECIPE)
+        episodes = max(1, budget // int(EPISODE_S))
+        pipe_rng = rng.spawn(1)[0]
+        first = min(episodes, RECIPE_EPISODES)
+        family = get_suite(TRAIN_FAMILY)
+        train_random_compiled(agent, family, first, pipe_rng=pipe_rng, episode_seconds=EPISODE_S)
+        if episodes > first:
+            if then:
+                agent.retune(make_agent("cacla", supervised=True, **{**RECIPE, **then}).params)
+            extra = dict(options)
+            if "trained_in" in extra:
+                extra["params"] = CONDITIONS[extra.pop("trained_in")]
+            if "randomization" in extra or "params" in extra:
+                extra["env_rng"] = disturbance_rng(seed)
+            train_random_compiled(agent, family, episodes - first, pipe_rng=pipe_rng,
+                                  episode_seconds=EPISODE_S, **extra)  # fmt: skip
+        return agent, episodes * int(EPISODE_S)
+
+    return train
+
+
 def _deep(algorithm: str) -> Callable[[int, int], tuple[object, int]]:
     def train(budget: int, seed: int):
         from pipefollow.training.deep import train_deep
@@ -132,6 +175,48 @@ VARIANTS: dict[str, tuple[str, Callable[[int, int], tuple[object, int]]]] = {
     "cacla-recipe": (
         "CACLA, TD(0.9), α_π 0.8, α_V 0.6, γ_d 0.9",
         _paper(False, {"critic_lambda": 0.9, "alpha_pi": 0.8, "alpha_v": 0.6, "discount": 0.9}),
+    ),
+    # the recipe's options with CACLA+Var throughout (not the recipe: it changes the 30,000 decisions)
+    "supervised-cacla-recipe-var": (
+        "supervised CACLA+Var, TD(0.9), α_π 0.8, α_V 0.6, γ_d 0.9",
+        _paper(True, {**RECIPE, "actor_repeats": "var"}),
+    ),
+    # the recipe to 100,000 decisions (examples/recipe-100k.toml): its 333 episodes, then CACLA+Var
+    "supervised-cacla-recipe-100k": (
+        "recipe to 29,970, then CACLA+Var, σ 1 → 0.01 again",
+        _recipe_then({"actor_repeats": "var"}),
+    ),
+    # what else was tried beyond the recipe's 30,000 decisions (docs/sample-efficiency/continuation.json)
+    "recipe-then-s1": ("recipe to 29,970, then σ 1 → 0.01 again", _recipe_then()),
+    "recipe-then-s0.3": ("recipe to 29,970, then σ 0.3 → 0.01", _recipe_then(sigma_start=0.3)),
+    "recipe-then-s0.1": ("recipe to 29,970, then σ 0.1 → 0.01", _recipe_then(sigma_start=0.1)),
+    "recipe-then-s0.1-a0.4": (
+        "recipe to 29,970, then σ 0.1 → 0.01, α_π 0.4, α_V 0.3",
+        _recipe_then({"alpha_pi": 0.4, "alpha_v": 0.3}, sigma_start=0.1),
+    ),
+    "recipe-then-s0.1-a0.2": (
+        "recipe to 29,970, then σ 0.1 → 0.01, α_π 0.2, α_V 0.2",
+        _recipe_then({"alpha_pi": 0.2, "alpha_v": 0.2}, sigma_start=0.1),
+    ),
+    "recipe-then-s0.1-mild": (
+        "recipe to 29,970, then σ 0.1 → 0.01 under mild",
+        _recipe_then(sigma_start=0.1, randomization="mild"),
+    ),
+    "recipe-then-s0.1-disturbed": (
+        "recipe to 29,970, then σ 0.1 → 0.01 trained disturbed",
+        _recipe_then(sigma_start=0.1, trained_in="disturbed"),
+    ),
+    "recipe-td1": (
+        "supervised CACLA, TD(1), α_π 0.8, α_V 0.6, γ_d 0.9",
+        _paper(True, {**RECIPE, "critic_lambda": 1.0}),
+    ),
+    "recipe-skew22.5": (
+        "supervised CACLA, skew 22.5°, TD(0.9), α_π 0.8, α_V 0.6, γ_d 0.9",
+        _paper(True, {**RECIPE, "skew_deg": 22.5}),
+    ),
+    "recipe-actor1.0": (
+        "supervised CACLA, TD(0.9), α_π 1.0, α_V 0.6, γ_d 0.9",
+        _paper(True, {**RECIPE, "alpha_pi": 1.0}),
     ),
     # the paper's state against it with what the vehicle measures (pipefollow.sim.observation)
     "supervised-cacla-td0.9-drift": (
@@ -274,8 +359,12 @@ def table(rows: list[dict], out: Path) -> str:
 # the curves drawn: the paper's learners, the critic's trace, the recipe and PPO (the table has every row)
 PLOT_VARIANTS = (
     "cacla", "supervised-cacla", "supervised-cacla-td0.9",
-    "cacla-recipe", "supervised-cacla-recipe", "ppo", "sac",
+    "cacla-recipe", "supervised-cacla-recipe", "supervised-cacla-recipe-100k", "ppo", "sac",
 )  # fmt: skip
+
+
+# variants that train another variant's runs first: their curve starts from its last point before theirs
+CONTINUES = {"supervised-cacla-recipe-100k": "supervised-cacla-recipe"}
 
 
 def plot(rows: list[dict], out: Path, path: Path) -> None:
@@ -293,8 +382,12 @@ def plot(rows: list[dict], out: Path, path: Path) -> None:
         ax = fig.add_subplot(1, 2, j + 1)
         ax.axhline(np.mean(h[cond]["returns"]), color="k", lw=1, ls="--", label="heuristic")
         for variant in dict.fromkeys(r["variant"] for r in rows):
-            rs = sorted((r for r in rows if r["variant"] == variant and r["condition"] == cond),
-                        key=lambda r: r["steps"])  # fmt: skip
+            own = [r for r in rows if r["variant"] == variant and r["condition"] == cond]
+            if variant in CONTINUES:  # drawn on from the last budget its first phase is the recipe at
+                first = min(r["budget"] for r in own)
+                own += [max((r for r in rows if r["variant"] == CONTINUES[variant] and r["condition"] == cond
+                             and r["budget"] < first), key=lambda r: r["budget"])]  # fmt: skip
+            rs = sorted(own, key=lambda r: r["steps"])
             x = [r["steps"] for r in rs]
             (line,) = ax.plot(x, [r["mean_return"] for r in rs], marker="o", ms=3, label=VARIANTS[variant][0])
             ax.fill_between(x, [r["ci95"][0] for r in rs], [r["ci95"][1] for r in rs], color=line.get_color(),

@@ -87,11 +87,18 @@ def pipelines() -> list[PipelineEntry]:
     return [e for source in _SOURCES for e in source()]
 
 
+def _phase_row(p) -> dict:
+    """A phase as ``trials`` lists it: pipeline, episodes and its own learner options if any."""
+    row = {"pipeline": p.pipeline, "episodes": p.episodes}
+    return row | {"learner": dict(p.learner)} if p.learner else row
+
+
 def trials(exp: ExperimentConfig) -> list[dict]:
     """One row per trial of ``exp``: name, label, algorithm, options, phases, episodes, repeats.
 
     ``options`` names the learner options (:data:`~pipefollow.learners.options.LEARNER_OPTIONS`)
-    set away from their defaults, and the readings.
+    set away from their defaults, and the readings; a phase with its own options lists them
+    (``learner``).
     """
     rows = []
     for t in exp.trials:
@@ -103,7 +110,7 @@ def trials(exp: ExperimentConfig) -> list[dict]:
                 "label": t.title,
                 "algorithm": t.algorithm,
                 "options": ", ".join(options),
-                "phases": [{"pipeline": p.pipeline, "episodes": p.episodes} for p in t.phases],
+                "phases": [_phase_row(p) for p in t.phases],
                 "episodes": t.episodes,
                 "repeats": exp.repeats,
                 "evaluate_on": t.evaluate_on,
@@ -132,9 +139,14 @@ def table(rows: Sequence[dict], columns: Sequence[tuple[str, str]]) -> str:
     return "\n".join([line([h for _, h in columns])] + [line(c) for c in cells])
 
 
+def _learner(values: dict | None) -> str:
+    """A phase's own learner options as ``trials`` shows them (`` (actor_repeats var)``)."""
+    return f" ({describe(values)})" if values else ""
+
+
 def _cell(value) -> str:
     if isinstance(value, float):
         return f"{value:.2f}"
     if isinstance(value, list):
-        return " then ".join(f"{p['pipeline']} ×{p['episodes']}" for p in value)
+        return " then ".join(f"{p['pipeline']} ×{p['episodes']}" + _learner(p.get("learner")) for p in value)
     return str(value)

@@ -82,6 +82,11 @@ def _coerce(cls, data: dict, where: str):
             _check_disturbance(value, key)
             kwargs[f.name] = dict(value)
             continue
+        if f.name == "learner":  # a phase's options: a table, checked by validate
+            if not isinstance(value, dict):
+                raise ConfigError(f"{key} must be a table of learner options, got {value!r}")
+            kwargs[f.name] = dict(value)
+            continue
         if f.name == "water":
             camera, sensor = data.get("camera", "ideal"), data.get("sensor", "camera")
             kwargs[f.name] = _check_water(value, key, camera, sensor)

@@ -16,9 +16,9 @@ from pipefollow import readings as rd
 from pipefollow.files.limits import MAX_EPISODE_SECONDS as MAX_SECONDS
 from pipefollow.files.limits import MAX_EPISODES, MAX_REPEATS
 from pipefollow.files.paper_training import EPISODE_SECONDS, TRAINING_EPISODES
-from pipefollow.learners.options import LEARNER_OPTIONS, check_schedule
+from pipefollow.learners.options import LEARNER_OPTIONS, OPTION, PHASE_OPTIONS, check_schedule
 from pipefollow.learners.registry import NAMES as ALGORITHMS
-from pipefollow.learners.registry import agent_options
+from pipefollow.learners.registry import agent_options, learner, takes, taking
 
 # Figure and table keys of the report a trial can belong to (``figures = [...]`` in a trial).
 FIGURE_KEYS = ("fig5", "fig6", "fig7", "table1")
@@ -45,6 +45,12 @@ class Phase:
     )
     episodes: int = _f(
         TRAINING_EPISODES, "episodes of this phase; σ runs from sigma_start to sigma_end over them"
+    )
+    learner: dict | None = _f(
+        None,
+        "learner options of this phase's episodes in place of the trial's: a table of "
+        "pipefollow.learners.options.PHASE_OPTIONS (actor_repeats, critic_lambda, the step sizes); "
+        "none by default",
     )
 
 
@@ -168,6 +174,13 @@ def validate(obj, where: str) -> None:
     if isinstance(obj, Phase):
         if not 1 <= obj.episodes <= MAX_EPISODES:
             raise bad("episodes", f"from 1 to {MAX_EPISODES:,}", obj.episodes)
+        for key, value in (obj.learner or {}).items():
+            if key not in PHASE_OPTIONS:
+                raise ConfigError(f"{where}: key 'learner' may set {', '.join(PHASE_OPTIONS)}, not {key!r}")
+            try:
+                OPTION[key].check(value)
+            except ValueError:
+                raise bad(f"learner.{key}", OPTION[key].allowed(), value) from None
     elif isinstance(obj, TrialConfig):
         import re
 
@@ -183,6 +196,11 @@ def validate(obj, where: str) -> None:
             check_schedule(obj.sigma_start, obj.sigma_end)
         except ValueError as e:
             raise ConfigError(f"{where}: {_keyed(e)}") from None
+        for i, phase in enumerate(obj.phases):
+            for key in phase.learner or {}:
+                if not takes(learner(obj.algorithm), key):
+                    raise ConfigError(f"{where}.phases[{i}]: key 'learner.{key}' applies to algorithm "
+                                      f"{' and '.join(taking(key))} only")  # fmt: skip
         check_readings(obj.readings, f"{where}: key 'readings'")
         if obj.sensor == "sonar" and obj.camera != "ideal":
             raise bad("camera", "'ideal' with sensor = 'sonar' (the sonar observes alone)", obj.camera)
@@ -204,9 +222,12 @@ def validate(obj, where: str) -> None:
             raise ConfigError(f"{where}: no [[trial]] tables")
 
 
-def learner_values(trial: TrialConfig) -> dict:
-    """The values of ``trial``'s learner options (:data:`~pipefollow.learners.options.LEARNER_OPTIONS`)."""
-    return {o.name: getattr(trial, o.name) for o in LEARNER_OPTIONS}
+def learner_values(trial: TrialConfig, phase: Phase | None = None) -> dict:
+    """The values of ``trial``'s learner options (:data:`~pipefollow.learners.options.LEARNER_OPTIONS`).
+
+    With a ``phase``, those it sets for its episodes (its ``learner`` table) in their place.
+    """
+    return {o.name: getattr(trial, o.name) for o in LEARNER_OPTIONS} | dict((phase and phase.learner) or {})
 
 
 def _keyed(e: ValueError) -> str:

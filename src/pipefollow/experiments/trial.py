@@ -51,13 +51,20 @@ class TrialResult:
     wall_seconds: float = 0.0
 
 
-def build_agent(config: TrialConfig, rng: np.random.Generator | None = None):
+def build_agent(config: TrialConfig, rng: np.random.Generator | None = None, phase=None):
     """A fresh agent for ``config`` under its readings: the values of its learner's options.
 
-    :func:`~pipefollow.learners.registry.agent_options` reads them, as for ``pipefollow train``.
+    :func:`~pipefollow.learners.registry.agent_options` reads them, as for ``pipefollow train``;
+    with a ``phase``, those it sets (its ``learner`` table) in place of the trial's.
     """
-    values = agent_options(config.algorithm, learner_values(config), strict=False)
+    values = agent_options(config.algorithm, learner_values(config, phase), strict=False)
     return make_agent(config.algorithm, rng=rng, readings=config.reading, **values)
+
+
+def phase_params(config: TrialConfig) -> list:
+    """The learner's parameter record of each phase: None for a phase without a ``learner`` table."""
+    rng = np.random.default_rng(0)  # the records only: the agents built here draw nothing
+    return [build_agent(config, rng, ph).params if ph.learner else None for ph in config.phases]
 
 
 class ActorOnly:
@@ -91,6 +98,7 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
         episode_seconds=config.episode_seconds,
         sigma_start=config.sigma_start,
         sigma_end=config.sigma_end,
+        phase_params=phase_params(config),
     )
     phase = [np.full(ph.episodes, i) for i, ph in enumerate(config.phases)]
     schedule = (config.reading, config.sigma_start, config.sigma_end)

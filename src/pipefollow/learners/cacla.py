@@ -216,6 +216,18 @@ class Cacla(Agent):
         self.supervisor = supervisor
         self._phi_cache: tuple[bytes, np.ndarray] | None = None  # φ(s') of the last update
 
+    def retune(self, params) -> None:
+        """:meth:`Agent.retune`, and the packed record and actor rule the updates read.
+
+        Raises:
+            ValueError: ``params`` changes the skew or the supervisor (the heads the weights hold).
+        """
+        if (params.skew > 0.0) != (self.params.skew > 0.0) or params.supervised != self.params.supervised:
+            raise ValueError("a phase may not change the skew or the supervisor of a trained agent")
+        super().retune(params)
+        self._packed = pack(params)
+        self._rule = self.rule(params)
+
     @staticmethod
     def rule(params) -> int:
         """The actor's step factor: eq. 7's sign and max terms."""

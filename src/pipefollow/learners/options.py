@@ -15,6 +15,8 @@ Groups:
 * ``step``: a field of a learner's parameter record (its ``LearnerKind.step_sizes``);
 * ``schedule``: how training runs the learner (the σ schedule), for every learner;
 * ``state``: what the learner observes (:mod:`pipefollow.sim.observation`), for every learner.
+
+A training phase may set the options of :data:`PHASE_OPTIONS` for its own episodes.
 """
 
 from __future__ import annotations
@@ -154,6 +156,10 @@ LEARNER_OPTIONS: tuple[LearnerOption, ...] = (
     ),  # fmt: skip
 )
 OPTION = {o.name: o for o in LEARNER_OPTIONS}
+# The options a training phase may set for its own episodes (an experiment file's phase ``learner``
+# table): the step sizes and the switches that change neither the weights' shape, the features nor
+# the random numbers drawn (not the skew, the supervisor or the state).
+PHASE_OPTIONS = ("actor_repeats", "critic_lambda", *(o.name for o in LEARNER_OPTIONS if o.group == "step"))
 DEFAULTS = {o.name: o.default for o in LEARNER_OPTIONS}
 # The switches with their off values: set for a learner that does not take them, they are refused.
 SWITCHES = {o.name: o.default for o in LEARNER_OPTIONS if o.group == "switch"}

@@ -97,6 +97,15 @@ class Agent:
         """The discount factor γ_d."""
         return self.params.discount
 
+    def retune(self, params) -> None:
+        """Take the parameter record ``params`` from the next episode on (a training phase's options).
+
+        Only fields that keep the weights' meaning may differ (the step sizes and the options of
+        :data:`~pipefollow.learners.options.PHASE_OPTIONS`); the weights are kept.
+        """
+        self.params = params
+        self._pending = None
+
     def begin_episode(self, sigma: float) -> None:
         """Set the exploration σ for the coming episode and forget any pending action."""
         self.sigma = float(sigma)

@@ -65,6 +65,7 @@ def train_phases(
     sigma_start: float = SIGMA_START,
     sigma_end: float = SIGMA_END,
     progress: Callable[[int], None] | None = None,
+    phase_params: Sequence | None = None,
 ) -> list[np.ndarray]:
     """Train ``agent`` (its ``rng`` from :func:`agent_rng`) through ``phases`` of (pipeline, episodes).
 
@@ -72,8 +73,10 @@ def train_phases(
     σ runs from ``sigma_start`` to ``sigma_end`` (the paper's units, scaled by the ``sigma_unit``
     reading) over each phase. ``progress`` gets the episodes done over all phases. A
     ``randomization`` (:mod:`pipefollow.sim.randomization`; a preset name, table or record) draws
-    every episode's disturbances from the disturbances' stream instead of ``disturbance``. Returns
-    one (episodes, 4) statistics array per phase.
+    every episode's disturbances from the disturbances' stream instead of ``disturbance``.
+    ``phase_params`` gives each phase the learner's parameter record for its episodes (None: the
+    agent's record at the start; :meth:`~pipefollow.learners.protocol.Agent.retune`); the agent
+    ends with the last phase's. Returns one (episodes, 4) statistics array per phase.
     """
     from pipefollow.sim.pipe_names import resolve_training
     from pipefollow.sim.suites import Suite
@@ -92,8 +95,15 @@ def train_phases(
         env_rng=disturbance_rng(seed),
         randomization=randomization,
     )
+    own = agent.params
+    records = list(phase_params) if phase_params is not None else [None] * len(phases)
+    if len(records) != len(phases):
+        raise ValueError(f"phase_params must have one entry per phase ({len(phases)}), got {len(records)}")
     out, done, pipe_rng = [], 0, None
-    for pipe, (_, episodes) in zip(pipes, phases, strict=True):
+    for pipe, (_, episodes), record in zip(pipes, phases, records, strict=True):
+        wanted = own if record is None else record
+        if wanted is not agent.params:
+            agent.retune(wanted)
         report = None if progress is None else (lambda n, before=done: progress(before + n))
         if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the agent's generator
             pipe_rng = pipe_rng if pipe_rng is not None else agent.rng.spawn(1)[0]

@@ -2,8 +2,10 @@
 
 Sources: ``docs/sample-efficiency/summary.json`` (``examples/sample_efficiency.py``: per variant,
 budget and condition the mean return with its interval, the paired difference to the heuristic,
-the success rate and the training's wall time), and the paired tables of
-``docs/sample-efficiency/cacla-var.md`` and ``critic-td-lambda.md``.
+the success rate and the training's wall time), ``tuning.json`` and ``continuation.json`` (the
+same script on the tuning pipes, and beyond the recipe's 30,000 decisions), ``measured-state.json``,
+and the paired tables of ``docs/sample-efficiency/cacla-var.md`` and ``critic-td-lambda.md``. A
+source ``X.json`` computed by a recorded command has its ``X.provenance.json`` beside it.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ VS_HEADERS = tuple(f"{c}: vs heuristic [95 % CI]" for c in CONDITIONS)
 SOURCES = (
     "sample-efficiency/summary.json",
     "sample-efficiency/tuning.json",
+    "sample-efficiency/continuation.json",
     "sample-efficiency/measured-state.json",
     "sample-efficiency/cacla-var.md",
     "sample-efficiency/critic-td-lambda.md",
@@ -38,8 +41,9 @@ SOURCES = (
 
 TEXT = """\
 Regenerate the stored outputs with `python examples/sample_efficiency.py --out FOLDER --variants ...`
-(the how-to: [Sample efficiency](../guides/sample-efficiency.md)) and copy `summary.json` to
-`docs/sample-efficiency/`.
+(the how-to and the exact commands: [Sample efficiency](../guides/sample-efficiency.md)) and copy
+each folder's `summary.json` to `docs/sample-efficiency/` (`summary.json`, `tuning.json`,
+`continuation.json`), its `provenance.json` beside it (`summary.provenance.json`, …).
 
 ## Every variant at every budget
 
@@ -72,6 +76,24 @@ those pipes (its return {t_h_calm} calm, {t_h_dist} disturbed):
 
 {tuning_table}
 
+## Beyond 30,000 decisions
+
+The recipe's 333 episodes, then 778 more (99,990 decisions in all) another way, and the recipe's
+options changed throughout, each at 100,000 decisions with {c_seeds} seeds on `heldout`
+(`docs/sample-efficiency/continuation.json`; `python examples/sample_efficiency.py --out FOLDER
+--budgets 100000 --variants ...`), paired per pipe against the heuristic and against PPO:
+
+{cont_table}
+
+**These were chosen on `heldout`**, the suite that judges them: all with seeds 0–2 first, the two
+best (CACLA+Var throughout, and CACLA+Var after the recipe's 30,000 decisions) then with 0–4, and
+only afterwards on the tuning pipes (`tuning.json`, seeds 5–9); the rows above were completed to
+seeds 0–4 after the choice. The
+recipe to 100,000 decisions (`examples/recipe-100k.toml`: the recipe's 333 episodes, then 778
+with CACLA+Var and σ from 1 again) is {r100_ppo} calm and {r100_dist_ppo} disturbed against PPO
+at 100,000 ({r100_vs} and {r100_dist_vs} against the heuristic); on the tuning pipes
+{r100_t_ppo} calm and {r100_t_dist_ppo} disturbed.
+
 ## What helped and what did not, at equal budgets
 
 * **Supervision is the first large gain**: supervised CACLA against the heuristic in calm water
@@ -99,7 +121,9 @@ those pipes (its return {t_h_calm} calm, {t_h_dist} disturbed):
   then judged here, on `heldout` with the table's seeds. Against the heuristic at {mid} decisions it
   is {rec_mid_vs} calm and {rec_mid_dist_vs} disturbed; paired per pipe against PPO it is
   {rec_mid_ppo} calm and {rec_mid_dist_ppo} disturbed at {mid}, {rec_big_ppo} calm and
-  {rec_big_dist_ppo} disturbed at {big}. Without the trace (TD(0), the same step sizes and
+  {rec_big_dist_ppo} disturbed at {big} (the same options over 1,111 episodes); trained on from
+  its {mid} decisions with CACLA+Var instead (`examples/recipe-100k.toml`, "Beyond 30,000
+  decisions" above) {r100_ppo} and {r100_dist_ppo}. Without the trace (TD(0), the same step sizes and
   discount) it is {rec0_mid_vs} calm and {rec0_mid_dist_vs} disturbed at {mid}; CACLA without
   the supervisor, with the recipe's options, {crec_mid_vs} and {crec_mid_dist_vs}.
 * **The paper's family against PPO**: the best of the family at {big} decisions in calm water is
@@ -230,6 +254,21 @@ def render(docs: Path) -> str:
         for v, b in dict.fromkeys((r["variant"], r["budget"]) for r in measured)
     ]
 
+    cont = read_json(folder / "continuation.json")
+    c_cell = {(r["variant"], r["budget"], r["condition"]): r for r in cont}
+    c_rows = [
+        (
+            c_cell[v, b, "calm"]["label"],
+            *(vs_of(c_cell[v, b, c]) for c in CONDITIONS),
+            *(vs_ppo(c_cell[v, b, c]) for c in CONDITIONS),
+        )
+        for v, b in dict.fromkeys((r["variant"], r["budget"]) for r in cont if r["variant"] != "ppo")
+    ]
+    rec100 = rec + "-100k"
+    t_ppo = {c: t_cell.get((rec100, big, c)) for c in CONDITIONS}
+    if any(r is None for r in t_ppo.values()):
+        raise PageError(f"tuning.json: no row for {rec100} at {big}")
+
     var_heading = next(iter(_headings(folder / "cacla-var.md")))
     td_heading = next(iter(_headings(folder / "critic-td-lambda.md")))
     body = fill(
@@ -297,13 +336,32 @@ def render(docs: Path) -> str:
         crec_mid_dist_vs=vs("cacla-recipe", mid, "disturbed"),
         t_h_calm=num(heuristic_of(t_heur["calm"])),
         t_h_dist=num(heuristic_of(t_heur["disturbed"])),
+        c_seeds=cont[0]["seeds"],
+        cont_table=table(
+            ("variant", *VS_HEADERS, *(f"{c}: vs PPO [95 % CI]" for c in CONDITIONS)),
+            c_rows,
+        ),
+        r100_ppo=vs_ppo(get(rec100, big, "calm")),
+        r100_dist_ppo=vs_ppo(get(rec100, big, "disturbed")),
+        r100_vs=vs(rec100, big),
+        r100_dist_vs=vs(rec100, big, "disturbed"),
+        r100_t_ppo=vs_ppo(t_ppo["calm"]),
+        r100_t_dist_ppo=vs_ppo(t_ppo["disturbed"]),
         tuning_table=table(
             ("variant", "decisions", "seeds", *VS_HEADERS),
             t_rows,
         ),
     )
-    provenance = [(s, stored_provenance(folder)) for s in SOURCES]
+    provenance = [(s, _provenance(docs / s)) for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)
+
+
+def _provenance(path: Path) -> str:
+    """Where the stored output ``path`` was computed: its ``X.provenance.json``, else the folder's record."""
+    from pipefollow.files.machine import describe_provenance
+
+    own = path.with_name(path.stem + ".provenance.json")
+    return describe_provenance(read_json(own)) if own.is_file() else stored_provenance(path.parent)
 
 
 def _headings(path: Path) -> list[str]:
