@@ -13,6 +13,7 @@ from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
 from pipefollow.learners.heuristic import heuristic_action
 from pipefollow.perception.sonar_detect import MIN_HEIGHT_SHARE
+from pipefollow.perception.tracker import ACTIVE, MISS, TH, D, P, new_track, track_point
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.suites import get_suite, min_length_for
 
@@ -195,3 +196,29 @@ def test_benchmark_with_the_sonar_names_it_and_compares_with_the_ideal_heuristic
     assert result.exit_code == 0, result.output
     summary = json.loads(result.output)
     assert summary["sensor"] == "sonar" and summary["camera"] == "ideal" and "vs_heuristic" in summary
+
+
+def test_a_sonar_fix_updates_the_tracked_line_as_a_kalman_filter_does():
+    # the line x = 0.2 (θ = 0, d = 0.2) with covariance P; a point (0.1, 2.0) off it by 0.1 with
+    # error 0.03: the update is K = P Hᵀ (H P Hᵀ + σ²)⁻¹ of the point's offset r = n(θ)·p − d,
+    # H = ∂r/∂(θ, d) = (−u·p, −1) = (−2, −1), in matrices
+    T = new_track()
+    T[TH], T[D], T[P], T[P + 1], T[P + 2], T[ACTIVE], T[MISS] = 0.0, 0.2, 0.01, 0.002, 0.04, 1.0, 2.0
+    cov = np.array([[0.01, 0.002], [0.002, 0.04]])
+    H = np.array([[-2.0, -1.0]])
+    r = 0.1 - 0.2
+    k = cov @ H.T / (H @ cov @ H.T + 0.03**2)
+    want = np.array([0.0, 0.2]) - (k * r).ravel()
+    want_cov = (np.eye(2) - k @ H) @ cov
+    assert track_point(T, 0.1, 2.0, 0.03, 6.6349)
+    np.testing.assert_allclose([T[TH], T[D]], want, rtol=1e-12)
+    np.testing.assert_allclose([[T[P], T[P + 1]], [T[P + 1], T[P + 2]]], want_cov, rtol=1e-12)
+    assert T[MISS] == 0.0  # a sighting
+    # a point 1.5 m off the line is outside the gate: nothing changes; nor without a line
+    before = T.copy()
+    assert not track_point(T, 1.7, 2.0, 0.03, 6.6349)
+    np.testing.assert_array_equal(T, before)
+    T[ACTIVE] = 0.0
+    before = T.copy()
+    assert not track_point(T, 0.2, 2.0, 0.03, 6.6349)
+    np.testing.assert_array_equal(T, before)

@@ -36,10 +36,13 @@ from pipefollow.perception.camera import CameraSettings, TrueView, VisionCamera,
 from pipefollow.perception.detector import Detection
 from pipefollow.perception.slots import Sighting, observed, sighting_of, write_sighting
 from pipefollow.perception.sonar_track import SonarSensor
+from pipefollow.perception.tracker import PipeTracker
 from pipefollow.perception.water import Water
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams
 from pipefollow.sim.disturbance import NO_BURIAL
+
+FIX_SD = 0.03  # m: the error of the ping's fix on the tracked line (docs/decisions.md, fused sensor)
 
 
 def sonar_burial(water: Water) -> float:
@@ -87,6 +90,8 @@ class SonarSensors:
         self._last = Sighting()
         if self.vision is not None:
             self.vision.fallback = None  # the first frame: no ping yet
+            if self.fused and self.vision.tracker is not None:
+                self.vision.aid = self._aid  # each frame's fix a point on the tracked pipe (none yet)
             self.vision.reset(state, points, cum, rng)
         self._rng = _spawn(rng)
         self._look(state, points, cum)
@@ -112,6 +117,13 @@ class SonarSensors:
         if s[sim.OVERRIDDEN] != 0.0 or s[sim.IN_VIEW] == 0.0:
             return self.lost_reward
         return sim_reward
+
+    def _aid(self, tracker: PipeTracker) -> np.ndarray:
+        """After the camera's frame: the ping's fix as a point on the tracked pipe (:data:`FIX_SD`)."""
+        fix = self.sonar.fix
+        if not fix.found:
+            return tracker.out
+        return tracker.point(fix.lateral, fix.forward, FIX_SD)
 
     def _keep_truth(self, s: np.ndarray) -> None:
         self.truth = TrueView(bool(s[sim.IN_VIEW]), s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR])
