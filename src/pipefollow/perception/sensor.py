@@ -36,7 +36,7 @@ from pipefollow.perception.camera import CameraSettings, TrueView, VisionCamera,
 from pipefollow.perception.detector import Detection
 from pipefollow.perception.slots import Sighting, observed, sighting_of, write_sighting
 from pipefollow.perception.sonar_track import SonarSensor
-from pipefollow.perception.tracker import PipeTracker
+from pipefollow.perception.tracker import ACCEPTED, BEND, PipeTracker
 from pipefollow.perception.water import Water
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams
@@ -119,9 +119,14 @@ class SonarSensors:
         return sim_reward
 
     def _aid(self, tracker: PipeTracker) -> np.ndarray:
-        """After the camera's frame: the ping's fix as a point on the tracked pipe (:data:`FIX_SD`)."""
+        """After the camera's frame: the ping's fix as a point on the tracked pipe (:data:`FIX_SD`).
+
+        Only in a frame whose camera detection the tracker did not take (none, rejected, or one
+        that started the line again): a detection it took already places the line, and adding the
+        fix there made clear water worse (docs/decisions.md).
+        """
         fix = self.sonar.fix
-        if not fix.found:
+        if not fix.found or tracker.event in (ACCEPTED, BEND):
             return tracker.out
         return tracker.point(fix.lateral, fix.forward, FIX_SD)
 
