@@ -13,9 +13,11 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
 * ``"fused"``: one estimate from both sensors. Each decision the camera's own measurement comes
   first; when it finds no pipe the sonar's view of the pipe is the measurement instead
   (:attr:`VisionCamera.fallback`): with ``camera="vision"`` that measurement feeds the same pipe
-  tracker (:mod:`pipefollow.perception.tracker`) with its gates, with ``"vision-raw"`` it is the
-  observation, and with the ideal camera the sonar's view fills the slots while the exact camera
-  does not see the pipe.
+  tracker (:mod:`pipefollow.perception.tracker`) with its gates, and in a frame whose detection the
+  tracker did not take the ping's fix then corrects the tracked line as a point on the pipe with
+  its own error (:data:`FIX_SD`; :attr:`VisionCamera.aid`, :meth:`PipeTracker.point`); with
+  ``"vision-raw"`` the measurement is the observation, and with the ideal camera the sonar's view
+  fills the slots while the exact camera does not see the pipe.
 
 The sonar draws its noise (128 normals a ping) from a generator of its own, spawned from the
 environment's at each reset after the camera's draws (:func:`spawn`): the camera's frames, the
