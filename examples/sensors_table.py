@@ -1,6 +1,7 @@
 """The heuristic with each sensor: the held-out suite, ideal camera, vision, sonar and fused.
 
     python examples/sensors_table.py --csv docs/vision/sensors.csv
+    python examples/sensors_table.py --rows fused      # the fused rows only (printed)
 
 The heuristic runs one 60-s episode per held-out pipe (100) with each sensor in clear and turbid
 water, and half buried (``burial`` 0.5, clear water), through the environment
@@ -8,7 +9,8 @@ water, and half buried (``burial`` 0.5, clear water), through the environment
 gives each row's numbers); each row is compared with the heuristic on the ideal camera on the
 same pipes (paired difference of the returns, bootstrap CI). Rows: ``ideal`` (the exact camera),
 ``vision`` (detector and tracker), ``sonar`` (the look-ahead multibeam alone), ``fused`` (the
-vision camera's detections, the sonar's where it finds none, in one track), ``fused-ideal`` (the
+vision camera's detections, the sonar's where it finds none, in one track that each ping's fix
+also corrects), ``fused-ideal`` (the
 exact camera, the sonar's view where it sees no pipe).
 """
 
@@ -44,11 +46,15 @@ def main() -> None:
     ap.add_argument("--csv", default=None, help="write the table here")
     ap.add_argument("--pipes", type=int, default=None, help="the first N held-out pipes [all 100]")
     ap.add_argument("--noise-seed", type=int, default=0)
+    names = [name for name, _, _ in SENSORS]
+    ap.add_argument("--rows", nargs="+", choices=names, default=names, help="these sensors' rows only [all]")
     args = ap.parse_args()
     suite = get_suite("heldout")
     rows = []
     for water, burial in WATERS:
         for name, sensor, camera in SENSORS:
+            if name not in args.rows:
+                continue
             if name == "ideal" and (water, burial) != ("clear", 0.0):
                 continue  # the exact camera sees through any water
             if name == "fused-ideal" and (water, burial) != ("clear", 0.0):

@@ -13,6 +13,7 @@ from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
 from pipefollow.learners.heuristic import heuristic_action
 from pipefollow.perception.sonar_detect import MIN_HEIGHT_SHARE
+from pipefollow.perception.tracker import ACTIVE, MISS, TH, D, P, new_track, track_point
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.suites import get_suite, min_length_for
 
@@ -57,7 +58,7 @@ def test_sonar_and_fusion_follow_in_turbid_water_where_the_vision_camera_fails()
         out = [episode(env, k) for k, env in enumerate(envs)]
         runs[name] = np.array(out).mean(axis=0)  # mean return, share truly in view, decisions lost
     # the detector misses most turbid frames and the track drifts (measured: mean return −193,
-    # 12 decisions lost; the sonar −60 and 4, fused −74 and 4); the sonar does not see the water
+    # 12 decisions lost; the sonar −60 and 4, fused −68 and 3.7); the sonar does not see the water
     assert runs["vision"][2] >= 2 * runs["sonar"][2] and runs["sonar"][1] >= 0.95
     assert runs["sonar"][0] >= runs["vision"][0] + 60.0
     assert runs["fused"][2] < runs["vision"][2] and runs["fused"][0] >= runs["vision"][0] + 60.0
@@ -196,3 +197,29 @@ def test_benchmark_of_the_heuristic_with_the_sonar_names_it_and_compares_with_th
     summary = json.loads(result.output)
     assert summary["sensor"] == "sonar" and summary["camera"] == "ideal" and "vs_heuristic_ideal" in summary
     assert "vs_heuristic" not in summary  # the heuristic through the same sensor is itself
+
+
+def test_a_sonar_fix_updates_the_tracked_line_as_a_kalman_filter_does():
+    # the line x = 0.2 (θ = 0, d = 0.2) with covariance P; a point (0.1, 2.0) off it by 0.1 with
+    # error 0.03: the update is K = P Hᵀ (H P Hᵀ + σ²)⁻¹ of the point's offset r = n(θ)·p − d,
+    # H = ∂r/∂(θ, d) = (−u·p, −1) = (−2, −1), in matrices
+    T = new_track()
+    T[TH], T[D], T[P], T[P + 1], T[P + 2], T[ACTIVE], T[MISS] = 0.0, 0.2, 0.01, 0.002, 0.04, 1.0, 2.0
+    cov = np.array([[0.01, 0.002], [0.002, 0.04]])
+    H = np.array([[-2.0, -1.0]])
+    r = 0.1 - 0.2
+    k = cov @ H.T / (H @ cov @ H.T + 0.03**2)
+    want = np.array([0.0, 0.2]) - (k * r).ravel()
+    want_cov = (np.eye(2) - k @ H) @ cov
+    assert track_point(T, 0.1, 2.0, 0.03, 6.6349)
+    np.testing.assert_allclose([T[TH], T[D]], want, rtol=1e-12)
+    np.testing.assert_allclose([[T[P], T[P + 1]], [T[P + 1], T[P + 2]]], want_cov, rtol=1e-12)
+    assert T[MISS] == 0.0  # a sighting
+    # a point 1.5 m off the line is outside the gate: nothing changes; nor without a line
+    before = T.copy()
+    assert not track_point(T, 1.7, 2.0, 0.03, 6.6349)
+    np.testing.assert_array_equal(T, before)
+    T[ACTIVE] = 0.0
+    before = T.copy()
+    assert not track_point(T, 0.2, 2.0, 0.03, 6.6349)
+    np.testing.assert_array_equal(T, before)

@@ -17,6 +17,7 @@ after each decision; both draw from the environment's seeded generator only.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -146,6 +147,9 @@ class VisionCamera:
         # a second detector's pipe (sensor="fused": the sonar's), set before each frame by its owner;
         # the tracker (or the raw observation) takes it when the image's detector finds nothing
         self.fallback: Detection | None = None
+        # a second sensor's update of the track after each frame's detection (sensor="fused": the
+        # sonar's fix), set by its owner: it returns the tracker's output
+        self.aid: Callable[[PipeTracker], np.ndarray] | None = None
 
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
         """A new scene (seabed and growth textures from ``rng``) and its first image.
@@ -211,6 +215,8 @@ class VisionCamera:
     def _track(self, s: np.ndarray, pose: tuple[float, float, float], det: Detection) -> None:
         """The observation slots from the tracker fed with this frame's detection."""
         out = self.tracker.step(pose, det.found, (det.x1, det.y1, det.x2, det.y_near))
+        if self.aid is not None:
+            out = self.aid(self.tracker)
         seen = out[OUT_IN_VIEW] != 0.0
         if seen:
             ends = out[OUT_X1], out[OUT_Y1], out[OUT_X2], out[OUT_Y_NEAR]

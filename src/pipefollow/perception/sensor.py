@@ -13,9 +13,11 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
 * ``"fused"``: one estimate from both sensors. Each decision the camera's own measurement comes
   first; when it finds no pipe the sonar's view of the pipe is the measurement instead
   (:attr:`VisionCamera.fallback`): with ``camera="vision"`` that measurement feeds the same pipe
-  tracker (:mod:`pipefollow.perception.tracker`) with its gates, with ``"vision-raw"`` it is the
-  observation, and with the ideal camera the sonar's view fills the slots while the exact camera
-  does not see the pipe.
+  tracker (:mod:`pipefollow.perception.tracker`) with its gates, and in a frame whose detection the
+  tracker did not take the ping's fix then corrects the tracked line as a point on the pipe with
+  its own error (:data:`FIX_SD`; :attr:`VisionCamera.aid`, :meth:`PipeTracker.point`); with
+  ``"vision-raw"`` the measurement is the observation, and with the ideal camera the sonar's view
+  fills the slots while the exact camera does not see the pipe.
 
 The sonar draws its noise (128 normals a ping) from a generator of its own, spawned from the
 environment's at each reset after the camera's draws (:func:`spawn`): the camera's frames, the
@@ -36,10 +38,13 @@ from pipefollow.perception.camera import CameraSettings, TrueView, VisionCamera,
 from pipefollow.perception.detector import Detection
 from pipefollow.perception.slots import Sighting, observed, sighting_of, write_sighting
 from pipefollow.perception.sonar_track import SonarSensor
+from pipefollow.perception.tracker import ACCEPTED, BEND, PipeTracker
 from pipefollow.perception.water import Water
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams
 from pipefollow.sim.disturbance import NO_BURIAL
+
+FIX_SD = 0.03  # m: the error of the ping's fix on the tracked line (docs/decisions.md, fused sensor)
 
 
 def sonar_burial(water: Water) -> float:
@@ -87,6 +92,8 @@ class SonarSensors:
         self._last = Sighting()
         if self.vision is not None:
             self.vision.fallback = None  # the first frame: no ping yet
+            if self.fused and self.vision.tracker is not None:
+                self.vision.aid = self._aid  # each frame's fix a point on the tracked pipe (none yet)
             self.vision.reset(state, points, cum, rng)
         self._rng = _spawn(rng)
         self._look(state, points, cum)
@@ -112,6 +119,18 @@ class SonarSensors:
         if s[sim.OVERRIDDEN] != 0.0 or s[sim.IN_VIEW] == 0.0:
             return self.lost_reward
         return sim_reward
+
+    def _aid(self, tracker: PipeTracker) -> np.ndarray:
+        """After the camera's frame: the ping's fix as a point on the tracked pipe (:data:`FIX_SD`).
+
+        Only in a frame whose camera detection the tracker did not take (none, rejected, or one
+        that started the line again): a detection it took already places the line, and adding the
+        fix there made clear water worse (docs/decisions.md).
+        """
+        fix = self.sonar.fix
+        if not fix.found or tracker.event in (ACCEPTED, BEND):
+            return tracker.out
+        return tracker.point(fix.lateral, fix.forward, FIX_SD)
 
     def _keep_truth(self, s: np.ndarray) -> None:
         self.truth = TrueView(bool(s[sim.IN_VIEW]), s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR])

@@ -61,6 +61,7 @@ from pipefollow.sim.camera import clip_segment
 from pipefollow.sim.controller import wrap_angle as wrap
 
 CHI2_2DOF_99 = 9.2103  # Mahalanobis gate of a line: 99 % of a correct detection's innovations fall inside
+CHI2_1DOF_99 = 6.6349  # ... of a second sensor's point on the line: 99 % (a chi-squared table)
 CHI2_1DOF_90 = 2.7055  # ... of a detected end on the line: 90 % (a wider gate kept wrong lines; decisions.md)
 
 
@@ -520,6 +521,25 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
 
 
 @njit(cache=True)
+def track_point(T, px, py, point_sd, gate):
+    """A point the pipe passes through (a second sensor's fix, camera metres) updates the line.
+
+    The point must lie on the tracked line within ``gate`` (squared Mahalanobis distance, 1 degree
+    of freedom; :func:`point_innovation` with the point's own error ``point_sd``); then it corrects
+    the line (:func:`point_correct`) and counts as a sighting (the misses start again). Returns
+    whether it was taken; without a line nothing happens.
+    """
+    if T[ACTIVE] == 0.0:
+        return False
+    nu, j, S, m2 = point_innovation(T, TH, px, py, point_sd)
+    if m2 > gate:
+        return False
+    point_correct(T, TH, nu, j, S)
+    T[MISS] = 0.0
+    return True
+
+
+@njit(cache=True)
 def observe_track(T, tp, hw, depth, out):
     """The track's observation (see :func:`track_step`'s ``out``); sets the track's side and confidence.
 
@@ -677,6 +697,15 @@ class PipeTracker:
             self.state, found, d, motion, self.navigation.variances, self._tp,
             self.half_width, self.depth, self.out,
         )  # fmt: skip
+        return self.out
+
+    def point(self, x: float, y: float, point_sd: float, gate: float = CHI2_1DOF_99) -> np.ndarray:
+        """After :meth:`step`: a second sensor's point on the pipe (:func:`track_point`).
+
+        Returns the observation: the output array of :meth:`step`, rewritten if the point was taken.
+        """
+        if track_point(self.state, float(x), float(y), float(point_sd), float(gate)):
+            observe_track(self.state, self._tp, self.half_width, self.depth, self.out)
         return self.out
 
     @property
