@@ -279,6 +279,17 @@ def summarize(
     return summary
 
 
+def heuristic_camera(camera: dict | None) -> dict | None:
+    """The heuristic's camera arguments beside a controller's.
+
+    The same camera, sensor and water with the vector observation: the heuristic reads the pipe's
+    end points, not an image.
+    """
+    if not camera:
+        return camera
+    return {k: v for k, v in camera.items() if k != "observation"}
+
+
 def benchmark(
     agent,
     suite: Suite,
@@ -316,7 +327,8 @@ def benchmark(
     if is_heuristic:
         h_res, h_poses = res, poses
     else:
-        h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params, noise_seed, camera)
+        h_camera = heuristic_camera(camera)
+        h_res, h_poses = run_episodes(Heuristic(), pipes, seconds, params, noise_seed, h_camera)
     references = {} if is_heuristic else {"vs_heuristic": h_res[:, ep.STAT_RETURN]}
     ideal = h_res[:, ep.STAT_RETURN]
     if camera:  # the second reference: the heuristic on the ideal camera
