@@ -1,4 +1,4 @@
-"""How well the multibeam profiler's detector finds the pipe, and a figure of sample profiles.
+"""How well the multibeam profiler's detector finds the pipe, alone and in the heuristic's loop.
 
 * :func:`sonar_statistics` renders pings of straight pipes crossing the fan at random lateral
   positions and angles, and pipe-free pings, and runs
@@ -8,8 +8,8 @@
   observation from :class:`~pipefollow.perception.sonar_track.SonarSensor` instead of the exact
   camera, as an environment with the sonar would (reward eq. 19 from the true geometry, −10
   while the sonar has lost the pipe), beside the same controller on the exact camera.
-* :func:`profile_figure` draws sample profiles (heights above the fitted seabed against lateral
-  position) with the true pipe section (green), the detection (red) and the camera's footprint.
+
+The figure of sample profiles is :func:`pipefollow.evaluation.perception_figures.sonar_profiles`.
 
 Ping ``k`` of a condition draws from ``default_rng(SeedSequence([seed, condition, k]))``.
 """
@@ -17,13 +17,11 @@ Ping ``k`` of a condition draws from ``default_rng(SeedSequence([seed, condition
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 import numpy as np
 
-from pipefollow.perception.sonar import DOWNWARD_SONAR, Sonar, fan_line, profile_points, render_ping
-from pipefollow.perception.sonar_detect import THRESHOLD, detect_profile
-from pipefollow.sim.camera import PAPER_CAMERA
+from pipefollow.perception.sonar import DOWNWARD_SONAR, Sonar, fan_line, render_ping
+from pipefollow.perception.sonar_detect import detect_profile
 
 EMPTY = np.zeros((0, 2))
 
@@ -140,68 +138,3 @@ def heuristic_on_sonar(
             "pipes": len(pipes),
         }
     return out
-
-
-def profile_figure(
-    path,
-    cases: Sequence[tuple[str, float | None, float]] = (
-        ("on the seabed", 0.4, 0.0),
-        ("half buried", -0.8, 0.5),
-        ("3/4 buried", 0.2, 0.75),
-        ("fully buried", 0.6, 1.0),
-        ("outside the camera", 2.2, 0.0),
-        ("no pipe", None, 0.0),
-    ),
-    sonar: Sonar = DOWNWARD_SONAR,
-    diameter: float = 0.25,
-    seed: int = 0,
-) -> None:
-    """Sample profiles, one panel per ``(title, lateral or None for no pipe, burial)``."""
-    from pipefollow.envs.render import new_figure, save_figure
-
-    cols = 3
-    rows = math.ceil(len(cases) / cols)
-    fig = new_figure((3.2 * cols, 2.3 * rows))
-    axes = fig.subplots(rows, cols, squeeze=False)
-    radius = 0.5 * diameter
-    for i, (title, x0, burial) in enumerate(cases):
-        ax = axes[i // cols, i % cols]
-        rng = np.random.default_rng(np.random.SeedSequence([seed, 3, i]))
-        pts, cum = straight_pipe(x0, 0.0, forward=fan_line(sonar)) if x0 is not None else (EMPTY, EMPTY[:, 0])
-        ping = render_ping(pts, cum, (0.0, 0.0, 0.0), rng, sonar, diameter, burial)
-        fix = detect_profile(ping, diameter)
-        x, z = profile_points(ping.ranges, ping.angles, ping.pitch)
-        h = z + fix.seabed_depth  # heights above the fitted seabed
-        ax.axvspan(-PAPER_CAMERA.half_width, PAPER_CAMERA.half_width, color="0.92", lw=0)
-        ax.axhline(0.0, color="0.6", lw=0.6)
-        ax.plot(x, h * 100.0, ".", ms=2.5, color="k")
-        if x0 is not None:  # the true section: axis R(1 − 2b) above the seabed
-            t = np.linspace(0.0, 2.0 * math.pi, 100)
-            zc = radius * (1.0 - 2.0 * burial)
-            ax.plot(x0 + radius * np.cos(t), (zc + radius * np.sin(t)) * 100.0, color="green", lw=1.0)
-        if fix.found:
-            ax.axvline(fix.lateral, color="red", ls="--", lw=1.0)
-        if fix.found:
-            verdict = f"found, SNR {fix.snr:.0f}"
-        elif fix.snr >= THRESHOLD:
-            verdict = f"too low to count, SNR {fix.snr:.1f}"
-        else:
-            verdict = f"not found, SNR {fix.snr:.1f}"
-        ax.set_title(f"{title}: {verdict}", fontsize=8)
-        ax.set_xlim(-3.5, 3.5)
-        ax.set_ylim(-20.0, 40.0)
-        ax.tick_params(labelsize=7)
-        if i % cols == 0:
-            ax.set_ylabel("height (cm)", fontsize=7)
-        if i // cols == rows - 1:
-            ax.set_xlabel("lateral (m)", fontsize=7)
-    for j in range(len(cases), rows * cols):
-        axes[j // cols, j % cols].set_visible(False)
-    fig.suptitle(
-        f"multibeam profiles ({sonar.n_beams} beams, ±{0.5 * sonar.swath_deg:g}°, "
-        f"{sonar.altitude:g} m altitude, tilt {sonar.pitch_deg:g}°): "
-        "pipe section (green), detection (red), camera footprint (grey)",
-        fontsize=8,
-    )
-    fig.tight_layout()
-    save_figure(fig, path)
