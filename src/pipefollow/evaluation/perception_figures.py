@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipefollow.perception.water import WATER_PRESETS
-from pipefollow.sim.camera import PAPER_CAMERA
+from pipefollow.sim.camera import PAPER_CAMERA, to_camera
 
 Y_REF = 1.5  # m ahead of the vehicle's centre: where the time plot compares the lateral offsets
 STEEP = math.cos(math.radians(60.0))  # a tracked line more across the track than 60° has no offset there
@@ -37,19 +37,14 @@ SONAR_CASES = (  # (title, seabed roughness RMS (m), burial: buried share of the
 
 
 def to_world(pose, x, y) -> tuple[np.ndarray, np.ndarray]:
-    """Camera-frame points ``(x, y)`` seen from ``pose = (X, Y, ψ)`` as (north, east)."""
+    """Camera-frame points ``(x, y)`` seen from ``pose = (X, Y, ψ)`` as (north, east).
+
+    The inverse of :func:`pipefollow.sim.camera.to_camera`.
+    """
     X, Y, psi = pose
     c, s = math.cos(psi), math.sin(psi)
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     return X + y * c - x * s, Y + y * s + x * c
-
-
-def to_camera(pose, north, east) -> tuple[np.ndarray, np.ndarray]:
-    """World points as camera-frame ``(x, y)`` seen from ``pose`` (the inverse of :func:`to_world`)."""
-    X, Y, psi = pose
-    c, s = math.cos(psi), math.sin(psi)
-    dn, de = np.asarray(north, dtype=float) - X, np.asarray(east, dtype=float) - Y
-    return -s * dn + c * de, c * dn + s * de
 
 
 def lateral_at(points: np.ndarray, pose, y_ref: float = Y_REF, reach: float = 3.0) -> float:
@@ -57,7 +52,7 @@ def lateral_at(points: np.ndarray, pose, y_ref: float = Y_REF, reach: float = 3.
 
     Of several crossings within ``±reach`` m, the one nearest the vehicle's track.
     """
-    x, y = to_camera(pose, points[:, 0], points[:, 1])
+    x, y = to_camera(points[:, 0], points[:, 1], *pose)
     best = math.nan
     for k in range(len(x) - 1):
         y0, y1 = y[k] - y_ref, y[k + 1] - y_ref
