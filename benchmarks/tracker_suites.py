@@ -17,12 +17,10 @@ from __future__ import annotations
 
 import argparse
 
-LOST_IN_VIEW = 0.8  # an episode with the pipe in view less often than this lost it
-
 
 def judge(suite_name: str, n_pipes: int | None, camera: str, water: str, noise_seed: int) -> dict:
     """One suite's line (module docstring) as a dict."""
-    from pipefollow.evaluation.benchmark import benchmark
+    from pipefollow.evaluation.benchmark import LOST_IN_VIEW, benchmark
     from pipefollow.learners.heuristic import Heuristic
     from pipefollow.sim.suites import LEVELS, SUITES, TRAIN_STREAM, Suite, get_suite
 
