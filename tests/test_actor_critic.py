@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pipefollow.learners import actor_critic as ac
-from pipefollow.learners import cacla
+from pipefollow.learners import cacla, cacla_act
 from pipefollow.learners.cacla_update import A, K, V
 from pipefollow.training.agents import make_agent
 
@@ -16,8 +16,8 @@ def one_update(agent_class, p, reward, a_rl, a_sup=0.0, k=0.0):
     """One update as ``agent_class``'s agents make it: CACLA's entry point with the class's step factor."""
     w = np.zeros((4, 3))
     w[K, 0] = k
-    hp, rule, var, trace = cacla.pack(p), agent_class.rule(p), np.ones(1), np.zeros(3)
-    delta = cacla.update_packed(w, PHI, a_rl, a_sup, reward, 0.0, np.zeros(3), hp, rule, var, trace)
+    hp, rule, var, trace = cacla_act.pack(p), agent_class.rule(p), np.ones(1), np.zeros(3)
+    delta = cacla_act.update_packed(w, PHI, a_rl, a_sup, reward, 0.0, np.zeros(3), hp, rule, var, trace)
     return delta, w
 
 
@@ -42,7 +42,7 @@ def test_actor_critic_steps_by_hand(update, reward, actor):
 
 @pytest.mark.parametrize("reward", [-2.0, 3.0])
 def test_cacla_is_the_actor_critic_with_both_terms(reward):
-    _, w_cacla = one_update(cacla.Cacla, cacla.PAPER_CACLA, reward, 0.5)
+    _, w_cacla = one_update(cacla.Cacla, cacla_act.PAPER_CACLA, reward, 0.5)
     assert w_cacla[A, 0] == pytest.approx(ALPHA_PI * 0.5 if reward > 0 else 0.0)  # max(sgn δ, 0)
 
 
@@ -53,7 +53,7 @@ def test_supervised_actor_critic_is_eq_11_by_hand():
     assert w[A, 0] == pytest.approx(ALPHA_PI * (0.5 * -2.0 * 0.5 + 0.5 * -0.4))
     assert w[K, 0] == pytest.approx(0.5 + 0.05)  # eq. 13: k(s) grows by Δk·φ at every visit
     _, w12 = one_update(
-        cacla.Cacla, cacla.PAPER_CACLA._replace(supervised=True), -2.0, 0.5, a_sup=-0.4, k=0.5
+        cacla.Cacla, cacla_act.PAPER_CACLA._replace(supervised=True), -2.0, 0.5, a_sup=-0.4, k=0.5
     )
     assert w12[A, 0] == pytest.approx(ALPHA_PI * 0.5 * -0.4)  # eq. 12: the RL part drops out for δ < 0
 
@@ -73,9 +73,10 @@ def test_cacla_code_reads_the_actor_critic_record():
     # CACLA's compiled code reads the first fields of the packed record; the step factor goes beside it
     from pipefollow.sim import records
 
-    assert ac.ActorCriticParams._fields == (*cacla.CaclaParams._fields, "actor_update")
-    assert ac.PAPER_AC == (*cacla.PAPER_CACLA, ac.DELTA)  # CACLA's defaults, then eq. 9's δ
+    assert ac.ActorCriticParams._fields == (*cacla_act.CaclaParams._fields, "actor_update")
+    assert ac.PAPER_AC == (*cacla_act.PAPER_CACLA, ac.DELTA)  # CACLA's defaults, then eq. 9's δ
     p = ac.PAPER_AC._replace(supervised=True, alpha_pi=0.3, delta_k=0.07, actor_update=ac.SIGN)
-    assert cacla.unpack(records.pack(p)) == cacla.CaclaParams(supervised=True, alpha_pi=0.3, delta_k=0.07)
+    expected = cacla_act.CaclaParams(supervised=True, alpha_pi=0.3, delta_k=0.07)
+    assert cacla_act.unpack(records.pack(p)) == expected
     assert ac.ActorCritic(p).rule(p) == ac.SIGN
-    assert cacla.Cacla().rule(cacla.PAPER_CACLA) == cacla.SIGN_AND_MAX
+    assert cacla.Cacla().rule(cacla_act.PAPER_CACLA) == cacla.SIGN_AND_MAX

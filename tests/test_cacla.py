@@ -5,8 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from pipefollow.learners import cacla, cacla_update
-from pipefollow.learners.cacla import Cacla, CaclaParams
+from pipefollow.learners import cacla, cacla_act, cacla_update
+from pipefollow.learners.cacla import Cacla
+from pipefollow.learners.cacla_act import CaclaParams
 from pipefollow.learners.cacla_update import A, G, K, V
 from pipefollow.learners.exploration import skew_normal_from_normals
 from pipefollow.learners.rbf import RBFGrid
@@ -49,7 +50,7 @@ NORM2 = 0.2**2 + 0.5**2 + 0.3**2  # ‖φ‖² = 0.38
 
 def test_skew_update_moves_gamma_itself_by_the_step_by_default():
     p = CaclaParams(skew=0.5)
-    assert p.skew_step == cacla.STEP_GAMMA
+    assert p.skew_step == cacla_update.STEP_GAMMA
     # δ > 0 and a > A(s): w_γ += Δγ φ/‖φ‖², so γ(s) = w_γ·φ grows by exactly Δγ = 0.5
     w = weights()
     cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
@@ -71,7 +72,7 @@ def test_skew_update_moves_gamma_itself_by_the_step_by_default():
 
 
 def test_skew_update_sign_and_cap_with_the_weights_step():
-    p = CaclaParams(skew=0.5, skew_step=cacla.STEP_WEIGHTS)
+    p = CaclaParams(skew=0.5, skew_step=cacla_update.STEP_WEIGHTS)
     # δ > 0 and a > A(s): the weights grow by Δγ φ, so γ(s) by Δγ‖φ‖² = 0.19
     w = weights()
     cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
@@ -106,7 +107,8 @@ def test_k_update_readings():
     cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)  # δ = 0.55
     np.testing.assert_allclose(w[K], 0.05 * PHI)
     w = weights()
-    cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, CaclaParams(supervised=True, k_step=cacla.STEP_GAMMA))
+    p = CaclaParams(supervised=True, k_step=cacla_update.STEP_GAMMA)
+    cacla.update(w, PHI, 0.6, 0.0, 0.3, 0.8, PHI_NEXT, p)
     assert w[K] @ PHI == pytest.approx(0.05)  # k(s) itself moves by Δk
 
 
@@ -134,7 +136,7 @@ def test_supervised_actor_target_mixes_rl_and_supervisor_and_k_grows_to_cap():
 
 def test_k_starts_at_zero_so_the_supervisor_acts_alone():
     w = weights()
-    a, a_rl = cacla.act(w, PHI, 0.5, 1.3, 0.0, -0.7, CaclaParams(supervised=True))
+    a, a_rl = cacla_act.act(w, PHI, 0.5, 1.3, 0.0, -0.7, CaclaParams(supervised=True))
     assert a == pytest.approx(-0.7)
     assert a_rl == pytest.approx(min(1.0, 0.09 + 0.5 * 1.3))
 
@@ -142,13 +144,13 @@ def test_k_starts_at_zero_so_the_supervisor_acts_alone():
 def test_act_gaussian_skew_and_deterministic():
     w = weights()
     p = CaclaParams()
-    assert cacla.act(w, PHI, 0.0, 5.0, 5.0, 0.0, p)[0] == pytest.approx(0.09)  # σ = 0
-    assert cacla.act(w, PHI, 0.2, -0.5, 9.0, 0.0, p)[0] == pytest.approx(0.09 - 0.1)
-    assert cacla.act(w, PHI, 1.0, 3.0, 0.0, 0.0, p)[0] == 1.0  # clipped
+    assert cacla_act.act(w, PHI, 0.0, 5.0, 5.0, 0.0, p)[0] == pytest.approx(0.09)  # σ = 0
+    assert cacla_act.act(w, PHI, 0.2, -0.5, 9.0, 0.0, p)[0] == pytest.approx(0.09 - 0.1)
+    assert cacla_act.act(w, PHI, 1.0, 3.0, 0.0, 0.0, p)[0] == 1.0  # clipped
     ps = CaclaParams(skew=0.5)
     w[G] = [1.0, 1.0, 1.0]  # γ(s) = 1
     z = skew_normal_from_normals(1.0, -0.4, 0.3)
-    assert cacla.act(w, PHI, 0.2, -0.4, 0.3, 0.0, ps)[0] == pytest.approx(0.09 + 0.2 * z)
+    assert cacla_act.act(w, PHI, 0.2, -0.4, 0.3, 0.0, ps)[0] == pytest.approx(0.09 + 0.2 * z)
 
 
 def test_semi_markov_discount_is_used_for_bootstrap():
@@ -245,7 +247,10 @@ def test_skew_sample_readings_mean_and_sd(sample, mean, sd):
     rng = np.random.default_rng(0)
     sigma = 0.05  # small enough that no sample is clipped
     z = np.array(
-        [(cacla.act(w, PHI, sigma, *rng.standard_normal(2), 0.0, p)[1] - 0.09) / sigma for _ in range(20000)]
+        [
+            (cacla_act.act(w, PHI, sigma, *rng.standard_normal(2), 0.0, p)[1] - 0.09) / sigma
+            for _ in range(20000)
+        ]
     )
     assert z.mean() == pytest.approx(mean, abs=4 * z.std() / math.sqrt(z.size))
     assert z.std() == pytest.approx(sd, rel=0.03)

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from pipefollow.learners import cacla
-from pipefollow.learners.cacla import CaclaParams
+from pipefollow.learners import cacla, cacla_update
+from pipefollow.learners.cacla_act import CaclaParams
 from pipefollow.learners.cacla_update import MAX_ACTOR_REPEATS, A, V
 from pipefollow.sim.pipeline import builtin
 from pipefollow.training.agents import make_agent
@@ -69,7 +69,7 @@ def test_the_number_of_updates_is_capped():
 def test_agent_option_label_policy_file_and_refusals(tmp_path):
     agent = make_agent("cacla", supervised=True, actor_repeats="var", rng=np.random.default_rng(0))
     assert agent.name == "supervised CACLA+Var" and agent.params.actor_repeats == cacla.REPEAT_VAR
-    assert make_agent("cacla").params.actor_repeats == cacla.REPEAT_ONCE
+    assert make_agent("cacla").params.actor_repeats == cacla_update.REPEAT_ONCE
     train_compiled(agent, builtin("paper-left"), 5)
     assert agent.td_var[0] != 1.0  # the compiled loop kept the running variance
     loaded = load_policy(save_policy(agent, tmp_path / "p.npz"))

@@ -6,7 +6,7 @@ import pytest
 from pipefollow import readings as rd
 from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.learners import cacla
-from pipefollow.learners.cacla import CaclaParams
+from pipefollow.learners.cacla_act import CaclaParams
 from pipefollow.learners.cacla_update import A, V
 from pipefollow.sim.pipeline import builtin
 from pipefollow.training.agents import make_agent

@@ -58,7 +58,7 @@ name = "a"
 def test_trial_defaults_are_the_learners_records():
     # one definition of the paper's step sizes: the learners' records; SARSA's γ_d is CACLA's
     from pipefollow.learners.actor_critic import PAPER_AC
-    from pipefollow.learners.cacla import PAPER_CACLA
+    from pipefollow.learners.cacla_act import PAPER_CACLA
     from pipefollow.learners.sarsa import PAPER_SARSA
 
     t = TrialConfig()

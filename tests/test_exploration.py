@@ -14,7 +14,9 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy import integrate, stats
 
-from pipefollow.learners.cacla import A, Cacla, CaclaParams, G
+from pipefollow.learners.cacla import Cacla
+from pipefollow.learners.cacla_act import CaclaParams
+from pipefollow.learners.cacla_update import A, G
 from pipefollow.learners.exploration import (
     linear_sigma,
     skew_normal_from_normals,

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pipefollow import readings as rd
-from pipefollow.learners import cacla, cacla_update
+from pipefollow.learners import cacla, cacla_act, cacla_update
 from pipefollow.learners.rbf import STATE_CENTRES
 from pipefollow.sim import decision as sim
 from pipefollow.training.agents import make_agent
@@ -62,14 +62,14 @@ def test_skew_unit_and_sigma_unit():
 
 def test_cacla_params_under_each_reading():
     p = rd.cacla_params(skew_deg=45.0, supervised=True)
-    expected = (1.0, 1.0, cacla.STEP_GAMMA, cacla.SAMPLE_LOCATION)
+    expected = (1.0, 1.0, cacla_update.STEP_GAMMA, cacla.SAMPLE_LOCATION)
     assert (p.skew, p.gamma_max, p.skew_step, p.skew_sample) == expected
-    assert (p.k_update, p.k_step, p.supervised) == (cacla.K_EVERY, cacla.STEP_WEIGHTS, True)
+    assert (p.k_update, p.k_step, p.supervised) == (cacla_update.K_EVERY, cacla_update.STEP_WEIGHTS, True)
     r = rd.parse("skew_step=weights,skew_sample=moments,gamma_max=0.5,k_update=positive,k_step=k")
     q = rd.cacla_params(r, 22.5)
-    assert (q.skew_step, q.skew_sample, q.gamma_max) == (cacla.STEP_WEIGHTS, cacla.SAMPLE_MOMENTS, 0.5)
+    assert (q.skew_step, q.skew_sample, q.gamma_max) == (cacla_update.STEP_WEIGHTS, cacla.SAMPLE_MOMENTS, 0.5)
     assert (q.k_update, q.k_step) == (cacla_update.K_POSITIVE, cacla_update.STEP_GAMMA)
-    np.testing.assert_array_equal(cacla.unpack(cacla.pack(q)), q)  # the packed form keeps them
+    np.testing.assert_array_equal(cacla_act.unpack(cacla_act.pack(q)), q)  # the packed form keeps them
 
 
 def test_every_learner_has_its_inputs_under_the_readings():

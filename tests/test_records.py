@@ -5,7 +5,7 @@ from typing import NamedTuple
 import numpy as np
 import pytest
 
-from pipefollow.learners import cacla
+from pipefollow.learners import cacla_act
 from pipefollow.sim import records
 
 
@@ -35,9 +35,9 @@ def test_cacla_parameters_unpack_field_by_field():
         alpha_v=0.3, alpha_pi=0.1, discount=0.7, skew=0.25, gamma_max=1.5, supervised=True, delta_k=0.02,
         k_max=0.9, forgetting=0.01, skew_sample=2, skew_step=1, k_update=1, k_step=0,
     )  # fmt: skip
-    p = cacla.CaclaParams(**values)
+    p = cacla_act.CaclaParams(**values)
     assert all(getattr(p, k) == v for k, v in values.items())
-    back = cacla.unpack(cacla.pack(p))
+    back = cacla_act.unpack(cacla_act.pack(p))
     assert back._fields == p._fields
     for name in p._fields:  # by name: a shifted slot would show
         assert float(getattr(back, name)) == float(getattr(p, name)), name

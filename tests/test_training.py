@@ -155,7 +155,8 @@ def test_semi_markov_updates_while_the_pipe_is_lost_by_hand():
 
 
 def test_compiled_loop_refuses_a_custom_supervisor():
-    from pipefollow.learners.cacla import Cacla, CaclaParams
+    from pipefollow.learners.cacla import Cacla
+    from pipefollow.learners.cacla_act import CaclaParams
 
     agent = Cacla(CaclaParams(supervised=True), supervisor=lambda obs: 0.0)
     with pytest.raises(TypeError, match="heuristic only"):

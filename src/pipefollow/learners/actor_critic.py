@@ -28,7 +28,8 @@ from typing import NamedTuple
 import numpy as np
 
 from pipefollow.learners import cacla
-from pipefollow.learners.cacla import PAPER_CACLA, Cacla
+from pipefollow.learners.cacla import Cacla
+from pipefollow.learners.cacla_act import PAPER_CACLA
 from pipefollow.learners.cacla_update import (
     DELTA,
     K_EVERY,
@@ -49,9 +50,9 @@ ACTOR_UPDATES = {"delta": DELTA, "positive": POSITIVE, "sign": SIGN}
 class ActorCriticParams(NamedTuple):
     """The actor-critic's step sizes and options: CACLA's, and the actor's step factor.
 
-    The fields up to ``critic_lambda`` are :class:`~pipefollow.learners.cacla.CaclaParams`'s, in
+    The fields up to ``critic_lambda`` are :class:`~pipefollow.learners.cacla_act.CaclaParams`'s, in
     its order and with its defaults, so that CACLA's compiled code reads the packed record
-    (``cacla.unpack`` reads the fields it starts with) and the record itself by the same names.
+    (``cacla_act.unpack`` reads the fields it starts with) and the record itself by the same names.
     """
 
     alpha_v: float = PAPER_CACLA.alpha_v  # critic step size α_V (paper §4)

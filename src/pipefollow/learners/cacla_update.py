@@ -4,7 +4,7 @@
 another actor step factor): the critic's TD error and step (eqs. 4–6; with ``critic_lambda`` > 0
 along an eligibility trace, TD(λ)), the actor's step (eq. 7, eq. 12 when supervised; with
 ``actor_repeats`` var made ⌈δ/√var⌉ times, CACLA+Var), the skew head (eq. 15) and the supervisor's
-trust k(s) (eq. 13). The record ``p`` is a :class:`~pipefollow.learners.cacla.CaclaParams` (or one
+trust k(s) (eq. 13). The record ``p`` is a :class:`~pipefollow.learners.cacla_act.CaclaParams` (or one
 that extends it), read by attribute; the codes of its integer fields, the rows of the weight matrix
 (:data:`V`, :data:`A`, :data:`G`, :data:`K`: critic, actor mean, skew, supervisor trust) and the
 codes of the actor's step factor (:func:`step_factor`) are defined here.

@@ -25,7 +25,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from pipefollow.learners.cacla import PAPER_CACLA
+from pipefollow.learners.cacla_act import PAPER_CACLA
 from pipefollow.learners.exploration import SIGMA_END, SIGMA_START
 from pipefollow.learners.sarsa import PAPER_SARSA
 from pipefollow.sim.observation import STATE_NAMES

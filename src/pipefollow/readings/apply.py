@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from pipefollow.learners.actor_critic import ACTOR_UPDATES, ActorCriticParams
-from pipefollow.learners.cacla import CaclaParams
+from pipefollow.learners.cacla_act import CaclaParams
 from pipefollow.learners.cacla_update import (
     ACTOR_REPEATS,
     K_EVERY,
