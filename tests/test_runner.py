@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 
 from pipefollow.experiments import store
+from pipefollow.experiments.backends import longest_first
 from pipefollow.experiments.config import load_experiment, with_overrides
-from pipefollow.experiments.runner import RunInterrupted, longest_first, run_experiment
+from pipefollow.experiments.runner import RunInterrupted, run_experiment
 from pipefollow.experiments.schema import ConfigError, ExperimentConfig
 from pipefollow.experiments.trial import run_trial
 
@@ -145,7 +146,7 @@ def test_a_failing_trial_keeps_the_others_and_says_where(tmp_path):
     assert store.finished(tmp_path, TINY) == {("sarsa", 2010)}
 
 
-# The process backend hands out the longest trials first (runner.longest_first).
+# The process backend hands out the longest trials first (backends.longest_first).
 FIRST = next((c.name, s) for c, s in longest_first([(t, s) for t in TINY.trials for s in TINY.seeds()]))
 
 

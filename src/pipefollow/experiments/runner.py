@@ -3,41 +3,29 @@
 The parent process owns the run folder (:mod:`pipefollow.experiments.store`): it saves every
 finished trial the moment its result arrives, so an interruption (Ctrl-C, ``kill``, a crash)
 loses only the trials still running, and starting again in the same folder computes only what
-is missing. Backends differ in where trials run, never in their numbers:
-
-* ``serial``: one after the other, in this process;
-* ``process``: a pool of worker processes on this machine (forked on Linux, so that they
-  inherit the compiled numba code instead of each compiling it);
-* ``ray``: Ray tasks, on a local instance or on a cluster (``ray_address``).
+is missing. The backend — ``serial``, ``process`` or ``ray`` (:mod:`pipefollow.experiments.backends`)
+— decides where trials run, never their numbers; before any trial, :func:`warm_up` compiles (or
+loads) the compiled code every kind of trial uses, once.
 """
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import logging
 import multiprocessing
 import os
-import signal
 import sys
 import time
-import warnings
-from collections.abc import Callable, Iterator, Mapping
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections.abc import Callable, Mapping
 from contextlib import closing
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from pipefollow.experiments import folder, store
-from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig
+from pipefollow.experiments import backends, folder, store
+from pipefollow.experiments.backends import TrialFn, Work
+from pipefollow.experiments.config import ExperimentConfig, TrialConfig
 from pipefollow.experiments.trial import TrialResult, run_trial
 from pipefollow.files.output_paths import first_missing, remove_empty_folders
 from pipefollow.files.progress import progress
-
-BACKENDS = ("serial", "process", "ray")
-
-TrialFn = Callable[[TrialConfig, int], TrialResult]
-Work = list[tuple[TrialConfig, int]]
 
 
 @dataclass(frozen=True)
@@ -86,15 +74,6 @@ class RunInterrupted(KeyboardInterrupt):
         )
 
 
-def import_ray():
-    """The ``ray`` module, or a :class:`ConfigError` saying how to install it."""
-    try:
-        import ray
-    except ImportError:
-        raise ConfigError("backend 'ray' needs the optional extra: pip install 'pipefollow[ray]'") from None
-    return ray
-
-
 def check_inputs(exp: ExperimentConfig) -> None:
     """Fail before any work on what the trials would fail on late: unreadable pipelines."""
     from pipefollow.sim.pipe_names import resolve_fixed, resolve_training
@@ -104,21 +83,6 @@ def check_inputs(exp: ExperimentConfig) -> None:
     for t in exp.trials:
         if t.evaluate_on:
             resolve_fixed(t.evaluate_on)
-
-
-@contextlib.contextmanager
-def _forking():
-    """Fork without Python ≥ 3.12's warning about forking a multi-threaded process.
-
-    The threads are BLAS's idle pool from importing NumPy; the forked workers run only our
-    compiled code, which does not call BLAS, so the deadlock the warning guards against cannot
-    occur, and forking lets the workers inherit the compiled code instead of loading it again.
-    """
-    with warnings.catch_warnings():
-        warnings.filterwarnings(
-            "ignore", message=r".*use of fork\(\) may lead to deadlocks", category=DeprecationWarning
-        )
-        yield
 
 
 def _compile_quietly(config: TrialConfig) -> None:
@@ -167,7 +131,7 @@ def warm_up(configs: list[TrialConfig], parallel: bool = False) -> None:
         helper = multiprocessing.get_context("fork").Process(
             target=_compile_quietly, args=(other,), daemon=True
         )
-        with _forking():
+        with backends.forking():
             helper.start()
         first = [c for c in tiny if c.algorithm == algorithms[0]]
         for c in first:
@@ -189,142 +153,6 @@ def _compile_phase(name: str, configs: list[TrialConfig], parallel: bool, hidden
     print(f" {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
 
 
-def _failed(e: BaseException, config: TrialConfig, seed: int) -> BaseException:
-    e.add_note(f"while running trial '{config.name}' with seed {seed}")
-    return e
-
-
-# ---------------------------------------------------------------------------------------------
-# Backends: each yields (config, result) as trials finish, and cleans up when closed
-
-
-def _serial(work: Work, trial_fn: TrialFn) -> Iterator[tuple[TrialConfig, TrialResult]]:
-    for config, seed in work:
-        try:
-            result = trial_fn(config, seed)
-        except Exception as e:
-            raise _failed(e, config, seed) from None
-        yield config, result
-
-
-def _worker_init(parent_pid: int) -> None:
-    # Ctrl-C reaches the whole process group: the parent alone decides how to stop.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    if sys.platform.startswith("linux"):
-        # Die with the parent (kill -9 included) instead of computing for nobody.
-        try:
-            import ctypes
-
-            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-        except (OSError, AttributeError):  # pragma: no cover
-            pass
-        if os.getppid() != parent_pid:  # the parent died before prctl took effect
-            os._exit(1)
-
-
-def _stop_workers(pool: ProcessPoolExecutor) -> None:
-    terminate = getattr(pool, "terminate_workers", None)  # Python ≥ 3.14
-    if terminate is not None:
-        terminate()
-        return
-    for p in list((getattr(pool, "_processes", None) or {}).values()):
-        if p.is_alive():
-            p.terminate()
-
-
-def longest_first(work: Work) -> Work:
-    """``work`` with the trials likely to take longest first (stable among equals).
-
-    Handing the long trials out first keeps a worker from starting one while the others have
-    nothing left, so the last trials end together. The estimate: the episodes of all phases, then
-    an evaluation run after training, SARSA (its update of all actions), skew or supervision.
-    """
-
-    def cost(item: tuple[TrialConfig, int]) -> tuple:
-        c = item[0]
-        episodes = sum(p.episodes for p in c.phases)
-        return (episodes, bool(c.evaluate_on), c.algorithm == "sarsa", c.skew_deg > 0 or c.supervised)
-
-    return sorted(work, key=cost, reverse=True)
-
-
-def _process(
-    work: Work, trial_fn: TrialFn, workers: int, while_waiting: Callable[[], object] | None = None
-) -> Iterator[tuple[TrialConfig, TrialResult]]:
-    work = longest_first(work)
-    ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
-    pool = ProcessPoolExecutor(
-        max_workers=workers, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(),)
-    )
-    futures = {}
-    complete = False
-    try:
-        with _forking():  # the pool forks its workers on the first submissions
-            futures = {pool.submit(trial_fn, config, seed): (config, seed) for config, seed in work}
-        if while_waiting is not None:
-            while_waiting()
-        for fut in as_completed(futures):
-            config, seed = futures[fut]
-            try:
-                result = fut.result()
-            except Exception as e:
-                raise _failed(e, config, seed) from None
-            yield config, result
-        complete = True
-    finally:
-        if not complete:  # interrupted or failed: do not wait for trials nobody will save
-            for fut in futures:
-                fut.cancel()
-            _stop_workers(pool)
-        pool.shutdown(wait=True, cancel_futures=True)
-
-
-def _ray(
-    work: Work,
-    trial_fn: TrialFn,
-    workers: int | None,
-    address: str | None,
-    info: dict,
-    while_waiting: Callable[[], object] | None = None,
-) -> Iterator[tuple[TrialConfig, TrialResult]]:
-    ray = import_ray()
-    connected_here = not ray.is_initialized()  # else: the caller's Ray session, left as it is
-    pending = {}
-    try:
-        # Ray's INFO/WARNING start-up lines would drown the progress bar; errors still show.
-        if connected_here and address:
-            ray.init(address=address, log_to_driver=False, logging_level=logging.ERROR)
-        elif connected_here:
-            ray.init(
-                num_cpus=workers or os.cpu_count(),
-                include_dashboard=False,
-                log_to_driver=False,
-                logging_level=logging.ERROR,
-            )
-        info["cpus"] = int(ray.cluster_resources().get("CPU", 0))
-        remote = ray.remote(num_cpus=1, max_retries=0)(trial_fn)
-        pending = {remote.remote(config, seed): (config, seed) for config, seed in work}
-        if while_waiting is not None:
-            while_waiting()
-        while pending:
-            ready, _ = ray.wait(list(pending), num_returns=1)
-            for ref in ready:
-                config, seed = pending.pop(ref)
-                try:
-                    result = ray.get(ref)
-                except Exception as e:
-                    raise _failed(e, config, seed) from None
-                yield config, result
-    finally:
-        for ref in pending:
-            ray.cancel(ref, force=True)
-        if connected_here:
-            ray.shutdown()
-
-
-# ---------------------------------------------------------------------------------------------
-
-
 @dataclass(frozen=True)
 class _How:
     """How :func:`run_experiment` runs its work: the backend and its settings, the progress shown."""
@@ -336,16 +164,6 @@ class _How:
     while_waiting: Callable[[], object] | None
     hidden: bool
     bar: Callable | None
-
-
-def _check_backend(backend: str, workers: int | None) -> None:
-    """Refuse an unknown backend or fewer than one worker; a missing Ray before any work."""
-    if backend not in BACKENDS:
-        raise ConfigError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    if workers is not None and workers < 1:
-        raise ConfigError(f"workers must be at least 1, got {workers}")
-    if backend == "ray":
-        import_ray()
 
 
 def _prepare(run_dir: Path, exp: ExperimentConfig, created: bool) -> None:
@@ -361,10 +179,10 @@ def _prepare(run_dir: Path, exp: ExperimentConfig, created: bool) -> None:
 def _results(work: Work, n_workers: int, how: _How, ray_info: dict):
     """The backend's iterator of (config, result) over ``work``."""
     if how.backend == "serial" or not work:
-        return _serial(work, how.trial_fn)
+        return backends.serial(work, how.trial_fn)
     if how.backend == "process":
-        return _process(work, how.trial_fn, n_workers, how.while_waiting)
-    return _ray(work, how.trial_fn, how.workers, how.ray_address, ray_info, how.while_waiting)
+        return backends.process_pool(work, how.trial_fn, n_workers, how.while_waiting)
+    return backends.ray_tasks(work, how.trial_fn, how.workers, how.ray_address, ray_info, how.while_waiting)
 
 
 def _run_work(run_dir: Path, exp: ExperimentConfig, done: set, in_hand: dict, created: bool, how: _How):
@@ -444,7 +262,7 @@ def run_experiment(
         RunInterrupted: on Ctrl-C, after stopping the workers; finished trials stay saved.
     """
     t0 = time.perf_counter()
-    _check_backend(backend, workers)
+    backends.check_backend(backend, workers)
     check_inputs(exp)
     total = len(exp.trials) * exp.repeats
     run_dir = Path(out_dir)
