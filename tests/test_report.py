@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 from scipy import stats as sps
 
-from pipefollow.experiments import claims, report, summary
+from pipefollow.experiments import claims, findings, report, summary
 from pipefollow.experiments.config import with_overrides
 from pipefollow.experiments.figures import learning_curve_figure, sliding_average
 from pipefollow.experiments.schema import ExperimentConfig, Phase, TrialConfig, to_dict
@@ -245,13 +245,13 @@ def run(tmp_path, paper_short, monkeypatch):
 
 def _findings(run_dir):
     cfg = report.from_dict(json.loads((run_dir / "config.json").read_text()))
-    return claims.compute_findings(
+    return findings.compute_findings(
         cfg, report.read_rows(run_dir / "results.csv"), report.read_rows(run_dir / "evaluation.csv")
     )
 
 
-def _parts(findings, number):
-    return next(c for c in findings.claims if c.number == number).parts
+def _parts(found, number):
+    return next(c for c in found.claims if c.number == number).parts
 
 
 # ---------------------------------------------------------------------------------------------

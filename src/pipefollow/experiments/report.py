@@ -2,7 +2,7 @@
 
 :func:`write_outputs` reads a run folder (``config.json``, ``results.csv``, ``evaluation.csv`` and,
 for the trajectories and run time, ``trials/``), computes the findings
-(:func:`pipefollow.experiments.claims.compute_findings`), renders them as markdown
+(:func:`pipefollow.experiments.findings.compute_findings`), renders them as markdown
 (:func:`render_markdown`) and draws the paper's Figs. 5–7 and the validation trajectories. An
 experiment that compares readings (``compare_readings``) gets the sensitivity report of
 :mod:`pipefollow.experiments.sensitivity` instead.
@@ -18,12 +18,9 @@ from pathlib import Path
 import numpy as np
 
 from pipefollow.experiments import figures
-from pipefollow.experiments.claims import (
-    Findings,
-    Table1,
-    compute_findings,
-)
+from pipefollow.experiments.claims import Table1
 from pipefollow.experiments.config import ExperimentConfig, TrialConfig, from_dict
+from pipefollow.experiments.findings import Findings, compute_findings
 from pipefollow.experiments.report_text import (
     FIGURES,
     REPORT_MD,

@@ -1,6 +1,6 @@
 """The reproduction report's text: the findings of a run rendered as ``REPORT.md`` markdown.
 
-:func:`render_markdown` turns the :class:`~pipefollow.experiments.claims.Findings` of a run (and
+:func:`render_markdown` turns the :class:`~pipefollow.experiments.findings.Findings` of a run (and
 the figures drawn for it) into the report; :mod:`pipefollow.experiments.report` reads the run
 folder, draws the figures and writes the file.
 """
@@ -15,12 +15,12 @@ from pipefollow.experiments.claims import (
     PAPER_EPISODES,
     PAPER_REPEATS,
     PAPER_TABLE1,
-    Findings,
     Part,
     paper_improvement_pct,
     pm,
 )
 from pipefollow.experiments.config import load_experiment
+from pipefollow.experiments.findings import Findings
 from pipefollow.experiments.summary import (
     CONVERGE_EPISODES,
     CONVERGE_PIPELINE,

@@ -5,7 +5,7 @@ An experiment with ``compare_readings`` runs each of its trials under each liste
 reading that changes only how results are judged (the convergence thresholds) trains nothing
 new: it re-judges the trials of the reading that trains the same way. :func:`compute` checks every
 claim under every reading with the same rules as the reproduction report
-(:func:`pipefollow.experiments.claims.compute_findings`); :func:`write_outputs` writes the tidy
+(:func:`pipefollow.experiments.findings.compute_findings`); :func:`write_outputs` writes the tidy
 ``readings.csv`` (``reading, claim, passed, repeats, verdict``) and ``REPORT.md`` with the
 sensitivity table and one line per claim.
 """
@@ -18,8 +18,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from pipefollow import readings as rd
-from pipefollow.experiments.claims import CONFIRMED, NOT_CONFIRMED, NOT_TESTED, Findings, compute_findings
+from pipefollow.experiments.claims import CONFIRMED, NOT_CONFIRMED, NOT_TESTED
 from pipefollow.experiments.config import ConfigError, ExperimentConfig, TrialConfig, from_dict
+from pipefollow.experiments.findings import Findings, compute_findings
 from pipefollow.experiments.summary import as_training, read_rows, read_training
 from pipefollow.files.machine import describe as describe_machine
 
