@@ -19,6 +19,7 @@ from pipefollow.experiments.backends import longest_first
 from pipefollow.experiments.config import load_experiment, with_overrides
 from pipefollow.experiments.runner import RunInterrupted, run_experiment
 from pipefollow.experiments.schema import ConfigError, ExperimentConfig
+from pipefollow.experiments.tables import write_tables
 from pipefollow.experiments.trial import run_trial
 
 # Two of the paper's trials (SARSA; supervised CACLA with skew, two phases and a validation run),
@@ -407,7 +408,7 @@ def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, monkeypatch):
 
     monkeypatch.setattr(pipefollow.files.atomic.os, "fsync", _no_space)
     with pytest.raises(OSError) as e:
-        store.write_tables(tmp_path, TINY)
+        write_tables(tmp_path, TINY)
     assert e.value.filename == str(tmp_path / "results.csv")
     assert list(tmp_path.iterdir()) == []  # and no temporary file stays
 

@@ -11,7 +11,7 @@ import pytest
 from llvmlite import binding as llvm
 
 import pipefollow
-from pipefollow.experiments import folder, store
+from pipefollow.experiments import folder, store, tables
 from pipefollow.experiments.schema import ConfigError, ExperimentConfig, Phase, TrialConfig, to_dict
 from pipefollow.experiments.trial import TrialResult, build_agent
 from pipefollow.files.sources import source_hash
@@ -159,7 +159,7 @@ def test_finished_ignores_seeds_and_trials_outside_the_experiment(tmp_path):
 
 def test_tables_read_back_with_pandas(tmp_path):
     results = fill(tmp_path)
-    paths = store.write_tables(tmp_path, EXP)
+    paths = tables.write_tables(tmp_path, EXP)
     assert paths == [tmp_path / "results.csv", tmp_path / "evaluation.csv"]
     df = pd.read_csv(tmp_path / "results.csv")
     assert list(df.columns) == [
@@ -223,7 +223,7 @@ def test_tables_read_back_with_pandas(tmp_path):
 def test_tables_leave_out_missing_trials(tmp_path):
     fill(tmp_path)
     store.trial_path(tmp_path, "sarsa", 40).unlink()
-    store.write_tables(tmp_path, EXP)
+    tables.write_tables(tmp_path, EXP)
     df = pd.read_csv(tmp_path / "results.csv")
     assert len(df) == 4 + 5 + 5
 
@@ -348,7 +348,7 @@ def test_missing_policies_are_rewritten(tmp_path):
 
 def test_summary(tmp_path):
     results = fill(tmp_path)
-    s = store.summary(tmp_path, EXP, last=2)
+    s = tables.summary(tmp_path, EXP, last=2)
     assert list(s) == ["sarsa", "sup-skew"]
     expected = np.mean([results["sarsa", seed].stats[-2:, 0].mean() for seed in (40, 41)])
     assert s["sarsa"]["mean_return_last2"] == pytest.approx(expected)
@@ -406,7 +406,7 @@ def _csv_rows_of(exp: ExperimentConfig, results) -> str:
                     (exp.name, t.name, t.title, t.algorithm, float(t.skew_deg), t.supervised, repeat, seed)
                     + (ph, t.phases[ph].pipeline, e, float(r.sigma[e]), *(float(v) for v in r.stats[e]))
                 )
-    return csv_text(store.RESULTS_COLUMNS, rows)
+    return csv_text(tables.RESULTS_COLUMNS, rows)
 
 
 def test_results_table_equals_the_csv_modules_text_byte_for_byte(tmp_path):
@@ -425,9 +425,9 @@ def test_results_table_equals_the_csv_modules_text_byte_for_byte(tmp_path):
     results = fill(tmp_path, exp)
     results["odd", 40].stats[0, :] = [1e-300, -0.0, 1 / 3, 12345678901234567.0]
     store.save_trial(tmp_path, results["odd", 40], trials[0])
-    store.write_tables(tmp_path, exp)  # from the trial files
+    tables.write_tables(tmp_path, exp)  # from the trial files
     assert (tmp_path / "results.csv").read_text(encoding="utf-8") == _csv_rows_of(exp, results)
-    store.write_tables(tmp_path, exp, results)  # from memory
+    tables.write_tables(tmp_path, exp, results)  # from memory
     assert (tmp_path / "results.csv").read_text(encoding="utf-8") == _csv_rows_of(exp, results)
 
 
@@ -439,7 +439,7 @@ def test_stored_results_take_known_results_and_read_the_others(tmp_path):
     assert list(got) == [("sarsa", 40), ("sup-skew", 40), ("sup-skew", 41)]
     assert got["sarsa", 40] is known["sarsa", 40]
     assert_same_result(got["sup-skew", 41], results["sup-skew", 41])
-    assert store.summary(tmp_path, EXP, last=2) == store.summary(tmp_path, EXP, last=2, results=got)
+    assert tables.summary(tmp_path, EXP, last=2) == tables.summary(tmp_path, EXP, last=2, results=got)
 
 
 def test_the_report_from_memory_equals_the_report_from_the_files(tmp_path):
@@ -447,7 +447,7 @@ def test_the_report_from_memory_equals_the_report_from_the_files(tmp_path):
     from pipefollow.experiments.summary import read_training
 
     results = fill(tmp_path)
-    store.write_tables(tmp_path, EXP)
+    tables.write_tables(tmp_path, EXP)
     from_files = read_training(tmp_path / "results.csv")
     from_memory = report.training_of(EXP, results)
     assert list(from_memory) == list(from_files)

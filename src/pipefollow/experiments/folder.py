@@ -14,14 +14,13 @@ from pathlib import Path
 from pipefollow.experiments.config import ConfigError, ExperimentConfig
 from pipefollow.experiments.store import (
     CONFIG_FILE,
-    EVALUATION_FILE,
-    RESULTS_FILE,
     StoreError,
     load_trial,
     policy_path,
     read_config,
     trial_path,
 )
+from pipefollow.experiments.tables import EVALUATION_FILE, RESULTS_FILE
 from pipefollow.files.atomic import TMP_SUFFIX
 
 LOCK_FILE = ".lock"

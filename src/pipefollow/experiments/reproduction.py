@@ -144,7 +144,7 @@ def reproduce(
 
 def summary(rep: Reproduction) -> dict:
     """The reproduction as one JSON object: the run, the files written and every trial's summary."""
-    from pipefollow.experiments.store import summary as trial_summary
+    from pipefollow.experiments.tables import summary as trial_summary
 
     run = rep.run
     return {
@@ -175,7 +175,7 @@ def summary_text(rep: Reproduction) -> str:
 
 def _trial_table(rep: Reproduction) -> list[str]:
     """Every trial's mean return and pipe in view over the last 50 episodes, and its evaluations."""
-    from pipefollow.experiments.store import summary as trial_summary
+    from pipefollow.experiments.tables import summary as trial_summary
 
     per_trial = trial_summary(rep.run.run_dir, rep.exp, results=rep.run.results or None)
     width = max(len(r["label"]) for r in per_trial.values()) if per_trial else 5

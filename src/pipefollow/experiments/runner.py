@@ -20,7 +20,7 @@ from contextlib import closing
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from pipefollow.experiments import backends, folder, store
+from pipefollow.experiments import backends, folder, store, tables
 from pipefollow.experiments.backends import TrialFn, Work
 from pipefollow.experiments.config import ExperimentConfig, TrialConfig
 from pipefollow.experiments.trial import TrialResult, run_trial
@@ -280,7 +280,7 @@ def run_experiment(
             n_workers, computed = _run_work(run_dir, exp, done, in_hand, created, how)
             store.ensure_policies(run_dir, exp)
             results = store.stored_results(run_dir, exp, in_hand)
-            tables = store.write_tables(run_dir, exp, results)
+            written = tables.write_tables(run_dir, exp, results)
     except Exception:
         remove_empty_folders(run_dir, made)  # the lock file is gone now; so go empty folders made here
         raise
@@ -292,6 +292,6 @@ def run_experiment(
         trials_computed=computed,
         trials_reused=len(done),
         wall_seconds=time.perf_counter() - t0,
-        tables=tuple(tables),
+        tables=tuple(written),
         results=results,
     )
