@@ -2,7 +2,8 @@
 
 ``shell`` (what both environments share: arguments, spaces, reset options, the start of an
 episode, infos, the episode summary), ``env`` (``pipefollow/PipelineFollowing-v0``), ``vector_env``
-(its batched vector version), ``render`` (the Fig. 2 view) and ``animation``.
+(its batched vector version), ``vector_batch`` (its sub-environments' pipes in padded arrays and
+their compiled decision), ``render`` (the Fig. 2 view) and ``animation``.
 
 They compose the simulator's stages and the camera; they know no learner. May import ``files``,
 ``sim`` and ``perception``.

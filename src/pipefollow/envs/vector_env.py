@@ -48,7 +48,6 @@ single environment draws them.
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Sequence
 from typing import Any
@@ -58,7 +57,6 @@ from gymnasium.error import ResetNeeded
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
-from numba import njit
 
 from pipefollow.envs.shell import (
     CAMERA_ARGUMENTS,
@@ -73,40 +71,15 @@ from pipefollow.envs.shell import (
     start_episode,
     state_infos,
 )
+from pipefollow.envs.vector_batch import PipeBatch, pipeline_specs, step_batch
 from pipefollow.perception.camera import camera_settings
 from pipefollow.perception.sensor import make_sensor, start_sensor
 from pipefollow.sim import decision as sim
 from pipefollow.sim import episode as ep
-from pipefollow.sim.pipe_names import is_points, pipeline_source
+from pipefollow.sim.pipe_names import pipeline_source
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.randomization import MAX_NOISE, check_not_both
 from pipefollow.sim.randomization import resolve as resolve_randomization
-
-
-@njit(cache=True)
-def step_batch(states, actions, points, cum, n_points, packed, z, skip, rewards, books, max_n, ends):
-    """One decision of every sub-environment not in ``skip``, counted in its book.
-
-    ``packed[i]`` is sub-environment i's packed parameters (its own disturbances under a
-    randomization), ``books[i]`` its episode's book (:mod:`pipefollow.sim.episode`).
-
-    Actions are clipped to [-1, 1]; returns False (stepping nothing) if one is NaN. Writes the
-    rewards and, in ``ends``, how each sub-environment's episode stands (``pipefollow.sim.episode.end_of``:
-    0 going on, or the code of the end this decision reached).
-    """
-    for i in range(states.shape[0]):
-        if math.isnan(actions[i]):
-            return False
-    for i in range(states.shape[0]):
-        ends[i] = ep.GOES_ON
-        if skip[i]:
-            rewards[i] = 0.0
-            continue
-        n = n_points[i]
-        a = min(1.0, max(-1.0, actions[i]))
-        pts, cm = points[i, :n], cum[i, :n]
-        rewards[i], ends[i] = ep.decide_packed(states[i], a, pts, cm, packed[i], z[i], books[i], max_n)
-    return True
 
 
 def _checked_count_and_mode(num_envs, render_mode, autoreset_mode) -> tuple[int, AutoresetMode]:
@@ -132,15 +105,6 @@ def _camera_of(kwargs: dict[str, Any]):
             f"autoreset_mode, {', '.join(SHARED_ARGUMENTS + CAMERA_ARGUMENTS)}, randomization"
         )
     return camera_settings(**{k: kwargs.pop(k) for k in CAMERA_ARGUMENTS if k in kwargs})
-
-
-def _pipeline_specs(pipeline, n: int) -> list:
-    """One pipeline spec per sub-environment: ``pipeline`` for all, or its list of ``n``."""
-    one = is_points(pipeline) or not isinstance(pipeline, list | tuple)
-    specs = [pipeline] * n if one else list(pipeline)
-    if len(specs) != n:
-        raise ValueError(f"pipeline lists {len(specs)} specs for {n} sub-environments")
-    return specs
 
 
 class PipelineFollowingVectorEnv(VectorEnv):
@@ -173,7 +137,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
         n, mode = _checked_count_and_mode(num_envs, render_mode, autoreset_mode)
         randomization = kwargs.pop("randomization", None)
         camera = _camera_of(kwargs)
-        specs = _pipeline_specs(pipeline, n)
+        specs = pipeline_specs(pipeline, n)
         setup = make_setup(**kwargs)
         # gymnasium.make_vec passes the registered id's max_episode_steps (its episode's decisions);
         # the episodes end after episode_seconds, as in the single environment, and a longer
@@ -190,7 +154,8 @@ class PipelineFollowingVectorEnv(VectorEnv):
             self.randomization = resolve_randomization(randomization)
             check_not_both(setup.params.disturbance, self.randomization)
         self._describe(n, mode, camera)
-        self._load_pipelines(specs)
+        self._pipes = PipeBatch(specs)  # each sub-environment's pipe, padded for step_batch
+        self.suites, self.pipelines = self._pipes.suites, self._pipes.pipelines  # the batch's lists
         self._make_buffers()
 
     def _describe(self, n: int, mode: AutoresetMode, camera) -> None:
@@ -213,19 +178,6 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, n)
         self.action_space = batch_space(self.single_action_space, n)
 
-    def _load_pipelines(self, specs: list) -> None:
-        """Each sub-environment's pipeline source, its points in the batch's padded arrays."""
-        n = self.num_envs
-        sources = [pipeline_source(s) for s in specs]
-        self.suites = [suite for suite, _ in sources]
-        self.pipelines = [pipe for _, pipe in sources]
-        cap = max(len(p.points) for p in self.pipelines)
-        self._points = np.zeros((n, cap, 2))
-        self._cum = np.zeros((n, cap))
-        self._n_points = np.zeros(n, dtype=np.int64)
-        for i, pipe in enumerate(self.pipelines):
-            self._load_pipe(i, pipe)
-
     def _make_buffers(self) -> None:
         """The batch's states, per sub-environment parameters, normals, books and step buffers."""
         n, setup = self.num_envs, self.setup
@@ -247,19 +199,6 @@ class PipelineFollowingVectorEnv(VectorEnv):
         cam, lost = self.params.camera, self.params.lost_reward
         cams = [make_sensor(self.camera_settings, cam, lost) for _ in range(n)]
         self._cams = cams if cams[0] is not None else None
-
-    def _load_pipe(self, i: int, pipe: Pipeline) -> None:
-        m = len(pipe.points)
-        if m > self._points.shape[1]:  # grow the buffers of all sub-environments
-            cap = max(m, 2 * self._points.shape[1])
-            points, cum = np.zeros((self.num_envs, cap, 2)), np.zeros((self.num_envs, cap))
-            points[:, : self._points.shape[1]] = self._points
-            cum[:, : self._cum.shape[1]] = self._cum
-            self._points, self._cum = points, cum
-        self._points[i, :m] = pipe.points
-        self._cum[i, :m] = pipe.cumulative
-        self._n_points[i] = m
-        self.pipelines[i] = pipe
 
     @property
     def np_random_generators(self) -> list[np.random.Generator]:
@@ -297,7 +236,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
             source = pipeline_source(opts.pipeline)
             for i in chosen:
                 self.suites[i] = source[0]
-                self._load_pipe(i, source[1])
+                self._pipes.load(i, source[1])
         for i in chosen:
             self._reset_one(int(i), opts.lateral_offset, opts.heading_offset_deg)
         self._ended_before[mask] = False
@@ -330,11 +269,10 @@ class PipelineFollowingVectorEnv(VectorEnv):
             lateral, heading_deg,
         )  # fmt: skip
         if pipe is not self.pipelines[i]:
-            self._load_pipe(i, pipe)
+            self._pipes.load(i, pipe)
         self._books[i] = 0.0
         if self._cams is not None:
-            m = self._n_points[i]
-            pts, cum = self._points[i, :m], self._cum[i, :m]
+            pts, cum = self._pipes.of(i)
             rng, disturbance = self.np_random_generators[i], setup.params.disturbance
             start_sensor(self._cams[i], self.states[i], pts, cum, rng, disturbance)
 
@@ -361,8 +299,9 @@ class PipelineFollowingVectorEnv(VectorEnv):
         skip = resetting if any_reset else self._no_skip
         rewards, ends = self._rewards, self._ends
         a_prev = self.states[:, sim.A_PREV].copy() if self._cams is not None else None
+        pipes = self._pipes
         ok = step_batch(
-            self.states, a, self._points, self._cum, self._n_points, self._packed, self._z, skip,
+            self.states, a, pipes.points, pipes.cum, pipes.n_points, self._packed, self._z, skip,
             rewards, self._books, self.max_decisions, ends,
         )  # fmt: skip
         if not ok:
@@ -370,8 +309,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
         if self._cams is not None:  # each sub-environment renders and detects with its own generator
             rngs = self.np_random_generators
             for i in np.flatnonzero(~skip):
-                m = self._n_points[i]
-                pts, cum = self._points[i, :m], self._cum[i, :m]
+                pts, cum = pipes.of(i)
                 rewards[i] = self._cams[i].step(self.states[i], pts, cum, rngs[i], rewards[i], a_prev[i])
         if any_reset:  # next-step autoreset
             for i in np.flatnonzero(resetting):
