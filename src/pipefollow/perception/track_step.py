@@ -51,7 +51,7 @@ class TrackParams(NamedTuple):
         0.4  # m: a new line whose end lies this near the far end beyond a bend continues the pipe
     )
     near_reach: float = 0.5  # m: a rejected detection with an end this near the line's entry: the pipe
-    edge_misses: int = 2  # frames a line is carried without a detection while its piece in view is short
+    edge_misses: int = 5  # frames a line is carried without a detection while its piece in view is short
     edge_piece: float = 0.6  # m: a piece in view shorter than this is short (the detector misses such pieces)
 
 
