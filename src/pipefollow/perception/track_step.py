@@ -218,6 +218,12 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
                     point_correct(T, TH, nu_a, j_a, s_a)
                     T[EVENT] = BEND
                     T[HAS_FAR], T[FAR_X], T[FAR_Y], T[FAR_AGE] = 1.0, x1, y1, 0.0
+                    # the line ends at the corner, about where the far end lies along it (its
+                    # extension beyond is no pipe: shown once the far end is out of view, it led
+                    # the vehicle back along the first leg)
+                    t_c = max(along(T[TH], x1, y1), along(T[TH], x2, y_near))
+                    T[HAS_END] = 1.0
+                    T[END_X], T[END_Y] = on_line(T[TH], T[D], t_c)
                     taken = True
             elif ok_a and ok_b:
                 # both ends on the line: ordered along it (the detector's order is a guess)
