@@ -188,6 +188,45 @@ def test_a_corner_seen_ahead_is_shown_by_its_far_end_beyond_the_bend():
     assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx((-1.0, 0.5))
 
 
+def test_a_bend_ends_the_line_at_its_corner_and_the_search_turns_towards_the_far_end():
+    t = quiet_tracker()
+    _, (x0, y0, psi) = straight_detections(t, 6, offset=0.0)
+    # the pipe runs ahead to a corner at 1.5 m and turns 90° to starboard, out of view at the right border
+    out = t.step((x0, y0, psi), True, (1.0, 1.5, 0.0, 0.0))
+    assert t.event == ts.BEND
+    # a right-angle corner is the far end's foot on the line
+    assert t.state[ts.HAS_END] == 1.0
+    assert (t.state[ts.END_X], t.state[ts.END_Y]) == pytest.approx((0.0, 1.5), abs=1e-9)
+    # 1 m on, the corner 0.5 m ahead: the far end beyond it still shows
+    out = t.step((x0 + 1.0, y0, psi), False, (0.0, 0.0, 0.0, 0.0))
+    assert out[ts.OUT_IN_VIEW] == 1.0 and (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx((1.0, 0.5))
+    # 2 m on, the corner 0.5 m behind the view and the far end out of it: the first leg's extension
+    # ahead is no pipe, so nothing is in view, and the search turns to starboard, where the pipe went
+    out = t.step((x0 + 2.0, y0, psi), False, (0.0, 0.0, 0.0, 0.0))
+    assert out[ts.OUT_IN_VIEW] == 0.0 and out[ts.OUT_SIDE] == 1.0
+
+
+@pytest.mark.parametrize("edge_misses", [2, 5])
+def test_a_short_piece_at_the_views_corner_is_carried_through_edge_misses_frames(edge_misses):
+    nav = NavParams(dvl_sd=0.0, dvl_scale_sd=0.0, gyro_arw=0.0, gyro_bias_sd=0.0, gyro_bias_walk=0.0)
+    t = PipeTracker(nav=nav, params=ts.TRACK._replace(edge_misses=edge_misses))
+    t.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
+    pose = (0.0, 0.0, 0.0)  # the vehicle holds still: the piece stays where it is
+    # the pipe crosses the footprint's lower right corner: 0.5 m of it in view, from (0.6, 0) to (1, 0.3)
+    for _ in range(3):
+        out = t.step(pose, True, (1.0, 0.3, 0.6, 0.0))
+    assert out[ts.OUT_IN_VIEW] == 1.0
+    seen = [t.step(pose, False, (0.0, 0.0, 0.0, 0.0))[ts.OUT_IN_VIEW] for _ in range(7)]
+    assert seen == [1.0] * edge_misses + [0.0] * (7 - edge_misses)
+    # a long piece (the pipe straight ahead, 3 m in view) is lost after max_misses frames whatever edge_misses
+    t = PipeTracker(nav=nav, params=ts.TRACK._replace(edge_misses=edge_misses))
+    t.reset(np.random.default_rng(0), pose)
+    for _ in range(3):
+        t.step(pose, True, (0.0, 3.0, 0.0, 0.0))
+    seen = [t.step(pose, False, (0.0, 0.0, 0.0, 0.0))[ts.OUT_IN_VIEW] for _ in range(4)]
+    assert seen == [1.0] * ts.TRACK.max_misses + [0.0] * (4 - ts.TRACK.max_misses)
+
+
 def test_navigation_without_errors_reports_the_true_motion():
     nav = Navigation(
         NavParams(dvl_sd=0.0, dvl_scale_sd=0.0, gyro_arw=0.0, gyro_bias_sd=0.0, gyro_bias_walk=0.0)
