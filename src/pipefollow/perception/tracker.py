@@ -29,14 +29,16 @@ freedom on its offset from it). Both ends on it: they are ordered along the line
 ends are put back) and the line through them updates the filter inside a χ² gate with 2 degrees
 of freedom (else the near end alone does). One end on it, nearer than the other to where the
 line enters the view: the pipe bends in view; that end updates the line and the other is the far
-end beyond the bend. Otherwise the detection is rejected: it starts (or feeds) a candidate line
-that replaces the line when seen :attr:`TrackParams.confirm` times, and at once if it starts
-where the line enters the view (an arc the line cannot follow), ends where the far end beyond a
-bend was seen (the next leg), or if the line is out of view. A new line keeps the pipe's way
-(``track_step._reversed``): the last line's when the two are near parallel, else away from the corner
-where they meet, towards the far end beyond the bend for the next leg; never the detector's order
-of the ends, which swaps. Through missed detections the prediction goes on and its uncertainty
-grows; beyond ``max_misses`` frames (``edge_misses`` while the line's piece in view is shorter than
+end beyond the bend, and the line ends at the corner (taken where the far end lies along it),
+so its extension beyond is not shown once the far end is out of view. Otherwise the detection
+is rejected: it starts (or feeds) a candidate line that replaces the line when seen
+:attr:`TrackParams.confirm` times, and at once if it starts where the line enters the view (an
+arc the line cannot follow), ends where the far end beyond a bend was seen (the next leg), or if
+the line is out of view. A new line keeps the pipe's way (``track_step._reversed``): the last
+line's when the two are near parallel, else away from the corner where they meet, towards the
+far end beyond the bend for the next leg; never the detector's order of the ends, which swaps.
+Through missed detections the prediction goes on and its uncertainty grows; beyond
+``max_misses`` frames (``edge_misses`` while the line's piece in view is shorter than
 ``edge_piece``: the detector misses short pieces at the view's edge), or an offset uncertain by
 more than ``max_offset_sd`` (:class:`TrackParams`), the pipe is lost.
 
