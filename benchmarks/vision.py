@@ -71,16 +71,17 @@ def reset_rows(gym, pipe, ideal_step, repeats: int) -> list[tuple[str, float, st
 
 def tracker_rows(repeats: int) -> list[tuple[str, float, str]]:
     """The tracker per decision: the compiled step alone and with the navigation's draws (Python)."""
-    from pipefollow.perception import tracker as tk
+    from pipefollow.perception.track_step import track_step
+    from pipefollow.perception.tracker import PipeTracker
 
-    t = tk.PipeTracker()
+    t = PipeTracker()
     t.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
     k = iter(range(10**9))
     motion, det = np.array([0.0, 0.5, 0.01]), np.array([0.1, 3.0, 0.05, 0.0])
 
     def compiled():
         i = next(k)
-        tk.track_step(t.state, i % 7 != 0, det, motion, t.navigation.variances, t._tp, 1.0, 3.0, t.out)
+        track_step(t.state, i % 7 != 0, det, motion, t.navigation.variances, t._tp, 1.0, 3.0, t.out)
 
     def whole():
         i = next(k)

@@ -13,7 +13,8 @@ from pipefollow.envs.env import PipelineFollowingEnv
 from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
 from pipefollow.learners.heuristic import heuristic_action
 from pipefollow.perception.sonar_detect import MIN_HEIGHT_SHARE
-from pipefollow.perception.tracker import ACTIVE, MISS, TH, D, P, new_track, track_point
+from pipefollow.perception.track_step import ACTIVE, MISS, TH, D, P, new_track
+from pipefollow.perception.tracker import track_point
 from pipefollow.sim.pipeline import Pipeline
 from pipefollow.sim.suites import get_suite, min_length_for
 

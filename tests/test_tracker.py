@@ -7,8 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from pipefollow.perception import tracker as tk
-from pipefollow.perception.tracker import Navigation, NavParams, PipeTracker
+from pipefollow.perception import line_ekf as ekf
+from pipefollow.perception import track_step as ts
+from pipefollow.perception.navigation import Navigation, NavParams
+from pipefollow.perception.tracker import PipeTracker
 
 
 def moved(px, py, dl, df, dpsi):
@@ -25,13 +27,13 @@ def line_through(ax, ay, bx, by):
 
 def test_prediction_moves_the_line_as_the_world_fixed_points_on_it_move():
     th, d = 0.3, 0.2
-    T = tk.new_track()
-    T[tk.TH], T[tk.D] = th, d
+    T = ts.new_track()
+    T[ts.TH], T[ts.D] = th, d
     dl, df, dpsi = 0.1, 0.5, 0.05
-    tk.predict(T, tk.TH, dl, df, dpsi, np.zeros(3), 0.0, 0.0)
-    a = moved(*tk.on_line(th, d, -1.0), dl, df, dpsi)
-    b = moved(*tk.on_line(th, d, 2.0), dl, df, dpsi)
-    assert (T[tk.TH], T[tk.D]) == pytest.approx(line_through(*a, *b), abs=1e-12)
+    ekf.predict(T, ts.TH, dl, df, dpsi, np.zeros(3), 0.0, 0.0)
+    a = moved(*ekf.on_line(th, d, -1.0), dl, df, dpsi)
+    b = moved(*ekf.on_line(th, d, 2.0), dl, df, dpsi)
+    assert (T[ts.TH], T[ts.D]) == pytest.approx(line_through(*a, *b), abs=1e-12)
 
 
 def test_prediction_covariance_is_the_jacobians_sandwich():
@@ -43,8 +45,8 @@ def test_prediction_covariance_is_the_jacobians_sandwich():
     q_t, q_d = 0.002, 0.0005
 
     def f(x, m):
-        a = moved(*tk.on_line(x[0], x[1], -1.0), *m)
-        b = moved(*tk.on_line(x[0], x[1], 2.0), *m)
+        a = moved(*ekf.on_line(x[0], x[1], -1.0), *m)
+        b = moved(*ekf.on_line(x[0], x[1], 2.0), *m)
         return np.array(line_through(*a, *b))
 
     h = 1e-6
@@ -52,29 +54,29 @@ def test_prediction_covariance_is_the_jacobians_sandwich():
     F = np.column_stack([(f(x0 + h * e, motion) - f(x0 - h * e, motion)) / (2 * h) for e in np.eye(2)])
     G = np.column_stack([(f(x0, motion + h * e) - f(x0, motion - h * e)) / (2 * h) for e in np.eye(3)])
     expected = F @ P @ F.T + G @ np.diag(nav_var) @ G.T + np.diag([q_t, q_d])
-    T = tk.new_track()
-    T[tk.TH], T[tk.D], T[tk.P], T[tk.P + 1], T[tk.P + 2] = th, d, P[0, 0], P[0, 1], P[1, 1]
-    tk.predict(T, tk.TH, *motion, nav_var, q_t, q_d)
-    got = np.array([[T[tk.P], T[tk.P + 1]], [T[tk.P + 1], T[tk.P + 2]]])
+    T = ts.new_track()
+    T[ts.TH], T[ts.D], T[ts.P], T[ts.P + 1], T[ts.P + 2] = th, d, P[0, 0], P[0, 1], P[1, 1]
+    ekf.predict(T, ts.TH, *motion, nav_var, q_t, q_d)
+    got = np.array([[T[ts.P], T[ts.P + 1]], [T[ts.P + 1], T[ts.P + 2]]])
     np.testing.assert_allclose(got, expected, rtol=1e-6, atol=1e-12)
 
 
 def test_line_update_is_the_textbook_kalman_step():
-    T = tk.new_track()
+    T = ts.new_track()
     x = np.array([0.1, -0.05])
     P = np.array([[0.02, -0.003], [-0.003, 0.01]])
-    T[tk.TH], T[tk.D], T[tk.P], T[tk.P + 1], T[tk.P + 2] = x[0], x[1], P[0, 0], P[0, 1], P[1, 1]
+    T[ts.TH], T[ts.D], T[ts.P], T[ts.P + 1], T[ts.P + 2] = x[0], x[1], P[0, 0], P[0, 1], P[1, 1]
     z = np.array([0.16, 0.02])
     R = np.array([[0.004, -0.001], [-0.001, 0.003]])
-    nu_t, nu_d, s_tt, s_td, s_dd, m2 = tk.innovation(T, tk.TH, z[0], z[1], R[0, 0], R[0, 1], R[1, 1])
+    nu_t, nu_d, s_tt, s_td, s_dd, m2 = ekf.innovation(T, ts.TH, z[0], z[1], R[0, 0], R[0, 1], R[1, 1])
     S = P + R
     assert m2 == pytest.approx((z - x) @ np.linalg.solve(S, z - x), rel=1e-12)
-    tk.correct(T, tk.TH, nu_t, nu_d, s_tt, s_td, s_dd, R[0, 0], R[0, 1], R[1, 1])
+    ekf.correct(T, ts.TH, nu_t, nu_d, s_tt, s_td, s_dd, R[0, 0], R[0, 1], R[1, 1])
     K = P @ np.linalg.inv(S)
-    np.testing.assert_allclose([T[tk.TH], T[tk.D]], x + K @ (z - x), rtol=1e-12)
+    np.testing.assert_allclose([T[ts.TH], T[ts.D]], x + K @ (z - x), rtol=1e-12)
     P_post = (np.eye(2) - K) @ P
     np.testing.assert_allclose(
-        [T[tk.P], T[tk.P + 1], T[tk.P + 2]], [P_post[0, 0], P_post[0, 1], P_post[1, 1]], rtol=1e-10
+        [T[ts.P], T[ts.P + 1], T[ts.P + 2]], [P_post[0, 0], P_post[0, 1], P_post[1, 1]], rtol=1e-10
     )
 
 
@@ -92,22 +94,22 @@ def test_point_update_is_the_extended_kalman_step_of_a_point_on_the_line():
     J = np.array([(r(x0 + h * e) - r(x0 - h * e)) / (2 * h) for e in np.eye(2)])
     S = J @ P @ J + sd * sd
     K = P @ J / S
-    T = tk.new_track()
-    T[tk.TH], T[tk.D], T[tk.P], T[tk.P + 1], T[tk.P + 2] = th, d, P[0, 0], P[0, 1], P[1, 1]
-    nu, j, s, m2 = tk.point_innovation(T, tk.TH, p[0], p[1], sd)
+    T = ts.new_track()
+    T[ts.TH], T[ts.D], T[ts.P], T[ts.P + 1], T[ts.P + 2] = th, d, P[0, 0], P[0, 1], P[1, 1]
+    nu, j, s, m2 = ekf.point_innovation(T, ts.TH, p[0], p[1], sd)
     assert s == pytest.approx(S, rel=1e-6) and m2 == pytest.approx(r(x0) ** 2 / S, rel=1e-6)
-    tk.point_correct(T, tk.TH, nu, j, s)
-    np.testing.assert_allclose([T[tk.TH], T[tk.D]], x0 - K * r(x0), rtol=1e-6)
+    ekf.point_correct(T, ts.TH, nu, j, s)
+    np.testing.assert_allclose([T[ts.TH], T[ts.D]], x0 - K * r(x0), rtol=1e-6)
     P_post = P - np.outer(K, K) * S
     np.testing.assert_allclose(
-        [T[tk.P], T[tk.P + 1], T[tk.P + 2]], [P_post[0, 0], P_post[0, 1], P_post[1, 1]], rtol=1e-6
+        [T[ts.P], T[ts.P + 1], T[ts.P + 2]], [P_post[0, 0], P_post[0, 1], P_post[1, 1]], rtol=1e-6
     )
 
 
 def test_measured_line_covariance_matches_the_ends_noise():
     rng = np.random.default_rng(3)
     a, b, sd = np.array([0.2, 0.3]), np.array([-0.4, 2.8]), 0.05
-    th0, d0, r_tt, r_td, r_dd = tk.measured_line(*a, *b, sd)
+    th0, d0, r_tt, r_td, r_dd = ekf.measured_line(*a, *b, sd)
     assert (th0, d0) == pytest.approx(line_through(*a, *b), abs=1e-12)
     n = 40_000
     ea, eb = a + sd * rng.standard_normal((n, 2)), b + sd * rng.standard_normal((n, 2))
@@ -137,13 +139,13 @@ def quiet_tracker():
 def test_the_gate_rejects_a_detection_off_the_pipe_and_keeps_the_line():
     t = quiet_tracker()
     out, pose = straight_detections(t, 6)
-    assert out[tk.OUT_IN_VIEW] == 1.0 and out[tk.OUT_X1] == pytest.approx(0.1, abs=1e-3)
-    before = t.state[[tk.TH, tk.D]].copy()
+    assert out[ts.OUT_IN_VIEW] == 1.0 and out[ts.OUT_X1] == pytest.approx(0.1, abs=1e-3)
+    before = t.state[[ts.TH, ts.D]].copy()
     # a texture line parallel to the pipe, 0.6 m to port: rejected, the observation stays on the pipe
     out = t.step(pose, True, (-0.5, 3.0, -0.5, 0.0))
-    assert t.event == tk.REJECTED
-    np.testing.assert_allclose(t.state[[tk.TH, tk.D]], before, atol=1e-12)
-    assert out[tk.OUT_IN_VIEW] == 1.0 and out[tk.OUT_X1] == pytest.approx(0.1, abs=1e-3)
+    assert t.event == ts.REJECTED
+    np.testing.assert_allclose(t.state[[ts.TH, ts.D]], before, atol=1e-12)
+    assert out[ts.OUT_IN_VIEW] == 1.0 and out[ts.OUT_X1] == pytest.approx(0.1, abs=1e-3)
 
 
 def test_swapped_ends_are_put_back_in_the_pipes_direction():
@@ -151,9 +153,9 @@ def test_swapped_ends_are_put_back_in_the_pipes_direction():
     _, pose = straight_detections(t, 6, offset=0.0)
     # the pipe turns slightly to starboard ahead; the detector gives its ends the wrong way round
     out = t.step(pose, True, (0.0, 0.0, 0.15, 3.0))
-    assert t.event == tk.ACCEPTED
-    assert out[tk.OUT_Y1] == pytest.approx(3.0, abs=1e-6) and out[tk.OUT_X1] > 0.05
-    assert out[tk.OUT_Y_NEAR] == pytest.approx(0.0, abs=1e-6)
+    assert t.event == ts.ACCEPTED
+    assert out[ts.OUT_Y1] == pytest.approx(3.0, abs=1e-6) and out[ts.OUT_X1] > 0.05
+    assert out[ts.OUT_Y_NEAR] == pytest.approx(0.0, abs=1e-6)
 
 
 def test_uncertainty_grows_through_misses_until_the_pipe_is_lost():
@@ -162,16 +164,16 @@ def test_uncertainty_grows_through_misses_until_the_pipe_is_lost():
     variances, confidences, seen = [], [], []
     for k in range(1, 7):
         out = t.step((pose[0] + 0.5 * k, 0.0, 0.0), False, (0.0, 0.0, 0.0, 0.0))
-        variances.append(t.state[tk.P + 2])
+        variances.append(t.state[ts.P + 2])
         confidences.append(t.confidence)
-        seen.append(out[tk.OUT_IN_VIEW])
+        seen.append(out[ts.OUT_IN_VIEW])
     m = int(t.params.max_misses)
     assert all(b > a for a, b in zip(variances[:m], variances[1 : m + 1], strict=True))
     assert all(b <= a for a, b in zip(confidences[:-1], confidences[1:], strict=True))
     assert confidences[m - 1] < confidences[0]
     assert seen[:m] == [1.0] * m and seen[m:] == [0.0] * (6 - m)  # carried max_misses frames, then lost
     # while carried, the prediction stays on the pipe (straight, the vehicle on it)
-    assert t.state[tk.ACTIVE] == 0.0
+    assert t.state[ts.ACTIVE] == 0.0
 
 
 def test_a_corner_seen_ahead_is_shown_by_its_far_end_beyond_the_bend():
@@ -179,11 +181,50 @@ def test_a_corner_seen_ahead_is_shown_by_its_far_end_beyond_the_bend():
     _, pose = straight_detections(t, 6, offset=0.0)
     # the pipe runs ahead to a corner at 1.5 m and turns 135° to port, out of view at the left border
     out = t.step(pose, True, (-1.0, 0.5, 0.0, 0.0))
-    assert t.event == tk.BEND
-    assert (out[tk.OUT_X1], out[tk.OUT_Y1]) == pytest.approx((-1.0, 0.5))
+    assert t.event == ts.BEND
+    assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx((-1.0, 0.5))
     # a frame in which the detector stops at the corner keeps the far end beyond it
     out = t.step(pose, True, (0.0, 1.5, 0.0, 0.0))
-    assert (out[tk.OUT_X1], out[tk.OUT_Y1]) == pytest.approx((-1.0, 0.5))
+    assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx((-1.0, 0.5))
+
+
+def test_a_bend_ends_the_line_at_its_corner_and_the_search_turns_towards_the_far_end():
+    t = quiet_tracker()
+    _, (x0, y0, psi) = straight_detections(t, 6, offset=0.0)
+    # the pipe runs ahead to a corner at 1.5 m and turns 90° to starboard, out of view at the right border
+    out = t.step((x0, y0, psi), True, (1.0, 1.5, 0.0, 0.0))
+    assert t.event == ts.BEND
+    # a right-angle corner is the far end's foot on the line
+    assert t.state[ts.HAS_END] == 1.0
+    assert (t.state[ts.END_X], t.state[ts.END_Y]) == pytest.approx((0.0, 1.5), abs=1e-9)
+    # 1 m on, the corner 0.5 m ahead: the far end beyond it still shows
+    out = t.step((x0 + 1.0, y0, psi), False, (0.0, 0.0, 0.0, 0.0))
+    assert out[ts.OUT_IN_VIEW] == 1.0 and (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx((1.0, 0.5))
+    # 2 m on, the corner 0.5 m behind the view and the far end out of it: the first leg's extension
+    # ahead is no pipe, so nothing is in view, and the search turns to starboard, where the pipe went
+    out = t.step((x0 + 2.0, y0, psi), False, (0.0, 0.0, 0.0, 0.0))
+    assert out[ts.OUT_IN_VIEW] == 0.0 and out[ts.OUT_SIDE] == 1.0
+
+
+@pytest.mark.parametrize("edge_misses", [2, 5])
+def test_a_short_piece_at_the_views_corner_is_carried_through_edge_misses_frames(edge_misses):
+    nav = NavParams(dvl_sd=0.0, dvl_scale_sd=0.0, gyro_arw=0.0, gyro_bias_sd=0.0, gyro_bias_walk=0.0)
+    t = PipeTracker(nav=nav, params=ts.TRACK._replace(edge_misses=edge_misses))
+    t.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
+    pose = (0.0, 0.0, 0.0)  # the vehicle holds still: the piece stays where it is
+    # the pipe crosses the footprint's lower right corner: 0.5 m of it in view, from (0.6, 0) to (1, 0.3)
+    for _ in range(3):
+        out = t.step(pose, True, (1.0, 0.3, 0.6, 0.0))
+    assert out[ts.OUT_IN_VIEW] == 1.0
+    seen = [t.step(pose, False, (0.0, 0.0, 0.0, 0.0))[ts.OUT_IN_VIEW] for _ in range(7)]
+    assert seen == [1.0] * edge_misses + [0.0] * (7 - edge_misses)
+    # a long piece (the pipe straight ahead, 3 m in view) is lost after max_misses frames whatever edge_misses
+    t = PipeTracker(nav=nav, params=ts.TRACK._replace(edge_misses=edge_misses))
+    t.reset(np.random.default_rng(0), pose)
+    for _ in range(3):
+        t.step(pose, True, (0.0, 3.0, 0.0, 0.0))
+    seen = [t.step(pose, False, (0.0, 0.0, 0.0, 0.0))[ts.OUT_IN_VIEW] for _ in range(4)]
+    assert seen == [1.0] * ts.TRACK.max_misses + [0.0] * (4 - ts.TRACK.max_misses)
 
 
 def test_navigation_without_errors_reports_the_true_motion():
@@ -216,7 +257,7 @@ def test_navigation_errors_come_from_the_seeded_generator_and_have_their_spread(
 
 def direction_of(out):
     """The observation's direction from its near end to its far end (rad from forward to starboard)."""
-    return math.atan2(out[tk.OUT_X1] - out[tk.OUT_X2], out[tk.OUT_Y1] - out[tk.OUT_Y_NEAR])
+    return math.atan2(out[ts.OUT_X1] - out[ts.OUT_X2], out[ts.OUT_Y1] - out[ts.OUT_Y_NEAR])
 
 
 @pytest.mark.parametrize("swapped", [False, True])
@@ -229,12 +270,12 @@ def test_a_line_that_replaces_a_contradicted_one_keeps_the_pipes_way(swapped):
     near, far = (-0.9, 0.3), (0.6, 2.3)
     det = (*near, *far) if swapped else (*far, *near)  # (x1, y1, x2, y_near): far end first
     t.step(pose, True, det)
-    assert t.event == tk.REJECTED
+    assert t.event == ts.REJECTED
     out = t.step(pose, True, det)
-    assert t.event == tk.REPLACED
+    assert t.event == ts.REPLACED
     assert direction_of(out) == pytest.approx(math.atan2(1.5, 2.0), abs=1e-9)
-    assert t.state[tk.TH] == pytest.approx(math.atan2(1.5, 2.0), abs=1e-9)
-    assert (out[tk.OUT_X2], out[tk.OUT_Y_NEAR]) == pytest.approx(near)
+    assert t.state[ts.TH] == pytest.approx(math.atan2(1.5, 2.0), abs=1e-9)
+    assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(near)
 
 
 def test_the_leg_after_a_hook_runs_away_from_its_corner():
@@ -244,11 +285,11 @@ def test_the_leg_after_a_hook_runs_away_from_its_corner():
     _, pose = straight_detections(t, 6, offset=0.0)
     for _ in range(int(t.params.max_misses) + 1):
         t.step(pose, False, (0.0, 0.0, 0.0, 0.0))
-    assert t.state[tk.ACTIVE] == 0.0
+    assert t.state[ts.ACTIVE] == 0.0
     out = t.step(pose, True, (-0.3, 1.7, -1.0, 1.0))
-    assert t.event == tk.STARTED
+    assert t.event == ts.STARTED
     assert direction_of(out) == pytest.approx(math.radians(-135.0), abs=1e-9)
-    assert (out[tk.OUT_X2], out[tk.OUT_Y_NEAR]) == pytest.approx((-0.3, 1.7))
+    assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx((-0.3, 1.7))
 
 
 def test_a_far_end_beyond_a_bend_does_not_turn_a_parallel_line_back():
@@ -258,14 +299,14 @@ def test_a_far_end_beyond_a_bend_does_not_turn_a_parallel_line_back():
     t = quiet_tracker()
     _, pose = straight_detections(t, 6, offset=0.0)
     t.step(pose, True, (-1.0, 0.5, 0.0, 0.0))
-    assert t.event == tk.BEND
+    assert t.event == ts.BEND
     det = (-0.6, 3.0, -0.6, 0.0)
     t.step(pose, True, det)
-    assert t.event == tk.REJECTED
+    assert t.event == ts.REJECTED
     out = t.step(pose, True, det)
-    assert t.event == tk.REPLACED
+    assert t.event == ts.REPLACED
     assert direction_of(out) == pytest.approx(0.0, abs=1e-9)
-    assert out[tk.OUT_Y1] == pytest.approx(3.0) and out[tk.OUT_Y_NEAR] == pytest.approx(0.0)
+    assert out[ts.OUT_Y1] == pytest.approx(3.0) and out[ts.OUT_Y_NEAR] == pytest.approx(0.0)
 
 
 @pytest.mark.parametrize("swapped", [False, True])
@@ -276,9 +317,9 @@ def test_after_a_lost_line_a_piece_it_crosses_runs_from_the_end_nearer_the_vehic
     _, pose = straight_detections(t, 6, offset=0.0)
     for _ in range(int(t.params.max_misses) + 1):
         t.step(pose, False, (0.0, 0.0, 0.0, 0.0))
-    assert t.state[tk.ACTIVE] == 0.0
+    assert t.state[ts.ACTIVE] == 0.0
     near, far = (0.8, 0.5), (-0.7, 2.5)
     out = t.step(pose, True, (*near, *far) if swapped else (*far, *near))
-    assert t.event == tk.STARTED
+    assert t.event == ts.STARTED
     assert direction_of(out) == pytest.approx(math.atan2(-1.5, 2.0), abs=1e-9)
-    assert (out[tk.OUT_X2], out[tk.OUT_Y_NEAR]) == pytest.approx(near)
+    assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(near)

@@ -160,7 +160,7 @@ def tracker_episode(suite: str, index: int, water: str = "clear", seconds: float
     from pipefollow.envs.env import PipelineFollowingEnv
     from pipefollow.evaluation.benchmark import _noise_rng
     from pipefollow.learners.heuristic import Heuristic
-    from pipefollow.perception import tracker as tr
+    from pipefollow.perception import track_step as tr
     from pipefollow.sim import decision as sim
     from pipefollow.sim.suites import get_suite, min_length_for
 

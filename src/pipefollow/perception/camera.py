@@ -28,15 +28,8 @@ from pipefollow.perception.image import Renderer
 from pipefollow.perception.pixels import column_at, pixel_grid, row_at
 from pipefollow.perception.slots import Sighting, observed, sighting_of, write_sighting
 from pipefollow.perception.textures import SCENES, Textures
-from pipefollow.perception.tracker import (
-    OUT_IN_VIEW,
-    OUT_SIDE,
-    OUT_X1,
-    OUT_X2,
-    OUT_Y1,
-    OUT_Y_NEAR,
-    PipeTracker,
-)
+from pipefollow.perception.track_step import OUT_IN_VIEW, OUT_SIDE, OUT_X1, OUT_X2, OUT_Y1, OUT_Y_NEAR
+from pipefollow.perception.tracker import PipeTracker
 from pipefollow.perception.water import Water, water_from
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams

@@ -1,0 +1,115 @@
+"""Where the tracked camera loses return against the ideal one: oracle ablations of the tracker.
+
+Usage: ``python benchmarks/tracker_ablation.py [--modes base truth-detections ...]
+[--suites mixed hard sharp] [--pipes N] [--noise-seed 0]``
+
+Each mode runs the heuristic through ``camera="vision"`` in clear water (as
+``benchmarks/tracker_suites.py`` does) with one part of the chain replaced by the exact camera's
+answer, and prints per suite the loss of return against the ideal camera, the pipes lost, the
+turned-back episodes and the success, then the decisions where the tracker and the exact camera
+disagree on "in view" and the far end's error as the heuristic's action (|Δa|, the action is the
+far end's bearing) split by what the frame's detection did:
+
+* ``base``: the tracker as it is;
+* ``truth-detections``: the tracker fed with the exact camera's piece instead of the detector's
+  (isolates the detector; what is left is the filter's);
+* ``truth-order``: the detector's ends put in the exact camera's near/far order (isolates swaps);
+* ``detection-verbatim``: in a frame whose detection the tracker took, the detection itself
+  shown (ordered by the tracker's near end) instead of the tracked line (the line's smoothing);
+* ``truth-geometry``: the exact camera's piece shown whenever both see the pipe (isolates the
+  geometry; what is left is "in view");
+* ``truth-in-view``: the exact camera's in-view flag (isolates the in-view decisions).
+
+It replaces ``VisionCamera._track`` in this process only (the package is not changed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+MODES = ("base", "truth-detections", "truth-order", "detection-verbatim", "truth-geometry", "truth-in-view")
+EVENTS = ("none", "accepted", "bend", "rejected", "started", "replaced")
+
+
+def patch(mode: str, log: list) -> None:
+    """Replace ``VisionCamera._track`` by the mode's version, which appends a row per decision to ``log``."""
+    from pipefollow.learners.heuristic import heuristic_action
+    from pipefollow.perception import camera as cam
+    from pipefollow.perception import track_step as ts
+    from pipefollow.perception.slots import sighting_of, write_sighting
+
+    def _track(self, s, pose, det):
+        tv = self.truth
+        found, d = det.found, (det.x1, det.y1, det.x2, det.y_near)
+        if mode == "truth-detections":
+            found, d = tv.in_view, (tv.x1, tv.y1, tv.x2, tv.y_near)
+        elif mode == "truth-order" and found and tv.in_view:
+            kept = math.hypot(d[0] - tv.x1, d[1] - tv.y1) + math.hypot(d[2] - tv.x2, d[3] - tv.y_near)
+            swapped = math.hypot(d[2] - tv.x1, d[3] - tv.y1) + math.hypot(d[0] - tv.x2, d[1] - tv.y_near)
+            if swapped < kept:
+                d = (d[2], d[3], d[0], d[1])
+        out = self.tracker.step(pose, found, d).copy()
+        T, event = self.tracker.state, int(self.tracker.event)
+        if mode == "detection-verbatim" and found and event != int(ts.REJECTED) and event != 0:
+            nx, ny = T[ts.NEAR_X], T[ts.NEAR_Y]
+            if math.hypot(d[2] - nx, d[3] - ny) <= math.hypot(d[0] - nx, d[1] - ny):
+                out[1:5] = d
+            else:
+                out[1:5] = (d[2], d[3], d[0], d[1])
+        elif mode == "truth-geometry" and out[0] and tv.in_view:
+            out[1:5] = (tv.x1, tv.y1, tv.x2, tv.y_near)
+        elif mode == "truth-in-view":
+            out[0] = 1.0 if tv.in_view else 0.0
+            if tv.in_view and not T[ts.ACTIVE]:
+                out[1:5] = (tv.x1, tv.y1, tv.x2, tv.y_near)
+        seen = out[0] != 0.0
+        if seen:
+            self._last = sighting_of(out[1], out[2], out[3], out[4], side=out[5])
+        else:
+            self._last = self._last._replace(side=out[5])
+        write_sighting(s, self._last, seen)
+        err = math.nan
+        if seen and tv.in_view:
+            err = abs(heuristic_action(out[1], out[2]) - heuristic_action(tv.x1, tv.y1))
+        log.append((event, float(tv.in_view), float(seen), err))
+
+    cam.VisionCamera._track = _track
+
+
+def main() -> None:
+    from tracker_suites import judge
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--modes", nargs="+", default=list(MODES), choices=MODES)
+    ap.add_argument("--suites", nargs="+", default=["mixed", "hard", "sharp"])
+    ap.add_argument("--pipes", type=int, default=None)
+    ap.add_argument("--noise-seed", type=int, default=0)
+    args = ap.parse_args()
+    print("| mode | suite | loss | lost | turned back | success | missed in view | false in view | "
+          + " | ".join(f"{e}: n, mean \\|Δa\\|" for e in EVENTS) + " |")  # fmt: skip
+    print("|---" * (8 + len(EVENTS)) + "|")
+    for mode in args.modes:
+        for name in args.suites:
+            log: list = []
+            patch(mode, log)
+            r = judge(name, args.pipes, "vision", "clear", args.noise_seed)
+            rows = np.array(log)
+            event, true_in, seen, err = rows.T
+            both = (true_in == 1.0) & (seen == 1.0)
+            cells = []
+            for k in range(len(EVENTS)):
+                m = both & (event == k)
+                cells.append(f"{int(m.sum())}, {np.mean(err[m]) if m.any() else 0.0:.3f}")
+            print(
+                f"| {mode} | {name} | {r['loss']:.1f} | {len(r['lost'])} | {len(r['turned_back'])} | "
+                f"{r['success']:.0%} | {int(np.sum((true_in == 1.0) & (seen == 0.0)))} | "
+                f"{int(np.sum((true_in == 0.0) & (seen == 1.0)))} | " + " | ".join(cells) + " |",
+                flush=True,
+            )
+
+
+if __name__ == "__main__":
+    main()
