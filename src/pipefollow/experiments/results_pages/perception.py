@@ -402,5 +402,5 @@ def render(docs: Path) -> str:
             ),
         ),
     )
-    provenance = [(s, stored_provenance((docs / s).parent)) for s in SOURCES]
+    provenance = [(s, stored_provenance(docs / s)) for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)

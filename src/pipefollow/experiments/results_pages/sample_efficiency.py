@@ -352,16 +352,8 @@ def render(docs: Path) -> str:
             t_rows,
         ),
     )
-    provenance = [(s, _provenance(docs / s)) for s in SOURCES]
+    provenance = [(s, stored_provenance(docs / s)) for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)
-
-
-def _provenance(path: Path) -> str:
-    """Where the stored output ``path`` was computed: its ``X.provenance.json``, else the folder's record."""
-    from pipefollow.files.machine import describe_provenance
-
-    own = path.with_name(path.stem + ".provenance.json")
-    return describe_provenance(read_json(own)) if own.is_file() else stored_provenance(path.parent)
 
 
 def _headings(path: Path) -> list[str]:
