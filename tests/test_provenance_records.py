@@ -30,7 +30,9 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 
 
 def test_a_file_has_its_record_beside_it_under_its_own_stem():
-    assert provenance_path(Path("docs/vision/closed_loop.csv")) == Path("docs/vision/closed_loop.provenance.json")
+    assert provenance_path(Path("docs/vision/closed_loop.csv")) == Path(
+        "docs/vision/closed_loop.provenance.json"
+    )
     assert provenance_path(Path("a/ppo_pixels_raw.json")) == Path("a/ppo_pixels_raw.provenance.json")
 
 
