@@ -96,3 +96,18 @@ def test_the_perception_page_cites_each_vision_files_own_record(tmp_path):
     assert "| `docs/vision/ppo_pixels.json` | " + NOT_RECORDED in after
     changed = [a for a, b in zip(after.splitlines(), before.splitlines(), strict=True) if a != b]
     assert changed == [row]
+
+
+def test_the_deep_rl_page_cites_its_folders_record_and_reads_no_run_from_it(tmp_path):
+    docs = tmp_path / "docs"
+    shutil.copytree(DOCS / "deep-vs-paper", docs / "deep-vs-paper")
+    before = results_pages.render("deep-vs-paper", docs)
+    assert "| `docs/deep-vs-paper/*.json` | " + NOT_RECORDED in before
+    write_provenance(docs / "deep-vs-paper", "python examples/deep-vs-paper.py --out R")
+    after = results_pages.render("deep-vs-paper", docs)
+    assert "| `docs/deep-vs-paper/*.json` | `python examples/deep-vs-paper.py --out R` on " in after
+    # only the runs' provenance row changed: the record is not read as a run, and discount.jsonl,
+    # which another command writes, does not borrow it
+    changed = [a for a, b in zip(after.splitlines(), before.splitlines(), strict=True) if a != b]
+    assert len(changed) == 1 and changed[0].startswith("| `docs/deep-vs-paper/*.json` |")
+    assert "| `docs/deep-vs-paper/discount.jsonl` | " + NOT_RECORDED in after
