@@ -58,8 +58,9 @@ def results(docs_dir, out_dir, names, readme_path, check):
     """Write one results page per result from the stored outputs under DOCS.
 
     Tables are rendered from the stored CSV/JSON files and every number in a page's text is filled
-    from them; the output depends on the stored outputs only (no date, no machine), so a page that
-    differs from its regeneration is stale (--check; tests/test_results_pages.py).
+    from them; the output depends on the stored outputs only (no clock or machine of its own: the
+    dates and machines a page shows are those its outputs record), so a page that differs from
+    its regeneration is stale (--check; tests/test_results_pages.py).
     """
     from pipefollow.experiments import results_pages
 
