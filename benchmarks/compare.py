@@ -1,6 +1,7 @@
 """Wall time of ``pipefollow compare`` on 15 policies × 100 held-out pipes (target ≤ 5 s).
 
-Usage: ``python benchmarks/compare.py [--repeats N]``
+Usage: ``python benchmarks/compare.py [--repeats N] [--json FILE]`` (``--json``: the record of
+``stored.py``, with the load and the machine; ``docs/speed/compare.json``)
 
 Makes 15 policy files in a temporary folder (5 seeds each of CACLA, supervised CACLA and SARSA,
 their weights drawn at random from the seed: the timing does not depend on what was learned),
@@ -50,7 +51,11 @@ def wall(args: list[str]) -> tuple[float, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--json", default=None, help="also write the figures, the load and the machine here")
     args = parser.parse_args()
+    import stored
+
+    load_before = stored.load_average()
     with tempfile.TemporaryDirectory() as tmp:
         policies = make_policies(Path(tmp))
         compare = ["-c", "import sys; from pipefollow.cli import main; sys.argv[1:] = sys.argv[1:]; main()",
@@ -60,10 +65,15 @@ def main() -> None:
         for _ in range(args.repeats):
             times["compare"].append(wall(compare))
             times["numpy"].append(wall(["-c", "import numpy"]))
+    rows = []
     for name, label in (("numpy", 'python -c "import numpy"'), ("compare", "pipefollow compare, 15 × 100")):
         w = statistics.median(t for t, _ in times[name])
         c = statistics.median(c for _, c in times[name])
         print(f"{label:<32} wall {w:6.2f} s   CPU {c:6.2f} s")
+        target = 5.0 if name == "compare" else None
+        rows += [(f"{label}, wall", w, target, None), (f"{label}, CPU", c, None, None)]
+    if args.json:
+        stored.write(args.json, "compare", "wall and CPU", args.repeats, load_before, rows)
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
 
 

@@ -1,6 +1,7 @@
 """Benchmarks: medians of the hot paths, each beside its floor and target, in one run.
 
-Usage: ``python benchmarks/run.py [--repeats N] [--no-reproduce] [--readings] [--json FILE]``
+Usage: ``python benchmarks/run.py [--repeats N] [--no-reproduce] [--cold] [--readings] [--json FILE]``
+(``--json``: the record of ``stored.py``, with the load and the machine; ``docs/speed/run.json``).
 
 The floors are estimates of what compiled C would need (issue "Speed near the physical limit"):
 an RK4 substep ≈ 0.09 µs; a 500-episode trial is 200,000 substeps plus 10,000 learning updates,
@@ -12,7 +13,6 @@ machine is shared and noisy.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics
@@ -61,7 +61,20 @@ def bench_env_step(repeats):
     env.reset(seed=0)
     action = np.array([0.1], dtype=np.float32)
     env.step(action)
-    return median_time(lambda: env.step(action), repeats, inner=2000)
+    return median_time(_stepper(env, action), repeats, inner=2000)
+
+
+def _stepper(env, action):
+    """One ``env.step``; at the pipe's end (79 decisions on paper-left) a new episode, its reset timed too.
+
+    Without the reset almost every timed step came after the episode's end, the pipe out of view.
+    """
+
+    def step():
+        if env.step(action)[2]:
+            env.reset()
+
+    return step
 
 
 NOTES: list[str] = []
@@ -89,9 +102,10 @@ def bench_env_step_disturbed(repeats):
         env.reset(seed=0)
         env.step(action)
     plain, disturbed = [], []
+    steps = [_stepper(env, action) for env in envs]
     for _ in range(repeats):
-        plain.append(median_time(lambda: envs[0].step(action), 1, inner=2000))
-        disturbed.append(median_time(lambda: envs[1].step(action), 1, inner=2000))
+        plain.append(median_time(steps[0], 1, inner=2000))
+        disturbed.append(median_time(steps[1], 1, inner=2000))
     ratio = statistics.median(d / p for d, p in zip(disturbed, plain, strict=True))
     NOTES.append(
         f"env.step with current + camera noise / plain, paired: {ratio:.3f} "
@@ -165,17 +179,20 @@ def bench_render_frame(repeats):
     return median_time(env.render, repeats, inner=5)
 
 
-def bench_reproduce(repeats, extra=(), runs=None):
+def bench_reproduce(repeats, extra=(), runs=None, cold=False):
+    """Wall time of ``pipefollow reproduce --no-figures``, a fresh process (``cold``: an empty cache)."""
     exe = os.path.join(os.path.dirname(sys.executable), "pipefollow")
     times = []
     for _ in range(runs or max(1, repeats // 5)):
-        with tempfile.TemporaryDirectory() as out:
+        with tempfile.TemporaryDirectory() as out, tempfile.TemporaryDirectory() as cache:
+            env = dict(os.environ, NUMBA_CACHE_DIR=cache) if cold else None
             t = time.perf_counter()
             subprocess.run(
                 [exe, "reproduce", "--out", out, "--no-figures", *extra],
                 check=True,
                 stdout=subprocess.DEVNULL,
                 stderr=subprocess.DEVNULL,
+                env=env,
             )
             times.append(time.perf_counter() - t)
     return statistics.median(times)
@@ -340,6 +357,8 @@ BENCHES = [
     ("benchmark episodes, MLP 64×64", bench_mlp_benchmark, None, None),
     ("PPO (SB3), time per step", bench_ppo_throughput, None, None),
     ("pipefollow reproduce (warm)", bench_reproduce, 1.5, 8.0),
+    # one run with an empty compile cache (compiling dominates: a minute of CPU); opt in with --cold
+    ("pipefollow reproduce (cold)", lambda r: bench_reproduce(r, runs=1, cold=True), None, 15.0),
     # 13 training readings × 8 trials × 10 repeats (1,040 trials); opt in with --readings
     (
         "reproduce --experiment readings",
@@ -364,9 +383,13 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=15, help="repeats per benchmark (median)")
     ap.add_argument("--no-reproduce", action="store_true", help="skip the full-reproduction benchmark")
     ap.add_argument("--readings", action="store_true", help="also time the readings experiment (minutes)")
-    ap.add_argument("--json", help="also write the figures to this JSON file")
+    ap.add_argument("--cold", action="store_true", help="also time one reproduce with an empty compile cache")
+    ap.add_argument("--json", help="also write the figures, the load and the machine to this JSON file")
     ap.add_argument("--only", metavar="TEXT", help="run only the benchmarks whose name contains TEXT")
     args = ap.parse_args(argv)
+    import stored
+
+    load_before = stored.load_average()
     print(
         f"# {time.strftime('%Y-%m-%d')} · {platform.processor() or platform.machine()} · "
         f"{os.cpu_count()} cores · Python {platform.python_version()}"
@@ -376,7 +399,7 @@ def main(argv=None) -> int:
     for name, fn, floor, target in BENCHES:
         if (args.no_reproduce and "reproduce" in name) or ("readings" in name and not args.readings):
             continue
-        if args.only and args.only not in name:
+        if "cold" in name and not args.cold:
             continue
         if args.only and args.only not in name:
             continue
@@ -392,8 +415,8 @@ def main(argv=None) -> int:
     for note in NOTES:
         print(note)
     if args.json:
-        with open(args.json, "w") as f:
-            json.dump(results, f, indent=1)
+        rows = [(name, r["median_s"], r["target_s"], r["floor_s"]) for name, r in results.items()]
+        stored.write(args.json, "run", "wall", args.repeats, load_before, rows, NOTES)
     return 0
 
 

@@ -1,6 +1,7 @@
 """Benchmarks of the multibeam profiler: render a ping, detect the pipe; env.step with and without it.
 
-Usage: ``python benchmarks/sonar.py [--repeats N] [--cpu]``
+Usage: ``python benchmarks/sonar.py [--repeats N] [--cpu] [--json FILE]`` (``--json``: the record of
+``stored.py``, with the load and the machine; ``docs/speed/sonar.json``)
 
 Poses are taken along a heuristic episode on a held-out pipe (ideal camera); the sonar is
 ``LOOK_AHEAD_SONAR`` (128 beams over ±60°, 3 rays a beam, 1 cm noise and quantisation, the fan
@@ -26,7 +27,11 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeats", type=int, default=15)
     parser.add_argument("--cpu", action="store_true", help="CPU time (time.process_time), not wall time.")
+    parser.add_argument("--json", default=None, help="also write the figures, the load and the machine here")
     args = parser.parse_args()
+    import stored
+
+    load_before = stored.load_average()
     global CLOCK
     if args.cpu:
         CLOCK = time.process_time
@@ -110,6 +115,12 @@ def main() -> None:
         if target:
             ok = " ✓" if t <= float(target.split()[1]) * 1e-3 else " ✗"
         print(f"| {name} | {t * 1e3:.4f} ms | {target}{ok} |")
+    if args.json:
+        rows = [
+            (name, statistics.median(times[name]), float(target.split()[1]) * 1e-3 if target else None, None)
+            for name, _, target in stages
+        ]
+        stored.write(args.json, "sonar", "CPU" if args.cpu else "wall", args.repeats, load_before, rows)
 
 
 if __name__ == "__main__":

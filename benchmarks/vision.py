@@ -1,6 +1,7 @@
 """Benchmarks of the vision camera: render, detect, env.step and reset beside the ideal camera, the tracker.
 
-Usage: ``python benchmarks/vision.py [--repeats N] [--cpu]``
+Usage: ``python benchmarks/vision.py [--repeats N] [--cpu] [--json FILE]`` (``--json``: the record
+of ``stored.py``, with the load and the machine; ``docs/speed/vision.json``)
 
 Frames are taken along a heuristic episode on a held-out pipe (clear water, 64 × 96). Times are
 medians over repeats of blocks of calls; render, detect and the two together are timed in turns,
@@ -102,7 +103,11 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeats", type=int, default=15)
     parser.add_argument("--cpu", action="store_true", help="CPU time (time.process_time), not wall time.")
+    parser.add_argument("--json", default=None, help="also write the figures, the load and the machine here")
     args = parser.parse_args()
+    import stored
+
+    load_before = stored.load_average()
     global CLOCK
     if args.cpu:
         CLOCK = time.process_time
@@ -198,6 +203,10 @@ def main() -> None:
             limit = float(target.split()[1]) * 1e-3
             ok = " ✓" if t <= limit else " ✗"
         print(f"| {name} | {t * 1e3:.3f} ms | {target}{ok} |")
+    if args.json:
+        limit = [float(target.split()[1]) * 1e-3 if target else None for _, _, target in rows]
+        rows = [(name, t, lim, None) for (name, t, _), lim in zip(rows, limit, strict=True)]
+        stored.write(args.json, "vision", "CPU" if args.cpu else "wall", args.repeats, load_before, rows)
 
 
 if __name__ == "__main__":

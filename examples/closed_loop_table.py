@@ -46,7 +46,6 @@ import csv
 import hashlib
 import io
 import json
-import shlex
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -276,7 +275,7 @@ def main() -> None:
 
 def write_table(args, specs: dict, code: str) -> None:
     """``table.csv`` of every row the store has for today's code, and ``provenance.json``."""
-    from pipefollow.files.machine import write_provenance
+    from pipefollow.files.machine import script_command, write_provenance
 
     rows = []
     for suite in SUITES:
@@ -294,7 +293,7 @@ def write_table(args, specs: dict, code: str) -> None:
         w.writerow({k: fmt(r[k]) for k in COLUMNS})
     args.out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(args.out / "table.csv", out.getvalue())
-    write_provenance(args.out, shlex.join(["python", "examples/closed_loop_table.py", *sys.argv[1:]]))
+    write_provenance(args.out, script_command())
     print(f"{len(rows)} rows: {args.out / 'table.csv'}", flush=True)
 
 

@@ -28,6 +28,7 @@ import numpy as np
 
 from pipefollow.evaluation.benchmark import benchmark
 from pipefollow.files.atomic import write_text_atomic
+from pipefollow.files.machine import script_command, write_provenance
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim.decision import PAPER_SIM
 from pipefollow.sim.disturbance import make_disturbance
@@ -92,6 +93,7 @@ def run_all(out: Path, learners, budgets, seeds) -> None:
                 result = {"learner": learner, "budget": budget, "seed": seed, "steps": steps, "wall_s": wall}
                 result |= judge(agent, f"{learner}-{budget}-{seed}")
                 write_text_atomic(path, json.dumps(result))
+                write_provenance(out, script_command())  # OUT/provenance.json
                 calm, dist = result["calm"], result["disturbed"]
                 print(
                     f"{learner:17s} {budget:>7} seed {seed}: {wall:7.1f} s, "

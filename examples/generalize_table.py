@@ -18,12 +18,10 @@ import argparse
 import csv
 import json
 import re
-import shlex
-import sys
 from pathlib import Path
 
 from pipefollow.evaluation.benchmark import benchmark, load_controller
-from pipefollow.files.machine import write_provenance
+from pipefollow.files.machine import script_command, write_provenance
 from pipefollow.sim.decision import PAPER_SIM
 from pipefollow.sim.disturbance import make_disturbance
 from pipefollow.sim.suites import get_suite
@@ -125,8 +123,7 @@ def main() -> None:
             for r in table:
                 w.writerow({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()})
         # beside the CSV: the command, the date, the code and the machine (the results page cites it)
-        command = shlex.join(["python", "examples/generalize_table.py", *sys.argv[1:]])
-        write_provenance(args.csv.parent, command)
+        write_provenance(args.csv.parent, script_command())
     print(markdown(table))
 
 

@@ -22,6 +22,7 @@ from pipefollow.evaluation.perception_figures import (
     tracker_episode,
     tracker_figure,
 )
+from pipefollow.files.machine import script_command, write_output_provenance
 
 
 def main() -> None:
@@ -35,12 +36,14 @@ def main() -> None:
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     fixes = sonar_profiles(args.out / "sonar_profiles.png", seed=args.seed)
+    write_output_provenance(args.out / "sonar_profiles.png", script_command())
     for (title, _, _), fix in zip(SONAR_CASES, fixes, strict=True):
         found = f"found at {fix.lateral:+.3f} m" if fix.found else "not found"
         print(f"{title}: {found}, SNR {fix.snr:.1f}")
     run = tracker_episode(args.suite, args.pipe, args.water, noise_seed=args.seed)
     title = f"{run.pipe.name}, {args.water} water"
     stats = tracker_figure(run, args.out / "tracker_episode.png", title)
+    write_output_provenance(args.out / "tracker_episode.png", script_command())
     print(
         f"{title}: "
         + ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in stats.items())

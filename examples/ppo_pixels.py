@@ -29,6 +29,7 @@ import numpy as np
 from pipefollow.envs.vector_env import PipelineFollowingVectorEnv
 from pipefollow.evaluation.benchmark import benchmark
 from pipefollow.files.atomic import write_text_atomic
+from pipefollow.files.machine import script_command, write_output_provenance
 from pipefollow.perception.water import WATER_PRESETS
 from pipefollow.sim.suites import get_suite
 from pipefollow.training.deep import SB3VecEnv, hyperparameters, make_model
@@ -157,6 +158,7 @@ def main() -> None:
             "camera": args.camera, "success": SUCCESS, "rows": rows,
         }  # fmt: skip
         write_text_atomic(args.json, json.dumps(record, indent=1) + "\n")
+        write_output_provenance(args.json, script_command())  # X.provenance.json beside it
 
 
 if __name__ == "__main__":

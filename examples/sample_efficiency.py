@@ -35,8 +35,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import shlex
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -47,7 +45,7 @@ from pipefollow.evaluation.benchmark import run_episodes
 from pipefollow.evaluation.stats import bootstrap_ci, paired_difference
 from pipefollow.evaluation.success import SUCCESS_IN_VIEW
 from pipefollow.files.atomic import write_text_atomic
-from pipefollow.files.machine import write_provenance
+from pipefollow.files.machine import script_command, write_provenance
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim.decision import PAPER_SIM
 from pipefollow.sim.disturbance import check, make_disturbance
@@ -286,9 +284,11 @@ def run_all(out: Path, variants, budgets, seeds, judge_on: str = TEST_SUITE) -> 
                 agent, steps = VARIANTS[variant][1](budget, seed)
                 wall = time.perf_counter() - t0
                 result = {"variant": variant, "budget": budget, "seed": seed, "steps": steps, "wall_s": wall}
+                if getattr(agent, "td_var", None) is not None:  # CACLA+Var's running variance of δ
+                    result["sqrt_td_var"] = float(np.sqrt(agent.td_var[0]))
                 result |= judge(agent, judge_on)
                 write_text_atomic(path, json.dumps(result))
-                write_provenance(out, shlex.join(["python", "examples/sample_efficiency.py", *sys.argv[1:]]))
+                write_provenance(out, script_command())
                 print(f"{variant:24s} {budget:>7} seed {seed}: {wall:6.1f} s, calm "
                       f"{np.mean(result['calm']['returns']):7.2f}, disturbed "
                       f"{np.mean(result['disturbed']['returns']):7.2f}", flush=True)  # fmt: skip

@@ -22,6 +22,7 @@ import io
 
 from pipefollow.evaluation.benchmark import benchmark
 from pipefollow.files.atomic import write_text_atomic
+from pipefollow.files.machine import script_command, write_output_provenance
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim.suites import get_suite
 
@@ -89,6 +90,7 @@ def main() -> None:
         w.writeheader()
         w.writerows(rows)
         write_text_atomic(args.csv, out.getvalue())
+        write_output_provenance(args.csv, script_command())  # X.provenance.json beside it
 
 
 if __name__ == "__main__":

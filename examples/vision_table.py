@@ -32,6 +32,7 @@ from pathlib import Path
 from pipefollow.evaluation.benchmark import benchmark, load_controller
 from pipefollow.evaluation.vision import closed_loop
 from pipefollow.files.atomic import write_text_atomic
+from pipefollow.files.machine import script_command, write_output_provenance
 from pipefollow.perception.water import WATER_PRESETS
 from pipefollow.sim.suites import get_suite
 
@@ -108,6 +109,7 @@ def write(path: str, columns, rows) -> None:
     for r in rows:
         w.writerow({k: fmt(r[k]) for k in columns})
     write_text_atomic(path, lines.getvalue())
+    write_output_provenance(path, script_command())  # X.provenance.json: command, date, code, machine
 
 
 def main() -> None:

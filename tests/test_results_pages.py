@@ -87,7 +87,7 @@ def docs_copy(tmp_path) -> Path:
     """A copy of the stored outputs (docs/ without the pages and images)."""
     out = tmp_path / "docs"
     for sub in ("reproduction", "repeats", "readings", "skew-centred", "reference-learners", "generalize",
-                "deep-vs-paper", "robustness", "sample-efficiency", "vision"):  # fmt: skip
+                "deep-vs-paper", "robustness", "sample-efficiency", "vision", "speed"):  # fmt: skip
         shutil.copytree(DOCS / sub, out / sub, ignore=shutil.ignore_patterns("*.png"))
     return out
 
@@ -312,7 +312,7 @@ def test_the_command_writes_the_committed_pages_and_checks_them(tmp_path):
         assert p.read_bytes() == (RESULTS / p.name).read_bytes()
     assert readme_copy.read_bytes() == (DOCS.parent / "README.md").read_bytes()  # the README was current
     ok = CliRunner().invoke(main, ["docs", "results", *args, "--out", str(out), "--check"])
-    assert ok.exit_code == 0 and "up to date: 8 page(s)" in ok.output
+    assert ok.exit_code == 0 and f"up to date: {len(results_pages.PAGES)} page(s)" in ok.output
     (out / "robustness.md").write_text("old\n")
     stale = CliRunner().invoke(main, ["docs", "results", *args, "--out", str(out), "--check"])
     assert stale.exit_code == 1 and stale.output.strip() == f"stale: {out / 'robustness.md'}"
@@ -370,6 +370,7 @@ def test_a_changed_verdict_makes_the_readme_stale_and_the_command_rewrites_it(tm
     for name in ("reproduction", "repeats"):
         (docs / name).mkdir(parents=True)
         (docs / name / "REPORT.md").write_bytes((DOCS / name / "REPORT.md").read_bytes())
+    shutil.copytree(DOCS / "speed", docs / "speed")  # the README's compile time
     copy = tmp_path / "README.md"
     copy.write_bytes((DOCS.parent / "README.md").read_bytes())
     report = docs / "repeats" / "REPORT.md"
@@ -380,7 +381,10 @@ def test_a_changed_verdict_makes_the_readme_stale_and_the_command_rewrites_it(tm
     assert readme.stale(copy, docs)
     args = ["--docs", str(docs), "--readme", str(copy), "--page", "reproduction", "--out", str(tmp_path)]
     check = CliRunner().invoke(main, ["docs", "results", *args, "--check"])
-    assert check.exit_code == 1 and f"stale: the claims table of {copy}" in check.output
+    assert (
+        check.exit_code == 1
+        and f"stale: the generated blocks (claims table, compile time) of {copy}" in check.output
+    )
     assert readme.update(copy, docs) and new in copy.read_text(encoding="utf-8")
     assert not readme.stale(copy, docs)
     copy.write_text("no markers\n")

@@ -37,14 +37,14 @@ def docs() -> None:
     multiple=True,
     metavar="NAME",
     help="Only this page (repeatable): reproduction, readings, reference-learners, generalization, "
-    "deep-vs-paper, robustness, sample-efficiency, perception [default: all].",
+    "deep-vs-paper, robustness, sample-efficiency, perception, speed [default: all].",
 )
 @click.option(
     "--readme",
     "readme_path",
     default=None,
     type=click.Path(dir_okay=False),
-    help="The README whose claims table is regenerated too (between its marker lines) "
+    help="The README whose claims table and compile time are regenerated too (between their marker lines) "
     "[default: README.md beside DOCS, if there is one].",
 )
 @click.option(
@@ -58,8 +58,9 @@ def results(docs_dir, out_dir, names, readme_path, check):
     """Write one results page per result from the stored outputs under DOCS.
 
     Tables are rendered from the stored CSV/JSON files and every number in a page's text is filled
-    from them; the output depends on the stored outputs only (no date, no machine), so a page that
-    differs from its regeneration is stale (--check; tests/test_results_pages.py).
+    from them; the output depends on the stored outputs only (no clock or machine of its own: the
+    dates and machines a page shows are those its outputs record), so a page that differs from
+    its regeneration is stale (--check; tests/test_results_pages.py).
     """
     from pipefollow.experiments import results_pages
 
@@ -83,7 +84,7 @@ def results(docs_dir, out_dir, names, readme_path, check):
             click.echo(f"stale: {out / (n + '.md')}")
         if readme_path is not None and readme.stale(Path(readme_path), Path(docs_dir)):
             stale.append("README")
-            click.echo(f"stale: the claims table of {readme_path}")
+            click.echo(f"stale: the generated blocks (claims table, compile time) of {readme_path}")
         if stale:
             raise SystemExit(1)
         click.echo(f"up to date: {len(names or results_pages.PAGES)} page(s) in {out}")
@@ -91,4 +92,4 @@ def results(docs_dir, out_dir, names, readme_path, check):
     for path in results_pages.write_pages(docs_dir, out, names or None):
         click.echo(f"wrote {path}")
     if readme_path is not None and readme.update(Path(readme_path), Path(docs_dir)):
-        click.echo(f"wrote the claims table of {readme_path}")
+        click.echo(f"wrote the generated blocks (claims table, compile time) of {readme_path}")

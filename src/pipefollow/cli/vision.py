@@ -9,7 +9,7 @@ from pathlib import Path
 
 import click
 
-from pipefollow.cli.common import SEED, UserError, guard, writable_folder
+from pipefollow.cli.common import SEED, UserError, command_line, guard, writable_folder
 
 
 @click.group()
@@ -29,7 +29,8 @@ REPORT_COLUMNS = (
     "out_dir",
     default="vision-report",
     show_default=True,
-    help="Folder of report.csv and samples.png (the committed ones: --out docs/vision).",
+    help="Folder of report.csv, samples.png and report.provenance.json (where and by what code "
+    "they were computed; the committed ones: --out docs/vision).",
 )
 @click.option(
     "--pipes",
@@ -57,6 +58,7 @@ def report(out_dir, pipes, frames, seed):
     """
     from pipefollow.evaluation.vision import detector_report, sample_figure
     from pipefollow.files.atomic import write_text_atomic
+    from pipefollow.files.machine import write_output_provenance
     from pipefollow.perception.detector import require_cv2
     from pipefollow.sim.suites import get_suite
 
@@ -68,6 +70,7 @@ def report(out_dir, pipes, frames, seed):
     rows, pipe_list, frame_list = detector_report(get_suite("heldout"), pipes, frames, seed=seed)
     write_text_atomic(folder / "report.csv", _csv(rows))
     sample_figure(pipe_list, frame_list, folder / "samples.png", seed=seed)
+    write_output_provenance(folder / "report.csv", command_line())  # report.provenance.json
     click.echo(_table(rows))
     click.echo(f"report: {folder / 'report.csv'}; sample frames: {folder / 'samples.png'}")
 
@@ -80,7 +83,13 @@ def report(out_dir, pipes, frames, seed):
     show_default=True,
     help="The report.csv of 'pipefollow vision report' (the committed one: docs/vision/report.csv).",
 )
-@click.option("--out", "out_path", default=None, help="Write the calibration as JSON here.")
+@click.option(
+    "--out",
+    "out_path",
+    default=None,
+    help="Write the calibration as JSON here (and where and by what code it was computed beside it, "
+    "as NAME.provenance.json).",
+)
 @guard
 def calibrate(report_path, out_path):
     """Fit the simulator's camera noise and miss probability to the detector, per turbidity.
@@ -90,11 +99,13 @@ def calibrate(report_path, out_path):
     """
     from pipefollow.evaluation.vision import calibrate as fit
     from pipefollow.files.atomic import write_text_atomic
+    from pipefollow.files.machine import write_output_provenance
 
     rows = _read_report(Path(report_path))
     table = fit(rows)
     if out_path:
         write_text_atomic(out_path, json.dumps(table, indent=1) + "\n")
+        write_output_provenance(out_path, command_line())
     lines = [f"{'turbidity':>9}  {'camera_noise':>12}  {'miss_prob':>9}  {'gross':>6}  options"]
     for r in table:
         lines.append(

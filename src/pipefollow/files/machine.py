@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import platform
 from importlib import metadata
+from pathlib import Path
 
 PACKAGES = ("pipefollow", "numpy", "numba", "llvmlite", "scipy", "gymnasium")
 
@@ -48,6 +49,14 @@ def machine_stamp() -> dict:
 PROVENANCE_FILE = "provenance.json"
 
 
+def script_command(argv: list[str] | None = None) -> str:
+    """A script's command as it was run (``python examples/x.py --out …``), for :func:`provenance`."""
+    import shlex
+    import sys
+
+    return shlex.join(["python", *(sys.argv if argv is None else argv)])
+
+
 def provenance(command: str) -> dict:
     """What a stored output was computed by: the command, the UTC date, the code and the machine.
 
@@ -67,14 +76,48 @@ def provenance(command: str) -> dict:
     }
 
 
+def provenance_path(output) -> Path:
+    """Where the provenance of a stored output lives: ``X.provenance.json`` beside a file ``X.ext``.
+
+    A folder's own record (:func:`write_provenance`) covers every output in it that has no record of
+    its own; a file beside others made by other commands (``docs/vision/``) has its own record.
+    """
+    output = Path(output)
+    return output.with_name(output.stem + ".provenance.json")
+
+
 def write_provenance(folder, command: str) -> None:
     """``folder/provenance.json``: :func:`provenance` of ``command``, written atomically."""
+    _write_record(Path(folder) / PROVENANCE_FILE, command)
+
+
+def write_output_provenance(output, command: str) -> Path:
+    """The record of one stored output file (:func:`provenance_path`), written atomically; its path."""
+    path = provenance_path(output)
+    _write_record(path, command)
+    return path
+
+
+def provenance_record_path(output) -> Path | None:
+    """The record that says where a stored output was computed, or None if it has none.
+
+    For a file: its own record (:func:`provenance_path`), else its folder's ``provenance.json``; for
+    a folder: its ``provenance.json``.
+    """
+    output = Path(output)
+    if output.is_dir():
+        candidates = [output / PROVENANCE_FILE]
+    else:
+        candidates = [provenance_path(output), output.parent / PROVENANCE_FILE]
+    return next((p for p in candidates if p.is_file()), None)
+
+
+def _write_record(path, command: str) -> None:
     import json
-    from pathlib import Path
 
     from pipefollow.files.atomic import write_text_atomic
 
-    write_text_atomic(Path(folder) / PROVENANCE_FILE, json.dumps(provenance(command), indent=1) + "\n")
+    write_text_atomic(path, json.dumps(provenance(command), indent=1) + "\n")
 
 
 def describe_provenance(record: dict) -> str:

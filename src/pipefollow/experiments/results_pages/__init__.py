@@ -26,6 +26,7 @@ PAGES = {
     "robustness": "robustness",
     "sample-efficiency": "sample_efficiency",
     "perception": "perception",
+    "speed": "speed",
 }
 DEFAULT_OUT = "docs/results"  # the committed pages: the one default output path inside docs/
 

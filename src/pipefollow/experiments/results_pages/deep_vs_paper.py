@@ -22,8 +22,10 @@ from pipefollow.experiments.results_pages.markdown import (
     pct,
     read_json,
     read_text,
+    stored_provenance,
     table,
 )
+from pipefollow.files.machine import PROVENANCE_FILE
 
 TITLE = "Results: deep RL against the paper's learners"
 SOURCES = ("deep-vs-paper/*.json", "deep-vs-paper/discount.jsonl")
@@ -32,7 +34,7 @@ DEEP = ("ppo", "sac")
 
 TEXT = """\
 Regenerate the stored outputs with `python examples/deep-vs-paper.py --out FOLDER` (needs the extra
-`deep`) and copy `FOLDER/runs/*.json` to `docs/deep-vs-paper/`; the how-to is
+`deep`) and copy `FOLDER/runs/*.json` and `FOLDER/provenance.json` to `docs/deep-vs-paper/`; the how-to is
 [Deep RL and RL libraries](../guides/deep-rl.md).
 
 ## Equal budgets on `heldout`
@@ -67,7 +69,8 @@ The best mean return is PPO's at γ = {best_ppo} and SAC's at γ = {best_sac}.
 
 
 def _runs(folder: Path) -> list[dict]:
-    runs = [read_json(p) for p in sorted(folder.glob("*.json"))]
+    # the run files; a provenance record copied beside them (provenance.json) is not a run
+    runs = [read_json(p) for p in sorted(folder.glob("*.json")) if not p.name.endswith(PROVENANCE_FILE)]
     if not runs:
         raise PageError(f"{folder}: no run files (*.json)")
     return runs
@@ -197,5 +200,9 @@ def render(docs: Path) -> str:
         best_ppo=best("ppo"),
         best_sac=best("sac"),
     )
-    provenance = [("deep-vs-paper/*.json", "not recorded"), ("deep-vs-paper/discount.jsonl", "not recorded")]
+    # the runs: the folder's record (examples/deep-vs-paper.py); discount.jsonl, another command's: its own
+    provenance = [
+        (SOURCES[0], stored_provenance(docs / "deep-vs-paper")),
+        (SOURCES[1], stored_provenance(docs / SOURCES[1], folder=False)),
+    ]
     return page(TITLE, __name__, SOURCES, provenance, body)

@@ -202,12 +202,19 @@ REGENERATE = (
 )
 
 
-def stored_provenance(folder: Path) -> str:
-    """Where the outputs in ``folder`` were computed, from its ``provenance.json`` (if it has one)."""
-    from pipefollow.files.machine import PROVENANCE_FILE, describe_provenance
+def stored_provenance(output: Path, folder: bool = True) -> str:
+    """Where a stored output (a file or a folder) was computed, from its provenance record, if any.
 
-    path = Path(folder) / PROVENANCE_FILE
-    return describe_provenance(read_json(path)) if path.is_file() else NOT_RECORDED
+    The record is the file's own ``X.provenance.json``, else (unless ``folder`` is false: a file
+    another command wrote into the folder) its folder's ``provenance.json``
+    (:func:`pipefollow.files.machine.provenance_record_path`); :data:`NOT_RECORDED` without one.
+    """
+    from pipefollow.files.machine import describe_provenance, provenance_path, provenance_record_path
+
+    path = provenance_record_path(output)
+    if not folder and path != provenance_path(output):
+        path = None
+    return NOT_RECORDED if path is None else describe_provenance(read_json(path))
 
 
 def report_provenance(path: Path) -> str:

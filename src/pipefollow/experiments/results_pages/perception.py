@@ -48,8 +48,8 @@ TEXT = """\
 Regenerate the stored outputs with `pipefollow vision report --out FOLDER`, `pipefollow vision
 calibrate`, `python examples/vision_table.py` (with and without `--suites`), `python
 examples/ppo_pixels.py` and `python examples/closed_loop_table.py` (the how-to: [Perception in the
-loop](../guides/vision.md)) and copy them to `docs/vision/`; the figures of the sonar and the
-tracker with `python examples/perception_figures.py --out docs/vision`.
+loop](../guides/vision.md)) and copy them to `docs/vision/`, each with the `NAME.provenance.json`
+written beside it; the figures with `python examples/perception_figures.py --out docs/vision`.
 
 ## The water presets
 
@@ -402,5 +402,5 @@ def render(docs: Path) -> str:
             ),
         ),
     )
-    provenance = [(s, stored_provenance((docs / s).parent)) for s in SOURCES]
+    provenance = [(s, stored_provenance(docs / s)) for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)

@@ -4,25 +4,25 @@ Sources: ``docs/sample-efficiency/summary.json`` (``examples/sample_efficiency.p
 budget and condition the mean return with its interval, the paired difference to the heuristic,
 the success rate and the training's wall time), ``tuning.json`` and ``continuation.json`` (the
 same script on the tuning pipes, and beyond the recipe's 30,000 decisions), ``measured-state.json``,
-and the paired tables of ``docs/sample-efficiency/cacla-var.md`` and ``critic-td-lambda.md``. A
-source ``X.json`` computed by a recorded command has its ``X.provenance.json`` beside it.
+and ``options.json`` (CACLA+Var and the critic's TD(λ) paired per pipe against the learner without
+them: :mod:`~pipefollow.experiments.results_pages.sample_efficiency_options`). A source ``X.json``
+computed by a recorded command has its ``X.provenance.json`` beside it.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from pipefollow.experiments.results_pages import sample_efficiency_options
 from pipefollow.experiments.results_pages.markdown import (
     PageError,
     ci,
     count,
     fill,
-    minus,
     num,
     page,
     pct,
     read_json,
-    report_table,
     stored_provenance,
     table,
 )
@@ -35,15 +35,16 @@ SOURCES = (
     "sample-efficiency/tuning.json",
     "sample-efficiency/continuation.json",
     "sample-efficiency/measured-state.json",
-    "sample-efficiency/cacla-var.md",
-    "sample-efficiency/critic-td-lambda.md",
+    sample_efficiency_options.SOURCE,
 )
 
 TEXT = """\
 Regenerate the stored outputs with `python examples/sample_efficiency.py --out FOLDER --variants ...`
 (the how-to and the exact commands: [Sample efficiency](../guides/sample-efficiency.md)) and copy
 each folder's `summary.json` to `docs/sample-efficiency/` (`summary.json`, `tuning.json`,
-`continuation.json`), its `provenance.json` beside it (`summary.provenance.json`, …).
+`continuation.json`), its `provenance.json` beside it (`summary.provenance.json`, …); the
+options' paired comparisons with `python examples/sample_efficiency_options.py FOLDER --json
+docs/sample-efficiency/options.json` over the runs of the variants they compare.
 
 ## Every variant at every budget
 
@@ -103,16 +104,8 @@ at 100,000 ({r100_vs} and {r100_dist_vs} against the heuristic); on the tuning p
   supervised CACLA {ss03_big} against {sup_big}.
 * **Training under `mild` randomization**, judged disturbed at {big}: supervised CACLA {smild_big}
   against {sup_big_dist}, CACLA {cmild_big} against {cacla_big_dist}.
-* **CACLA+Var**, paired per pipe against the same learner without it (CACLA+Var − CACLA, 95 % CI
-  over the pipes, `cacla-var.md`):
-
-{var_table}
-
-* **An eligibility trace on the critic, TD(λ)**, paired per pipe against TD(0)
-  (`critic-td-lambda.md`):
-
-{td_table}
-
+* **CACLA+Var**, paired per pipe against the same learner without it: its section below.
+* **An eligibility trace on the critic, TD(λ)**, paired per pipe against TD(0): its section below.
   Supervised CACLA with λ = 0.9 is {std9_mid_vs} over the heuristic in calm water at {mid}
   decisions and {std9_mid_dist_vs} disturbed; at {big} it scores {std9_big} calm against PPO's
   {ppo_big}. CACLA with λ = 0.9 is {ctd9_big_vs} over the heuristic at {big} calm.
@@ -129,6 +122,16 @@ at 100,000 ({r100_vs} and {r100_dist_vs} against the heuristic); on the tuning p
 * **The paper's family against PPO**: the best of the family at {big} decisions in calm water is
   {best_name} ({best_big}), {best_gap} below PPO ({ppo_big}); within {mid} decisions the variants
   whose interval of the difference to the heuristic lies above 0 in both conditions: {both_mid}.
+
+## CACLA+Var against CACLA
+
+{var_section}
+
+![CACLA and supervised CACLA with and without the options](../sample-efficiency/options.png)
+
+## The critic's TD(λ) against TD(0)
+
+{td_section}
 """
 
 
@@ -223,13 +226,6 @@ def render(docs: Path) -> str:
         and all(get(v, mid, c)["vs_heuristic_ci95"][0] > 0 for c in ("calm", "disturbed"))
     ]
 
-    def paired(path: Path, heading: str) -> str:
-        t = report_table(path, heading)
-        return "\n".join(
-            "  " + line
-            for line in table(list(t[0]), ([minus(x) for x in r.values()] for r in t)).splitlines()
-        )
-
     tuning = read_json(folder / "tuning.json")
     t_cell = {(r["variant"], r["budget"], r["condition"]): r for r in tuning}
     t_rows = [
@@ -269,8 +265,6 @@ def render(docs: Path) -> str:
     if any(r is None for r in t_ppo.values()):
         raise PageError(f"tuning.json: no row for {rec100} at {big}")
 
-    var_heading = next(iter(_headings(folder / "cacla-var.md")))
-    td_heading = next(iter(_headings(folder / "critic-td-lambda.md")))
     body = fill(
         TEXT,
         seeds=get("cacla", small, "calm")["seeds"],
@@ -306,8 +300,8 @@ def render(docs: Path) -> str:
         sup_big_dist=ret("supervised-cacla", big, "disturbed"),
         cmild_big=ret("cacla-mild", big, "disturbed"),
         cacla_big_dist=ret("cacla", big, "disturbed"),
-        var_table=paired(folder / "cacla-var.md", var_heading),
-        td_table=paired(folder / "critic-td-lambda.md", td_heading),
+        var_section=sample_efficiency_options.var_section(docs),
+        td_section=sample_efficiency_options.td_section(docs),
         std9_mid_vs=vs("supervised-cacla-td0.9", mid),
         std9_mid_dist_vs=vs("supervised-cacla-td0.9", mid, "disturbed"),
         std9_big=ret("supervised-cacla-td0.9", big),
@@ -352,22 +346,5 @@ def render(docs: Path) -> str:
             t_rows,
         ),
     )
-    provenance = [(s, _provenance(docs / s)) for s in SOURCES]
+    provenance = [(s, stored_provenance(docs / s)) for s in SOURCES]
     return page(TITLE, __name__, SOURCES, provenance, body)
-
-
-def _provenance(path: Path) -> str:
-    """Where the stored output ``path`` was computed: its ``X.provenance.json``, else the folder's record."""
-    from pipefollow.files.machine import describe_provenance
-
-    own = path.with_name(path.stem + ".provenance.json")
-    return describe_provenance(read_json(own)) if own.is_file() else stored_provenance(path.parent)
-
-
-def _headings(path: Path) -> list[str]:
-    from pipefollow.experiments.results_pages.markdown import markdown_tables, read_text
-
-    tables = markdown_tables(read_text(path))
-    if not tables:
-        raise PageError(f"{path}: no table")
-    return list(tables)
