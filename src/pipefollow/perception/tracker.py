@@ -708,6 +708,17 @@ class PipeTracker:
             observe_track(self.state, self._tp, self.half_width, self.depth, self.out)
         return self.out
 
+    def search_towards(self, x: float) -> np.ndarray:
+        """While no pipe is in view: search on the side of ``x`` (a second sensor's sighting off the view).
+
+        Returns the observation: the output array of :meth:`step` with its side set.
+        """
+        if self.out[OUT_IN_VIEW] == 0.0:
+            side = 1.0 if x >= 0.0 else -1.0
+            self.state[SIDE] = side
+            self.out[OUT_SIDE] = side
+        return self.out
+
     @property
     def confidence(self) -> float:
         """How well the tracked offset is known, in [0, 1] (0 without a track)."""
