@@ -17,7 +17,11 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
   tracker did not take the ping's fix then corrects the tracked line as a point on the pipe with
   its own error (:data:`FIX_SD`; :attr:`VisionCamera.aid`, :meth:`PipeTracker.point`); with
   ``"vision-raw"`` the measurement is the observation, and with the ideal camera the sonar's view
-  fills the slots while the exact camera does not see the pipe.
+  fills the slots while the exact camera does not see the pipe. A frame whose contrast over its
+  noise is below :data:`MIN_CONTRAST` (:func:`clear_enough`; murky water) is not searched: the
+  sonar alone feeds the track then. The first ping feeds the first frame. While the track shows
+  no pipe, the sonar's view is the observation if it has the pipe in the footprint, and a fix
+  outside the footprint turns the search towards it.
 
 The sonar draws its noise (128 normals a ping) from a generator of its own, spawned from the
 environment's at each reset after the camera's draws (:func:`spawn`): the camera's frames, the
