@@ -708,6 +708,10 @@ class PipeTracker:
             observe_track(self.state, self._tp, self.half_width, self.depth, self.out)
         return self.out
 
+    def carry(self, max_misses: int) -> None:
+        """From the next frame on, carry the line this many frames without a sighting (not ``params``')."""
+        self._tp[5] = float(max_misses)
+
     def search_towards(self, x: float) -> np.ndarray:
         """While no pipe is in view: search on the side of ``x`` (a second sensor's sighting off the view).
 
