@@ -282,3 +282,21 @@ def test_the_sonar_s_view_is_the_fused_observation_while_the_track_shows_no_pipe
     assert ends == (view.x1, view.y1, view.x2, view.y_near)
     assert out[OUT_SIDE] == (1.0 if view.x1 >= 0.0 else -1.0)
     assert tracker.out[OUT_IN_VIEW] == 0.0  # the track itself is left as it is
+
+
+@pytest.mark.parametrize("carried", [1, 2, 3])
+def test_a_carried_line_is_lost_after_that_many_frames_without_a_sighting(carried):
+    from pipefollow.perception.tracker import ACTIVE as LIVE
+    from pipefollow.perception.tracker import PipeTracker
+
+    tracker = PipeTracker()
+    tracker.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
+    pose = [0.0, 0.0, 0.0]
+    tracker.step(tuple(pose), True, (0.0, 3.0, 0.0, 0.0))  # a straight pipe under the track
+    tracker.carry(carried)
+    alive = 0
+    for _ in range(5):  # the vehicle creeps along the pipe, seeing nothing
+        pose[0] += 0.05
+        tracker.step(tuple(pose), False, (0.0, 0.0, 0.0, 0.0))
+        alive += tracker.state[LIVE] != 0.0
+    assert alive == carried

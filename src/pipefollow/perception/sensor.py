@@ -24,8 +24,10 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
   outside the footprint turns the search towards it.
 
 The sonar draws its noise (128 normals a ping) from a generator of its own, spawned from the
-environment's at each reset after the camera's draws (:func:`spawn`): the camera's frames, the
-tracker's navigation and every other draw stay what they are without the sonar.
+environment's at each reset (:func:`spawn`, which draws nothing from it): after the camera's reset
+with ``"sonar"`` and the ideal camera's ``"fused"``, before it with a vision camera's ``"fused"``
+(whose first frame the first ping feeds; the tracker's navigation is then the second child). The
+camera's frames and every other draw stay what they are without the sonar.
 
 Burial: the image's ``Water.burial`` (the share of the pipe's width covered by sand, from its
 starboard edge: pixels more than ``R(1 − 2b)`` across from the axis) and the sonar's (the share
@@ -111,7 +113,7 @@ class SonarSensors:
         self._shown = np.zeros(OUT_SIZE)  # the sonar's view as a tracker's output (see _aid)
 
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
-        """A new episode: the camera's reset (its draws first), then the sonar's generator spawned."""
+        """A new episode: the sonar's generator spawned and the camera's reset (module docstring)."""
         self.sonar.reset()
         self._last = Sighting()
         if self.fused and self.settings.detects:

@@ -710,7 +710,7 @@ class PipeTracker:
 
     def carry(self, max_misses: int) -> None:
         """From the next frame on, carry the line this many frames without a sighting (not ``params``')."""
-        self._tp[5] = float(max_misses)
+        self._tp[TrackParams._fields.index("max_misses")] = float(max_misses)
 
     def search_towards(self, x: float) -> np.ndarray:
         """While no pipe is in view: search on the side of ``x`` (a second sensor's sighting off the view).
