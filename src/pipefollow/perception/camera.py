@@ -143,6 +143,9 @@ class VisionCamera:
         # a second sensor's update of the track after each frame's detection (sensor="fused": the
         # sonar's fix), set by its owner: it returns the tracker's output
         self.aid: Callable[[PipeTracker], np.ndarray] | None = None
+        # whether a frame shows enough to look for the pipe in (sensor="fused": its contrast over
+        # its noise), set by its owner; None: the detector searches every frame
+        self.usable: Callable[[np.ndarray], bool] | None = None
 
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
         """A new scene (seabed and growth textures from ``rng``) and its first image.
@@ -193,7 +196,11 @@ class VisionCamera:
         if not self.settings.detects:
             return
         wt, cam = self.settings.water, self.camera
-        det = detect_pipe(self.image, cam.half_width, cam.depth, wt.pipe_diameter, previous=self.detection)
+        if self.usable is None or self.usable(self.image):
+            diameter = wt.pipe_diameter
+            det = detect_pipe(self.image, cam.half_width, cam.depth, diameter, previous=self.detection)
+        else:  # a frame too murky to look for the pipe in
+            det = NOT_FOUND
         self.detection = det
         if not det.found and self.fallback is not None:
             det = self.fallback

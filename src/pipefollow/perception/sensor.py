@@ -17,11 +17,17 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
   tracker did not take the ping's fix then corrects the tracked line as a point on the pipe with
   its own error (:data:`FIX_SD`; :attr:`VisionCamera.aid`, :meth:`PipeTracker.point`); with
   ``"vision-raw"`` the measurement is the observation, and with the ideal camera the sonar's view
-  fills the slots while the exact camera does not see the pipe.
+  fills the slots while the exact camera does not see the pipe. A frame whose contrast over its
+  noise is below :data:`MIN_CONTRAST` (:func:`clear_enough`; murky water) is not searched: the
+  sonar alone feeds the track then. The first ping feeds the first frame. While the track shows
+  no pipe, the sonar's view is the observation if it has the pipe in the footprint, and a fix
+  outside the footprint turns the search towards it.
 
 The sonar draws its noise (128 normals a ping) from a generator of its own, spawned from the
-environment's at each reset after the camera's draws (:func:`spawn`): the camera's frames, the
-tracker's navigation and every other draw stay what they are without the sonar.
+environment's at each reset (:func:`spawn`, which draws nothing from it): after the camera's reset
+with ``"sonar"`` and the ideal camera's ``"fused"``, before it with a vision camera's ``"fused"``
+(whose first frame the first ping feeds; the tracker's navigation is then the second child). The
+camera's frames and every other draw stay what they are without the sonar.
 
 Burial: the image's ``Water.burial`` (the share of the pipe's width covered by sand, from its
 starboard edge: pixels more than ``R(1 − 2b)`` across from the axis) and the sonar's (the share
@@ -38,13 +44,32 @@ from pipefollow.perception.camera import CameraSettings, TrueView, VisionCamera,
 from pipefollow.perception.detector import Detection
 from pipefollow.perception.slots import Sighting, observed, sighting_of, write_sighting
 from pipefollow.perception.sonar_track import SonarSensor
-from pipefollow.perception.tracker import ACCEPTED, BEND, PipeTracker
+from pipefollow.perception.track_step import (
+    ACCEPTED,
+    BEND,
+    OUT_IN_VIEW,
+    OUT_SIDE,
+    OUT_SIZE,
+    OUT_X1,
+    OUT_X2,
+    OUT_Y1,
+    OUT_Y_NEAR,
+)
+from pipefollow.perception.tracker import PipeTracker
+from pipefollow.perception.visibility import contrast_to_noise
 from pipefollow.perception.water import Water
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams
 from pipefollow.sim.disturbance import NO_BURIAL
 
 FIX_SD = 0.03  # m: the error of the ping's fix on the tracked line (docs/decisions.md, fused sensor)
+# a camera frame's contrast over its noise below which the fused sensor does not search it for the
+# pipe: clear water's frames lie at 3.2–6.8, moderate water's (0.2/m) at 1.7–3.2 and turbid
+# water's (0.25/m) at 1.3–2.1 (1st–99th percentiles; docs/decisions.md, the fused sensor)
+MIN_CONTRAST = 2.15
+# frames a track fed by the sonar alone (a murky frame) is carried without a sighting; the camera's 2
+# (TrackParams.max_misses) kept a lagging line at the sonar's bends (docs/decisions.md, fused sensor)
+SONAR_MISSES = 1
 
 
 def sonar_burial(water: Water) -> float:
@@ -85,15 +110,22 @@ class SonarSensors:
         self._true_errors = (0.0, 0.0)
         self._last = Sighting()
         self._rng: np.random.Generator | None = None
+        self._shown = np.zeros(OUT_SIZE)  # the sonar's view as a tracker's output (see _aid)
 
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
-        """A new episode: the camera's reset (its draws first), then the sonar's generator spawned."""
+        """A new episode: the sonar's generator spawned and the camera's reset (module docstring)."""
         self.sonar.reset()
         self._last = Sighting()
+        if self.fused and self.settings.detects:
+            # the first ping before the first frame, which it feeds as it feeds every later one
+            self._rng = _spawn(rng)
+            self._feed(self._ping(state, points, cum))
+            if self.vision.tracker is not None:
+                self.vision.aid = self._aid  # each frame's fix a point on the tracked pipe
+            self.vision.usable = self._judge  # a murky frame is not searched for the pipe
+            self.vision.reset(state, points, cum, rng)
+            return
         if self.vision is not None:
-            self.vision.fallback = None  # the first frame: no ping yet
-            if self.fused and self.vision.tracker is not None:
-                self.vision.aid = self._aid  # each frame's fix a point on the tracked pipe (none yet)
             self.vision.reset(state, points, cum, rng)
         self._rng = _spawn(rng)
         self._look(state, points, cum)
@@ -110,8 +142,7 @@ class SonarSensors:
         """After a decision: ping (and frame); returns the decision's reward (as the vision camera's)."""
         s = state
         if self.fused and self.settings.detects:  # the vision camera writes the slots, fed the ping
-            view = self._ping(s, points, cum)
-            self.vision.fallback = _as_detection(view) if view.in_view else None
+            self._feed(self._ping(s, points, cum))
             return self.vision.step(s, points, cum, rng, sim_reward, previous_action)
         if self.vision is not None:  # the image only (observation="image"): the slots are ours
             self.vision.step(s, points, cum, rng, sim_reward, previous_action)
@@ -120,17 +151,50 @@ class SonarSensors:
             return self.lost_reward
         return sim_reward
 
-    def _aid(self, tracker: PipeTracker) -> np.ndarray:
-        """After the camera's frame: the ping's fix as a point on the tracked pipe (:data:`FIX_SD`).
+    def _judge(self, image: np.ndarray) -> bool:
+        """Whether the frame is searched (:func:`clear_enough`); the track of a murky one is the sonar's.
 
-        Only in a frame whose camera detection the tracker did not take (none, rejected, or one
-        that started the line again): a detection it took already places the line, and adding the
-        fix there made clear water worse (docs/decisions.md).
+        A track fed by the sonar alone is carried :data:`SONAR_MISSES` frames without a sighting
+        (the camera's: :attr:`TrackParams.max_misses`).
+        """
+        ok = clear_enough(image)
+        tracker = self.vision.tracker
+        if tracker is not None:
+            if ok:
+                tracker.carry(tracker.params.max_misses, tracker.params.edge_misses)
+            else:  # not searched by the detector: no short piece it missed, the sonar's carry alone
+                tracker.carry(SONAR_MISSES, SONAR_MISSES)
+        return ok
+
+    def _feed(self, view) -> None:
+        """The sonar's view as the camera's measurement where the camera finds no pipe (or none yet)."""
+        self.vision.fallback = _as_detection(view) if view.in_view else None
+
+    def _aid(self, tracker: PipeTracker) -> np.ndarray:
+        """After the camera's frame: the ping's fix on the tracked pipe; the sonar's view if it shows none.
+
+        The fix is a point on the tracked pipe (:data:`FIX_SD`) only in a frame whose camera
+        detection the tracker did not take (none, rejected, or one that started the line again):
+        a detection it took already places the line, and adding the fix there made clear water
+        worse (docs/decisions.md). While the track shows no pipe, the sonar's own view is this
+        decision's observation if it has the pipe in the footprint (the track stays as it is),
+        else the search turns towards the ping's fix if it found the pipe outside the footprint.
         """
         fix = self.sonar.fix
-        if not fix.found or tracker.event in (ACCEPTED, BEND):
-            return tracker.out
-        return tracker.point(fix.lateral, fix.forward, FIX_SD)
+        out = tracker.out
+        if fix.found and tracker.event not in (ACCEPTED, BEND):
+            out = tracker.point(fix.lateral, fix.forward, FIX_SD)
+        if out[OUT_IN_VIEW] != 0.0 or not fix.found:
+            return out
+        out = tracker.search_towards(fix.lateral)
+        view = self.sonar.view
+        if not view.in_view:
+            return out
+        shown = self._shown
+        shown[OUT_IN_VIEW], shown[OUT_X1], shown[OUT_Y1] = 1.0, view.x1, view.y1
+        shown[OUT_X2], shown[OUT_Y_NEAR] = view.x2, view.y_near
+        shown[OUT_SIDE] = 1.0 if view.x1 >= 0.0 else -1.0
+        return shown
 
     def _keep_truth(self, s: np.ndarray) -> None:
         self.truth = TrueView(bool(s[sim.IN_VIEW]), s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR])
@@ -142,9 +206,6 @@ class SonarSensors:
 
     def _look(self, s: np.ndarray, points: np.ndarray, cum: np.ndarray) -> None:
         """The slots from the sonar (``"sonar"``), or the exact camera's, else the sonar's (ideal, fused)."""
-        if self.fused and self.settings.detects:  # the reset's first frame: the vision camera's alone
-            self._ping(s, points, cum)
-            return
         self._keep_truth(s)
         view = self._ping(s, points, cum)
         if self.fused and s[sim.IN_VIEW] != 0.0:  # the exact camera sees the pipe: its slots stay
@@ -182,9 +243,19 @@ class SonarSensors:
         return np.zeros((height, 0, 3), dtype=np.uint8)
 
 
+def clear_enough(image: np.ndarray) -> bool:
+    """Whether the fused sensor searches a camera frame for the pipe: its contrast over its noise.
+
+    At least :data:`MIN_CONTRAST` (:func:`~pipefollow.perception.visibility.contrast_to_noise`):
+    in murkier frames the detector's finds are mostly wrong ones that the tracker takes
+    (docs/decisions.md, the fused sensor), so the sonar alone feeds the track there.
+    """
+    return contrast_to_noise(image) >= MIN_CONTRAST
+
+
 def _as_detection(view) -> Detection:
     """The sonar's view as a detection of the pipe's centre line in the camera's footprint."""
     return Detection(True, view.x1, view.y1, view.x2, view.y_near, 1.0)
 
 
-__all__ = ["SonarSensors", "make_sensor", "sonar_burial", "start_sensor"]
+__all__ = ["MIN_CONTRAST", "SonarSensors", "clear_enough", "make_sensor", "sonar_burial", "start_sensor"]

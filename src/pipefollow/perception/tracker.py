@@ -62,13 +62,14 @@ from numba import njit
 from pipefollow.perception.line_ekf import CHI2_1DOF_99, point_correct, point_innovation
 from pipefollow.perception.navigation import NAV, Navigation, NavParams
 from pipefollow.perception.track_step import (
-    ACCEPTED,
     ACTIVE,
-    BEND,
     CONFIDENCE,
     EVENT,
     MISS,
+    OUT_IN_VIEW,
+    OUT_SIDE,
     OUT_SIZE,
+    SIDE,
     TH,
     TRACK,
     TrackParams,
@@ -79,7 +80,7 @@ from pipefollow.perception.track_step import (
 )
 
 # the event codes a caller compares PipeTracker.event with, and the state's slots track_point uses
-__all__ = ["ACCEPTED", "BEND", "PipeTracker", "track_point"]
+__all__ = ["PipeTracker", "track_point"]
 
 
 @njit(cache=True)
@@ -162,6 +163,26 @@ class PipeTracker:
             observe_track(self.state, self._tp, self.half_width, self.depth, self.out)
         return self.out
 
+    def carry(self, max_misses: int, edge_misses: int) -> None:
+        """From the next frame on, carry the line this many frames without a sighting (not ``params``').
+
+        ``edge_misses`` is the same for a line whose piece in view is short
+        (:attr:`TrackParams.edge_misses`: the detector misses such pieces).
+        """
+        self._tp[TrackParams._fields.index("max_misses")] = float(max_misses)
+        self._tp[TrackParams._fields.index("edge_misses")] = float(edge_misses)
+
+    def search_towards(self, x: float) -> np.ndarray:
+        """While no pipe is in view: search on the side of ``x`` (a second sensor's sighting off the view).
+
+        Returns the observation: the output array of :meth:`step` with its side set.
+        """
+        if self.out[OUT_IN_VIEW] == 0.0:
+            side = 1.0 if x >= 0.0 else -1.0
+            self.state[SIDE] = side
+            self.out[OUT_SIDE] = side
+        return self.out
+
     @property
     def confidence(self) -> float:
         """How well the tracked offset is known, in [0, 1] (0 without a track)."""
@@ -169,5 +190,5 @@ class PipeTracker:
 
     @property
     def event(self) -> float:
-        """What the last detection did: :data:`ACCEPTED`, :data:`BEND`, ``track_step.REJECTED``, ..."""
+        """What the last detection did: ``track_step.ACCEPTED``, ``BEND``, ``REJECTED``, ..."""
         return float(self.state[EVENT])
