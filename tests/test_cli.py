@@ -412,3 +412,13 @@ def test_echo_result_prints_json_or_the_text_and_formats_only_what_it_prints(as_
     out = CliRunner().invoke(show, ["--json"] if as_json else []).output
     assert out == ('{"a": "é"}\n' if as_json else "a table\n")
     assert formatted == ([] if as_json else [1])
+
+
+@pytest.mark.parametrize("command", ["benchmark", "evaluate"])
+def test_the_camera_and_sensor_options_take_what_the_environment_takes(command):
+    # cli.options spells the choices out (importing perception.camera loads numba); held to it here
+    from pipefollow.perception.camera import CAMERAS, SENSORS
+
+    cmd = main.get_command(click.Context(main), command)
+    choices = {p.name: tuple(p.type.choices) for p in cmd.params if p.name in ("camera", "sensor")}
+    assert choices == {"camera": CAMERAS, "sensor": SENSORS}

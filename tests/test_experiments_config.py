@@ -387,13 +387,38 @@ def test_the_sensor_of_a_trial_is_its_evaluation_episodes(tmp_path):
     assert sonar.evaluation == run_trial(t, 3).evaluation  # seeded
 
 
+def test_a_trial_takes_every_camera_and_sensor_the_environment_takes(tmp_path):
+    import dataclasses
+
+    pytest.importorskip("cv2")
+    from pipefollow.experiments.schema import TrialConfig
+    from pipefollow.experiments.trial import run_trial
+    from pipefollow.perception.camera import CAMERAS, SENSORS
+
+    # one list of cameras and sensors: the environment's (the command line's options are held to it
+    # by tests/test_cli.py)
+    fields = {f.name: f for f in dataclasses.fields(TrialConfig)}
+    assert fields["camera"].metadata["choices"] == CAMERAS
+    assert fields["sensor"].metadata["choices"] == SENSORS
+    # the detector alone, frame by frame, in murky water: it takes the water's settings, and its
+    # evaluation episode differs from the tracker's
+    text = MINIMAL + "phases = [{ pipeline = 'paper-left', episodes = 2 }]\ncamera = 'vision-raw'\n"
+    text += "water = { preset = 'clear', turbidity = 0.3 }\n"
+    t = load_experiment(write_toml(tmp_path, text)).trials[0]
+    assert (t.camera, t.water) == ("vision-raw", {"preset": "clear", "turbidity": 0.3})
+    raw = run_trial(t, 3)
+    tracked = run_trial(dataclasses.replace(t, camera="vision"), 3)
+    np.testing.assert_array_equal(raw.weights, tracked.weights)  # training: the ideal camera's
+    assert raw.evaluation["heuristic"] != tracked.evaluation["heuristic"]
+
+
 @pytest.mark.parametrize(
     "lines, pattern",
     [
-        ("water = 'clear'\n", r"key 'water': water settings need camera = 'vision' or sensor = 'sonar' or"),
+        ("water = 'clear'\n", r"key 'water': water settings need camera = 'vision' or 'vision-raw' or"),
         ("sensor = 'radar'\n", r"key 'sensor' must be one of camera, sonar, fused, got 'radar'"),
         ("camera = 'vision'\nsensor = 'sonar'\n", r"key 'camera' must be 'ideal' with sensor = 'sonar'"),
-        ("camera = 'laser'\n", r"key 'camera' must be one of ideal, vision, got 'laser'"),
+        ("camera = 'laser'\n", r"key 'camera' must be one of ideal, vision, vision-raw, got 'laser'"),
         ("camera = 'vision'\nwater = 'murky'\n", r"key 'water': water preset 'murky': unknown"),
         ("camera = 'vision'\nwater = { turbidity = -1 }\n", r"'water': water setting turbidity must be in"),
         ("camera = 'vision'\nwater = { fog = 1 }\n", r"key 'water': unknown water setting\(s\) \['fog'\]"),

@@ -84,3 +84,22 @@ def test_the_random_families_are_listed_by_the_name_train_accepts():
     for e in rows:
         family = resolve_training(e.name)
         assert family.pipe(0).length == pytest.approx(e.length_m)
+
+
+def test_cli_trials_name_the_camera_sensor_and_water_of_the_evaluation(tmp_path):
+    path = tmp_path / "exp.toml"
+    path.write_text(
+        '[experiment]\nname = "seeing"\n[[trial]]\nname = "plain"\n'
+        '[[trial]]\nname = "fused"\ncamera = "vision"\nsensor = "fused"\nwater = "turbid"\n'
+        '[[trial]]\nname = "raw"\ncamera = "vision-raw"\nwater = { preset = "clear", burial = 0.5 }\n'
+    )
+    res = CliRunner().invoke(main, ["trials", "--experiment", str(path), "--json"])
+    assert res.exit_code == 0, res.output
+    rows = {r["name"]: r for r in json.loads(res.stdout)}
+    assert rows["plain"]["options"] == ""  # the paper's camera says nothing
+    assert rows["fused"]["options"] == "camera vision, sensor fused, water turbid"
+    assert rows["raw"]["options"] == "camera vision-raw, water preset=clear burial=0.5"
+    fused = rows["fused"]
+    assert (fused["camera"], fused["sensor"], fused["water"]) == ("vision", "fused", "turbid")
+    res = CliRunner().invoke(main, ["trials", "--experiment", str(path)], terminal_width=200)
+    assert "camera vision, sensor fused, water turbid" in res.stdout

@@ -72,11 +72,36 @@ print(images.hexdigest(), detections.hexdigest())
 """
 
 
+def old_cpu(cache: Path) -> dict:
+    """The environment of a process that computes as on an old CPU, on this one.
+
+    numba compiles for ``generic``; NumPy's and OpenCV's run-time dispatch to AVX, AVX2 and AVX-512
+    kernels is turned off (``NPY_DISABLE_CPU_FEATURES``, ``OPENCV_CPU_DISABLE``): NumPy's float64
+    ``exp`` and ``power`` give other last bits with and without AVX-512, and the renderer's lighting
+    and the texture bank compute with them before rounding to float32 and to integers.
+    """
+    env = dict(os.environ, NUMBA_CPU_NAME="generic", NUMBA_CACHE_DIR=str(cache))
+    try:
+        from numpy._core._multiarray_umath import __cpu_dispatch__
+    except ImportError:  # another NumPy's layout: its dispatch stays on
+        __cpu_dispatch__ = []
+    env["NPY_DISABLE_CPU_FEATURES"] = ",".join(__cpu_dispatch__)
+    try:
+        import cv2
+
+        # "*AVX2" is a feature dispatched at run time, "*AVX2?" one this CPU lacks
+        dispatched = [f.strip("*?") for f in cv2.getCPUFeaturesLine().split() if f.startswith("*")]
+        env["OPENCV_CPU_DISABLE"] = ",".join(dispatched)
+    except (ImportError, AttributeError):
+        pass
+    return env
+
+
 @pytest.mark.slow  # compiles the renderer for another target
 def test_camera_images_and_detections_are_the_same_under_the_generic_cpu_target(tmp_path):
     pytest.importorskip("cv2")
     host = {k: v for k, v in os.environ.items() if k != "NUMBA_CPU_NAME"}
-    generic = dict(os.environ, NUMBA_CPU_NAME="generic", NUMBA_CACHE_DIR=str(tmp_path))
+    generic = old_cpu(tmp_path)
     run = [sys.executable, "-c", FRAMES]
     a = subprocess.run(run, env=host, check=True, capture_output=True, text=True).stdout
     b = subprocess.run(run, env=generic, check=True, capture_output=True, text=True).stdout
@@ -106,8 +131,88 @@ print(ranges.hexdigest(), views.hexdigest())
 @pytest.mark.slow  # compiles the sonar for another target
 def test_sonar_pings_and_detections_are_the_same_under_the_generic_cpu_target(tmp_path):
     host = {k: v for k, v in os.environ.items() if k != "NUMBA_CPU_NAME"}
-    generic = dict(os.environ, NUMBA_CPU_NAME="generic", NUMBA_CACHE_DIR=str(tmp_path))
+    generic = old_cpu(tmp_path)
     run = [sys.executable, "-c", PINGS]
     a = subprocess.run(run, env=host, check=True, capture_output=True, text=True).stdout
     b = subprocess.run(run, env=generic, check=True, capture_output=True, text=True).stdout
     assert a == b and len(a.split()) == 2
+
+
+EPISODES = """
+import hashlib
+import gymnasium as gym
+import numpy as np
+import pipefollow
+from pipefollow.learners.heuristic import Heuristic
+from pipefollow.sim.suites import get_suite, min_length_for
+
+pipes = get_suite("heldout").pipes(2, min_length_for(60.0))
+for kw in (
+    dict(camera="vision", water="moderate"),  # the detector and the tracker (navigation, line EKF)
+    dict(camera="vision-raw", water="turbid"),
+    dict(sensor="sonar", water={"burial": 0.5}),
+    dict(sensor="fused", camera="vision", water="turbid"),  # the sonar's fixes on the camera's track
+    dict(sensor="fused"),
+):
+    returns, seen = [], hashlib.sha256()
+    for k, pipe in enumerate(pipes):
+        env = gym.make("pipefollow/PipelineFollowing-v0", pipeline=pipe, episode_seconds=60, **kw)
+        obs, info = env.reset(seed=k)
+        agent, total, done = Heuristic(), 0.0, False
+        while not done:
+            obs, reward, terminated, truncated, info = env.step([agent.act(obs)])
+            seen.update(np.asarray(obs, dtype=np.float64).tobytes())
+            seen.update(repr(sorted((key, value.tolist()) for key, value in info.items())).encode())
+            total, done = total + reward, terminated or truncated
+        returns.append(repr(float(total)))
+    print(*returns, seen.hexdigest())
+env = gym.make("pipefollow/PipelineFollowingImage-v0", water="turbid")  # observation="image"
+image, info = env.reset(seed=3)
+images, rng, done = hashlib.sha256(image.tobytes()), np.random.default_rng(1), False
+while not done:
+    image, reward, terminated, truncated, info = env.step(rng.uniform(-1, 1, 1))
+    images.update(image.tobytes())
+    done = terminated or truncated
+print(images.hexdigest())
+"""
+
+
+@pytest.mark.slow  # compiles the renderer, the tracker and the sonar for another target (≈ 1 min on 2 cores)
+def test_the_environments_through_every_camera_and_sensor_are_the_same_under_an_old_cpu(tmp_path):
+    # the heuristic's episodes through each camera, sensor and water: returns to the last bit, every
+    # observation and info; one episode's camera images
+    pytest.importorskip("cv2")
+    host = {k: v for k, v in os.environ.items() if k != "NUMBA_CPU_NAME"}
+    run = [sys.executable, "-c", EPISODES]
+    a = subprocess.run(run, env=host, check=True, capture_output=True, text=True).stdout
+    b = subprocess.run(run, env=old_cpu(tmp_path), check=True, capture_output=True, text=True).stdout
+    assert a == b and len(a.splitlines()) == 6
+
+
+NO_FMA_LIBM = "glibc.cpu.hwcaps=-FMA,-FMA4"  # glibc's math functions as on an x86-64 CPU without FMA
+
+
+def _libm_differs_without_fma() -> bool:
+    """Whether masking FMA changes glibc's ``sin`` here (x86-64 glibc on a CPU with FMA)."""
+    probe = "import math; print([math.sin(0.1 * k + 0.01).hex() for k in range(20000)])"
+    plain = subprocess.run([sys.executable, "-c", probe], check=True, capture_output=True, text=True).stdout
+    env = dict(os.environ, GLIBC_TUNABLES=NO_FMA_LIBM)
+    run = [sys.executable, "-c", probe]
+    masked = subprocess.run(run, env=env, check=True, capture_output=True, text=True)
+    return plain != masked.stdout
+
+
+@pytest.mark.slow  # the whole reproduction in a fresh interpreter (≈ 13 s)
+@pytest.mark.xfail(
+    strict=True,
+    reason="compiled code calls the C library's exp, sin, cos, atan2, pow; glibc's variants for CPUs "
+    "with and without FMA differ in rare last bits (75 of 100,000 exp calls), and training amplifies them: "
+    "47 of the 95 rows of evaluation.csv differ (docs/decisions.md, 'Speed and portable numbers')",
+)
+def test_reproduction_with_the_c_librarys_math_of_a_cpu_without_fma_equals_the_committed_evaluation(
+    tmp_path,
+):
+    if not _libm_differs_without_fma():
+        pytest.skip("no glibc FMA variants to mask here (not x86-64 glibc, or a CPU without FMA)")
+    env = dict(os.environ, GLIBC_TUNABLES=NO_FMA_LIBM)  # numba's target stays the host's
+    assert _reproduce(tmp_path / "run", env) == COMMITTED.read_bytes()

@@ -259,6 +259,8 @@ def camera_options(fn):
 
     number = click.FloatRange(min=0.0)
     options = [
+        # the cameras and sensors are perception.camera's CAMERAS and SENSORS (not imported here: it
+        # loads numba); tests/test_cli.py checks that these are they
         click.option(
             "--camera",
             type=click.Choice(["ideal", "vision", "vision-raw"]),

@@ -97,13 +97,14 @@ def trials(exp: ExperimentConfig) -> list[dict]:
     """One row per trial of ``exp``: name, label, algorithm, options, phases, episodes, repeats.
 
     ``options`` names the learner options (:data:`~pipefollow.learners.options.LEARNER_OPTIONS`)
-    set away from their defaults, and the readings; a phase with its own options lists them
-    (``learner``).
+    set away from their defaults, the readings, and the evaluation's camera, sensor and water
+    away from the paper's; a phase with its own options lists them (``learner``).
     """
     rows = []
     for t in exp.trials:
         options = [describe(learner_values(t))] if describe(learner_values(t)) else []
         options += [f"readings {t.reading.id}"] * (t.reading.id != "default")
+        options += _seeing(t)
         rows.append(
             {
                 "name": t.name,
@@ -114,10 +115,23 @@ def trials(exp: ExperimentConfig) -> list[dict]:
                 "episodes": t.episodes,
                 "repeats": exp.repeats,
                 "evaluate_on": t.evaluate_on,
+                "camera": t.camera,
+                "sensor": t.sensor,
+                "water": t.water,
                 "figures": list(t.figures),
             }
         )
     return rows
+
+
+def _seeing(t) -> list[str]:
+    """The evaluation's camera, sensor and water where a trial sets them (``camera vision``, ...)."""
+    seeing = [f"camera {t.camera}"] * (t.camera != "ideal") + [f"sensor {t.sensor}"] * (t.sensor != "camera")
+    if isinstance(t.water, dict):
+        seeing.append("water " + " ".join(f"{k}={v}" for k, v in t.water.items()))
+    elif t.water:
+        seeing.append(f"water {t.water}")
+    return seeing
 
 
 def pipeline_rows(entries: Sequence[PipelineEntry]) -> list[dict]:

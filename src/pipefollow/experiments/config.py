@@ -142,12 +142,13 @@ def _check_randomization(value, where: str, disturbance) -> dict:
 
 
 def _check_water(value, where: str, camera, sensor="camera") -> dict | str:
-    """A water preset name or table, checked (one-line errors); only with the vision camera or the sonar."""
+    """A water preset name or table, checked (one-line errors); only with a vision camera or the sonar."""
+    from pipefollow.perception.camera import VISION_CAMERAS
     from pipefollow.perception.water import WaterError, water_from
 
-    if camera != "vision" and sensor == "camera":
+    if camera not in VISION_CAMERAS and sensor == "camera":
         raise ConfigError(
-            f"{where}: water settings need camera = 'vision' or sensor = 'sonar' or 'fused', "
+            f"{where}: water settings need camera = 'vision' or 'vision-raw' or sensor = 'sonar' or 'fused', "
             f"got camera = {camera!r}"
         )
     if not isinstance(value, (str, dict)):

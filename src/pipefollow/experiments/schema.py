@@ -19,6 +19,7 @@ from pipefollow.files.paper_training import EPISODE_SECONDS, TRAINING_EPISODES
 from pipefollow.learners.options import LEARNER_OPTIONS, OPTION, PHASE_OPTIONS, check_schedule
 from pipefollow.learners.registry import NAMES as ALGORITHMS
 from pipefollow.learners.registry import agent_options, learner, takes, taking
+from pipefollow.perception.camera import CAMERAS, SENSORS
 
 # Figure and table keys of the report a trial can belong to (``figures = [...]`` in a trial).
 FIGURE_KEYS = ("fig5", "fig6", "fig7", "table1")
@@ -90,20 +91,22 @@ class TrialConfig:
     )
     camera: str = _f(
         "ideal",
-        "camera of the evaluation episode: ideal (the paper's) or vision (rendered image and pipe detector; "
-        "extra vision); training stays on the ideal camera's compiled loops",
-        choices=("ideal", "vision"),
+        "camera of the evaluation episode: ideal (the paper's), vision (rendered image, pipe detector and "
+        "tracker; extra vision) or vision-raw (the detector alone, frame by frame); training stays on the "
+        "ideal camera's compiled loops",
+        choices=CAMERAS,
     )
     water: dict | str | None = _f(
         None,
-        "water and camera settings of the vision camera: a preset name (clear, moderate, turbid) or a "
-        "table of pipefollow.perception.water.Water fields (preset key allowed); clear by default",
+        "water and camera settings of the vision cameras and the sonar: a preset name (clear, moderate, "
+        "turbid) or a table of pipefollow.perception.water.Water fields (preset key allowed); clear by "
+        "default",
     )
     sensor: str = _f(
         "camera",
         "sensor of the evaluation episode: camera (the camera alone), sonar (the look-ahead multibeam "
         "alone, with camera ideal) or fused (the camera's detections, the sonar's where it finds none)",
-        choices=("camera", "sonar", "fused"),
+        choices=SENSORS,
     )
     evaluate_on: str = _f("", "after training, evaluate deterministically on this pipeline ('' = none)")
     evaluate_seconds: float = _f(60.0, "length of the evaluation episode (s) (paper §4.2)")
