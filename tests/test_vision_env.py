@@ -87,6 +87,8 @@ def test_a_pipe_the_detector_cannot_see_is_a_lost_pipe():
         ({"reward_from": "detected"}, "needs camera='vision'"),
         ({"camera": "vision", "water": {"turbidity": math.nan}}, "water setting turbidity"),
         ({"camera": "vision", "water": "murky"}, "water preset 'murky'"),
+        ({"water": "turbid"}, "water='turbid' has no effect on the ideal camera's state observation"),
+        ({"water": {"burial": 0.5}, "camera": "ideal"}, "has no effect"),
     ],
 )
 def test_bad_camera_arguments_are_one_line_errors(kwargs, message):

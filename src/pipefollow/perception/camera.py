@@ -110,6 +110,11 @@ def camera_settings(
             f"sensor='sonar' observes with the sonar alone: camera must be 'ideal', got {camera!r}"
         )
     settings = CameraSettings(camera, observation, reward_from, water_from(water), sensor)
+    if water is not None and not settings.renders and sensor == "camera":
+        raise ValueError(
+            f"water={water!r} has no effect on the ideal camera's state observation: it needs "
+            "camera='vision' or 'vision-raw', observation='image', or sensor='sonar' or 'fused'"
+        )
     if camera in VISION_CAMERAS:
         require_cv2()
     return settings
