@@ -39,7 +39,6 @@ def patch(mode: str, log: list) -> None:
     from pipefollow.learners.heuristic import heuristic_action
     from pipefollow.perception import camera as cam
     from pipefollow.perception import track_step as ts
-    from pipefollow.perception.slots import sighting_of, write_sighting
 
     def _track(self, s, pose, det):
         tv = self.truth
@@ -65,12 +64,8 @@ def patch(mode: str, log: list) -> None:
             out[0] = 1.0 if tv.in_view else 0.0
             if tv.in_view and not T[ts.ACTIVE]:
                 out[1:5] = (tv.x1, tv.y1, tv.x2, tv.y_near)
+        self._show(s, out)
         seen = out[0] != 0.0
-        if seen:
-            self._last = sighting_of(out[1], out[2], out[3], out[4], side=out[5])
-        else:
-            self._last = self._last._replace(side=out[5])
-        write_sighting(s, self._last, seen)
         err = math.nan
         if seen and tv.in_view:
             err = abs(heuristic_action(out[1], out[2]) - heuristic_action(tv.x1, tv.y1))

@@ -222,6 +222,10 @@ class VisionCamera:
         out = self.tracker.step(pose, det.found, (det.x1, det.y1, det.x2, det.y_near))
         if self.aid is not None:
             out = self.aid(self.tracker)
+        self._show(s, out)
+
+    def _show(self, s: np.ndarray, out: np.ndarray) -> None:
+        """The observation slots from a tracker's output (in view, x1, y1, x2, y_near, side)."""
         seen = out[OUT_IN_VIEW] != 0.0
         if seen:
             ends = out[OUT_X1], out[OUT_Y1], out[OUT_X2], out[OUT_Y_NEAR]
