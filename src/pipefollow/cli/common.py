@@ -204,6 +204,19 @@ def disturbance_text(d, prefix: str = "; disturbances: ") -> str:
     return prefix + (", ".join(parts) or "varying current")
 
 
+def camera_record(camera) -> dict:
+    """A result's entries for ``--camera``, ``--sensor`` and the water (what :func:`camera_options` gave).
+
+    ``camera`` and ``water`` (its fields), and ``sensor`` unless it is the camera alone; ``{}`` for
+    the ideal camera alone.
+    """
+    if not camera:
+        return {}
+    out = {"camera": camera["camera"]}
+    if camera.get("sensor", "camera") != "camera":
+        out["sensor"] = camera["sensor"]
+    out["water"] = camera["water"]._asdict()
+    return out
 
 
 def command_line() -> str:

@@ -9,6 +9,8 @@ import click
 
 from pipefollow.cli.common import (
     UserError,
+    camera_record,
+    camera_text,
     check_plot_path,
     echo_result,
     guard,
@@ -16,6 +18,7 @@ from pipefollow.cli.common import (
     pipe_count,
 )
 from pipefollow.cli.options import (
+    camera_options,
     disturbance_options,
     json_option,
     pipes_option,
@@ -56,15 +59,17 @@ from pipefollow.cli.options import (
 )
 @json_option()
 @disturbance_options
+@camera_options
 @guard
 def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path, scores_path, as_json,
-            disturbance):  # fmt: skip
+            disturbance, camera):  # fmt: skip
     """Compare learners over training seeds × pipes: IQM, mean, probability of improvement.
 
     Every POLICY (a policy file, or heuristic / los) runs one deterministic episode per pipe
     under the readings it was trained with. Policies of one learner (same training options, or
     same --label) are its runs; the intervals are rliable's stratified bootstrap over runs, kept
-    per pipe, so they need several training seeds per learner.
+    per pipe, so they need several training seeds per learner. With --camera vision (or --sensor
+    sonar, fused) every policy observes through that camera or sensor and water.
     """
     import numpy as np
 
@@ -92,11 +97,11 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
     for spec, agent, label in zip(policies, agents, labels, strict=True):
         reading = parse(getattr(agent, "readings", "default"), source=f"policy '{spec}' readings")
         params = sim_params(reading)._replace(disturbance=disturbance)
-        res, _ = run_episodes(agent, pipe_list, seconds, params, noise_seed=seed)
+        res, _ = run_episodes(agent, pipe_list, seconds, params, noise_seed=seed, camera=camera)
         rows.setdefault(label, []).append(res[:, STAT_RETURN])
         stats.setdefault(label, []).append(res)
     result = run_compare({k: np.stack(v) for k, v in rows.items()}, reps=reps, seed=seed)
-    summary = {"suite": suite.name, "seconds": seconds, **result.summary}
+    summary = {"suite": suite.name, "seconds": seconds, **camera_record(camera), **result.summary}
     lengths = [p.length for p in pipe_list]
     for label, runs in stats.items():
         summary["learners"][label].update(summary_of_runs(runs, lengths))
@@ -116,13 +121,13 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
 
         plot_comparison(summary, plot_path)
         summary["plot"] = str(plot_path)
-    echo_result(summary, as_json, lambda: _format(summary))
+    echo_result(summary, as_json, lambda: _format(summary, camera))
 
 
-def _format(s: dict) -> str:
+def _format(s: dict, camera=None) -> str:
     lines = [
         f"{len(s['learners'])} learners on '{s['suite']}': {s['pipes']} pipes, {s['seconds']:g} s each; "
-        f"95 % stratified-bootstrap intervals over runs ({s['reps']} replicates)",
+        f"95 % stratified-bootstrap intervals over runs ({s['reps']} replicates){camera_text(camera)}",
         f"{'learner':<34} {'runs':>4} {'IQM':>8} {'95 % CI':>19} {'mean':>8} {'95 % CI':>19} "
         f"{'success':>7} {'progress':>8} {'back':>4}",
     ]

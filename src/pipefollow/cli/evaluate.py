@@ -8,6 +8,7 @@ import click
 
 from pipefollow.cli.common import (
     apply_readings,
+    camera_record,
     camera_text,
     check_plot_path,
     disturbance_text,
@@ -130,11 +131,7 @@ def _settings(disturbance, camera, warnings: list[str]) -> dict:
     out = {}
     if disturbance != _disturbance.NO_DISTURBANCE:
         out["disturbance"] = _disturbance.to_dict(disturbance)
-    if camera:
-        out["camera"] = camera["camera"]
-        if camera.get("sensor", "camera") != "camera":
-            out["sensor"] = camera["sensor"]
-        out["water"] = camera["water"]._asdict()
+    out.update(camera_record(camera))
     if warnings:
         out["warnings"] = warnings
     return out

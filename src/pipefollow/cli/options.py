@@ -360,4 +360,3 @@ def learner_options(fn):
     for o in reversed(LEARNER_OPTIONS):
         wrapper = option_of(o)(wrapper)
     return wrapper
-

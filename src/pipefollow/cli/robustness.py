@@ -10,6 +10,8 @@ import click
 from pipefollow.cli.common import (
     SEED,
     UserError,
+    camera_record,
+    camera_text,
     command_line,
     finite,
     guard,
@@ -17,7 +19,7 @@ from pipefollow.cli.common import (
     pipe_count,
     writable_folder,
 )
-from pipefollow.cli.options import MAX_EPISODE_SECONDS, pipes_option, suite_option
+from pipefollow.cli.options import MAX_EPISODE_SECONDS, camera_options, pipes_option, suite_option
 from pipefollow.files.paper_training import TEST_EPISODE_SECONDS
 
 OUTPUTS = ("curve.csv", "scenarios.csv", "robustness.json", "robustness.png", "provenance.json")
@@ -87,14 +89,17 @@ def _controllers(specs, seed: int) -> dict[str, list]:
     help="Folder for curve.csv, scenarios.csv, robustness.json and the figure robustness.png.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of tables.")
+@camera_options
 @guard
-def robustness(controllers, suite_specs, pipes, seconds, speeds, sets, seed, out_dir, as_json):
+def robustness(controllers, suite_specs, pipes, seconds, speeds, sets, seed, out_dir, as_json, camera):
     """Success rate and mean return against current speed, and on fixed scenario sets.
 
     Every controller runs one deterministic episode per pipe of the suite at each current speed
     (pipe k's current always flows towards the same seeded direction) and on each scenario set
     (currents, camera noise, missed detections, buried stretches, all at once; seeded per pipe), beside
     the heuristic. Policies that share a label are pooled as training seeds.
+    With --camera vision (or --sensor sonar, fused) every controller, the heuristic beside them too,
+    observes through that camera or sensor and water; success and in view are the exact camera's.
     """
     from pipefollow.evaluation import robustness as rb
     from pipefollow.sim.pipe_names import resolve_suite
@@ -113,10 +118,11 @@ def robustness(controllers, suite_specs, pipes, seconds, speeds, sets, seed, out
             if (Path(out_dir) / name).is_dir():
                 raise UserError(f"--out '{out_dir}': {name} is a folder")
     folder = writable_folder(out_dir, "--out") if out_dir else None
-    common = dict(n_pipes=n, seconds=seconds, seed=seed)
+    common = dict(n_pipes=n, seconds=seconds, seed=seed, camera=camera)
     curve = rb.robustness_curve(agents, suite, speeds=speed_list, **common)
     table = rb.scenario_table(agents, suite, sets=set_list, **common)
-    result = {"suite": suite.name, "pipes": n, "seconds": seconds, "curve": curve, "scenarios": table}
+    result = {"suite": suite.name, "pipes": n, "seconds": seconds, **camera_record(camera), "curve": curve,
+              "scenarios": table}  # fmt: skip
     if folder is not None:
         from pipefollow.files.atomic import write_text_atomic
         from pipefollow.files.machine import write_provenance
@@ -126,12 +132,15 @@ def robustness(controllers, suite_specs, pipes, seconds, speeds, sets, seed, out
         write_text_atomic(folder / "robustness.json", json.dumps(result, indent=1) + "\n")
         write_provenance(folder, command_line())
         if curve:
-            rb.plot_curve(curve, folder / "robustness.png", f"'{suite.name}', {n} pipes × {seconds:g} s")
+            title = f"'{suite.name}', {n} pipes × {seconds:g} s{camera_text(camera, ', ')}"
+            rb.plot_curve(curve, folder / "robustness.png", title)
         result["files"] = [str(folder / name) for name in OUTPUTS if curve or name != "robustness.png"]
     if as_json:
         click.echo(json.dumps(result))
         return
     cell = "mean return [95 % CI], success rate (pipe in view ≥ 95 % and followed forward)"
+    if camera:
+        click.echo(f"every controller observes through: {camera_text(camera, '')}\n")
     if curve:
         click.echo(f"current speed (m/s) — {cell}:\n" + rb.markdown(curve, "current_speed", "speed (m/s)"))
     if table:

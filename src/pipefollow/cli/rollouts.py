@@ -8,6 +8,8 @@ import click
 
 from pipefollow.cli.common import (
     UserError,
+    camera_record,
+    camera_text,
     echo_result,
     finite,
     guard,
@@ -16,6 +18,7 @@ from pipefollow.cli.common import (
     writable_folder,
 )
 from pipefollow.cli.options import (
+    camera_options,
     controller_options,
     disturbance_options,
     json_option,
@@ -52,13 +55,16 @@ from pipefollow.cli.options import (
 )
 @json_option("Print one JSON object: the dataset's id and folder.")
 @disturbance_options
+@camera_options
 @guard
 def rollouts(controller, lookahead, suite_specs, pipes, seconds, sigma, seed, out_dir, dataset_id, as_json,
-             disturbance):  # fmt: skip
+             disturbance, camera):  # fmt: skip
     """Write a controller's episodes on a suite as a Minari dataset (offline RL, behaviour cloning).
 
     Observations, actions, rewards and the infos of every step, one episode per pipe; needs the
     optional extra 'rollouts'. Read it back with minari.load_dataset(ID) and MINARI_DATASETS_PATH=OUT.
+    With --camera vision (or --sensor sonar, fused) the controller observes through that camera or
+    sensor and water, and the dataset's environment is that one.
     """
     from pathlib import Path
 
@@ -81,11 +87,12 @@ def rollouts(controller, lookahead, suite_specs, pipes, seconds, sigma, seed, ou
     try:
         path = record_rollouts(
             agent, suite.pipes(n, min_length_for(seconds)), folder, dataset_id,
-            seconds=seconds, params=params, sigma=sigma, seed=seed,
+            seconds=seconds, params=params, sigma=sigma, seed=seed, camera=camera,
         )  # fmt: skip
     except RolloutsExtraMissing as e:
         raise UserError(str(e)) from None
     echo_result(
-        {"dataset_id": dataset_id, "folder": str(path), "episodes": n}, as_json,
-        lambda: f"wrote {n} episodes of {controller} on '{suite.name}' as {dataset_id} to {path}",
+        {"dataset_id": dataset_id, "folder": str(path), "episodes": n, **camera_record(camera)}, as_json,
+        lambda: f"wrote {n} episodes of {controller} on '{suite.name}' as {dataset_id} to {path}"
+        + camera_text(camera),
     )  # fmt: skip

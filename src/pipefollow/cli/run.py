@@ -10,12 +10,14 @@ import click
 from pipefollow.cli.common import (
     UserError,
     apply_readings,
+    camera_record,
     echo_result,
     guard,
     policy_file,
     writable_folder,
 )
 from pipefollow.cli.options import (
+    camera_options,
     disturbance_options,
     episodes_option,
     json_option,
@@ -91,6 +93,7 @@ DEEP = ("ppo", "sac")  # the learners of Stable-Baselines3 (pipefollow.training.
     "options.",
 )
 @disturbance_options
+@camera_options
 @guard
 def train(
     algorithm,
@@ -108,12 +111,15 @@ def train(
     as_json,
     randomization,
     disturbance,
+    camera,
 ):
     """Train a learner; writes the policy and its learning curve.
 
     Every learner option of experiment files is an option here too (--critic-lambda, --alpha-v,
     --sigma-start, --state, ...): the same values give the same policy. An --out folder that already
     holds them is refused unless --force is given. Ctrl-C stops without writing anything (exit status 130).
+    PPO and SAC train through --camera vision (or --sensor sonar, fused) and its water; the paper's
+    learners train in the compiled loop of the ideal camera and refuse them.
     """
     _refuse_existing(out_dir, force)
     randomization = _randomization(randomization, disturbance)
@@ -122,8 +128,9 @@ def train(
     if algorithm in DEEP:
         _refuse_learner_options(algorithm, learner_options)
         return _train_deep(
-            algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization
+            algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization, camera
         )
+    _refuse_camera(algorithm, camera)
     if steps is not None:
         raise UserError("--steps applies to --algorithm ppo and sac only (use --episodes)")
     from pipefollow.files.output_paths import first_missing
@@ -281,7 +288,22 @@ def _given(*names: str) -> list[str]:
     return [option[n] for n in names if ctx.get_parameter_source(n) == ParameterSource.COMMANDLINE]
 
 
-def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization=None):
+def _refuse_camera(algorithm: str, camera) -> None:
+    """The paper's learners train in their compiled loop, which observes through the ideal camera only."""
+    if camera:
+        given = (
+            ("--camera", camera["camera"]) if camera["camera"] != "ideal" else ("--sensor", camera["sensor"])
+        )
+        raise UserError(
+            f"{' '.join(given)}: --algorithm {algorithm} trains in the compiled loop of the ideal camera; "
+            "train it under the camera's calibrated noise with --randomization vision, or train ppo or sac "
+            "through the camera"
+        )
+
+
+def _train_deep(
+    algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization=None, camera=None
+):
     """``train --algorithm ppo|sac``: :func:`pipefollow.training.deep.train_to_folder`."""
     given = _given("episodes", "init_policy", "readings")
     if given:
@@ -306,8 +328,9 @@ def _train_deep(algorithm, pipeline, seconds, steps, seed, out_dir, as_json, dis
             extra["randomization"] = randomization
         result = deep.train_to_folder(
             algorithm, pipeline, out, steps=steps, seconds=seconds, seed=seed,
-            progress=_counter(bar, every=256, total=steps), **extra,
+            progress=_counter(bar, every=256, total=steps), camera=camera, **extra,
         )  # fmt: skip
+    result.update(camera_record(camera))
     _echo_trained(result, disturbance, randomization, as_json, lambda: deep.result_text(result))
 
 

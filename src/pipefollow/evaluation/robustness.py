@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipefollow.evaluation import success as sc
-from pipefollow.evaluation.benchmark import run_episodes
+from pipefollow.evaluation.benchmark import heuristic_camera, run_episodes
 from pipefollow.evaluation.stats import bootstrap_ci, iqm, paired_difference
 from pipefollow.files.paper_training import TEST_EPISODE_SECONDS
 from pipefollow.learners.heuristic import Heuristic
@@ -174,12 +174,19 @@ def curve_scenarios(
 # Running
 
 
-def run_scenarios(agent, cases: Sequence[Scenario], seconds: float, params: sim.SimParams = sim.PAPER_SIM):
-    """One deterministic episode of ``agent`` per scenario: rows of :func:`benchmark.run_episodes`."""
+def run_scenarios(
+    agent, cases: Sequence[Scenario], seconds: float, params: sim.SimParams = sim.PAPER_SIM,
+    camera: dict | None = None,
+):  # fmt: skip
+    """One deterministic episode of ``agent`` per scenario: rows of :func:`benchmark.run_episodes`.
+
+    ``camera``: the environment's camera arguments (:func:`benchmark.run_episodes`); None for the
+    ideal camera.
+    """
     out = np.empty((len(cases), len(STAT_NAMES)))
     for i, c in enumerate(cases):
         p = params._replace(disturbance=c.disturbance)
-        out[i] = run_episodes(agent, [c.pipe], seconds, p, c.noise_seed)[0][0]
+        out[i] = run_episodes(agent, [c.pipe], seconds, p, c.noise_seed, camera)[0][0]
     return out
 
 
@@ -232,9 +239,14 @@ def evaluate(
     seconds: float,
     seed: int = 0,
     progress=None,
+    camera: dict | None = None,
 ) -> list[dict]:
-    """Rows of :func:`summarize` for the heuristic and each labelled controller on ``cases``."""
-    h = run_scenarios(Heuristic(), cases, seconds)
+    """Rows of :func:`summarize` for the heuristic and each labelled controller on ``cases``.
+
+    ``camera``: what every controller observes through (:func:`benchmark.run_episodes`), the
+    heuristic beside them too (:func:`benchmark.heuristic_camera`); None for the ideal camera.
+    """
+    h = run_scenarios(Heuristic(), cases, seconds, camera=heuristic_camera(camera))
     lengths = [c.pipe.length for c in cases]
     rows = [summarize(HEURISTIC_LABEL, [h], None, seed, lengths)]
     for label, agents in controllers.items():
@@ -242,7 +254,7 @@ def evaluate(
             continue
         results = []
         for agent in agents:
-            results.append(run_scenarios(agent, cases, seconds, params_for(agent)))
+            results.append(run_scenarios(agent, cases, seconds, params_for(agent), camera))
             if progress:
                 progress()
         rows.append(summarize(label, results, h, seed, lengths))
@@ -258,12 +270,19 @@ def robustness_curve(
     seconds: float = TEST_EPISODE_SECONDS,
     seed: int = 0,
     progress=None,
+    camera: dict | None = None,
 ) -> list[dict]:
-    """Rows (label, speed): success rate, mean return with CI, vs the heuristic (module docstring)."""
+    """Rows (label, speed): success rate, mean return with CI, vs the heuristic (module docstring).
+
+    ``camera``: what the controllers observe through (:func:`evaluate`); None for the ideal camera.
+    """
     cases = {v: curve_scenarios(v, suite, n_pipes, seconds) for v in speeds}  # checks every speed first
     rows = []
     for v, cs in cases.items():
-        rows += [{"current_speed": float(v), **r} for r in evaluate(controllers, cs, seconds, seed, progress)]
+        rows += [
+            {"current_speed": float(v), **r}
+            for r in evaluate(controllers, cs, seconds, seed, progress, camera)
+        ]
     return rows
 
 
@@ -276,12 +295,13 @@ def scenario_table(
     seconds: float = TEST_EPISODE_SECONDS,
     seed: int = 0,
     progress=None,
+    camera: dict | None = None,
 ) -> list[dict]:
-    """Rows (label, scenario set) of :func:`evaluate` on each set's fixed scenarios."""
+    """Rows (label, scenario set) of :func:`evaluate` on each set's fixed scenarios (``camera``: as there)."""
     cases = {name: scenarios(name, suite, n_pipes, seconds) for name in sets}  # checks every name first
     rows = []
     for name, cs in cases.items():
-        rows += [{"scenarios": name, **r} for r in evaluate(controllers, cs, seconds, seed, progress)]
+        rows += [{"scenarios": name, **r} for r in evaluate(controllers, cs, seconds, seed, progress, camera)]
     return rows
 
 

@@ -44,11 +44,12 @@ def _datasets_path(folder: Path):
             os.environ["MINARI_DATASETS_PATH"] = old
 
 
-def _environment(first: Pipeline, seconds: float, params):
+def _environment(first: Pipeline, seconds: float, params, camera: dict | None = None):
     """The environment the rollouts run in, made by ``gym.make`` so that the dataset keeps its spec.
 
-    Its keyword arguments are plain numbers (the first pipe's points, the episode's seconds, the
-    disturbance as its user-unit table), so Minari stores the spec as JSON and
+    Its keyword arguments are plain numbers and names (the first pipe's points, the episode's
+    seconds, the disturbance as its user-unit table, the camera, sensor and water's fields), so
+    Minari stores the spec as JSON and
     ``recover_environment()`` makes the same environment again; each episode's pipe is its reset
     option, which Minari stores with its seed. A simulation other than the paper's besides its
     disturbance (another reading) has no such form: the environment is then built directly and the
@@ -65,6 +66,8 @@ def _environment(first: Pipeline, seconds: float, params):
 
     params = sim.PAPER_SIM if params is None else params
     kwargs = {"pipeline": first.points.tolist(), "episode_seconds": float(seconds)}
+    for key, value in (camera or {}).items():  # a Water record as the dict of its fields
+        kwargs[key] = dict(value._asdict()) if hasattr(value, "_asdict") else value
     table = to_dict(params.disturbance)
     if params._replace(disturbance=sim.PAPER_SIM.disturbance) != sim.PAPER_SIM or (
         disturbance_from_dict(table) != params.disturbance
@@ -98,6 +101,7 @@ def record_rollouts(
     sigma: float = 0.0,
     seed: int = 0,
     description: str = "",
+    camera: dict | None = None,
 ) -> Path:
     """Run ``agent`` once on each pipe and write the episodes as the Minari dataset ``dataset_id``.
 
@@ -111,6 +115,8 @@ def record_rollouts(
         sigma: exploration σ of a learner (0: deterministic).
         seed: seed of episode ``k``'s environment: ``seed + k``.
         description: a line for the dataset's metadata.
+        camera: the environment's camera arguments (``camera``, ``water``, ``sensor``), kept in the
+            dataset's spec; None for the ideal camera.
 
     Returns:
         The dataset's folder.
@@ -125,7 +131,7 @@ def record_rollouts(
 
     folder = Path(folder).resolve()  # Minari joins relative paths twice
     folder.mkdir(parents=True, exist_ok=True)
-    env = _environment(pipes[0], seconds, params)
+    env = _environment(pipes[0], seconds, params, camera)
     import gc
     import warnings
 

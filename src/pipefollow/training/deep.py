@@ -263,6 +263,7 @@ def train_deep(
     disturbance=None,
     progress: Callable[[int], None] | None = None,
     randomization=None,
+    camera: dict[str, Any] | None = None,
     **overrides,
 ) -> DeepRun:
     """Train PPO or SAC for ``steps`` environment steps (decisions) and export its actor.
@@ -277,6 +278,8 @@ def train_deep(
         disturbance: disturbances replacing ``params.disturbance``, as for the environment.
         randomization: domain randomization, as for the vector environment (each sub-environment
             draws its episode's disturbances at its reset).
+        camera: the environment's camera arguments (``camera``, ``water``, ``sensor``): the learner
+            observes through them; None for the ideal camera.
         progress: called with the number of steps done.
         **overrides: hyper-parameters replacing :data:`DEFAULTS`.
     """
@@ -290,6 +293,7 @@ def train_deep(
         kwargs["disturbance"] = disturbance
     if randomization is not None:
         kwargs["randomization"] = randomization
+    kwargs.update(camera or {})
     venv = VecMonitor(SB3VecEnv(PipelineFollowingVectorEnv(hp["n_envs"], pipeline, **kwargs)))
     model = make_model(algorithm, venv, hp, seed)
     callback = _Progress(progress)
@@ -339,11 +343,13 @@ def train_to_folder(
     disturbance=None,
     progress: Callable[[int], None] | None = None,
     randomization=None,
+    camera: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """:func:`train_deep`, then write ``policy.npz``, ``hyperparameters.json`` and ``learning_curve.csv``.
 
     Returns the summary: ``algorithm``, ``policy``, ``hyperparameters`` (its file),
     ``learning_curve``, ``returns`` (of the finished training episodes), ``steps``, ``wall_s``.
+    ``camera`` (:func:`train_deep`) is recorded in ``hyperparameters.json`` (the water as its fields).
     """
     from pipefollow.files.atomic import write_text_atomic
     from pipefollow.training.outputs import csv_text
@@ -359,7 +365,9 @@ def train_to_folder(
         disturbance=disturbance,
         progress=progress,
         randomization=randomization,
+        camera=camera,
     )
+    seen = {k: v._asdict() if hasattr(v, "_asdict") else v for k, v in (camera or {}).items()}
     record = {"pipeline": str(pipeline), "seconds": seconds, "steps": run.steps, "seed": seed}
     hp_path = write_hyperparameters(
         out / "hyperparameters.json",
@@ -368,6 +376,7 @@ def train_to_folder(
         **record,
         wall_s=run.wall_s,
         torch_version=torch.__version__,
+        **({"observed_through": seen} if seen else {}),
     )
     policy_path = save_policy(run.policy, out / "policy.npz", hyperparameters=run.hyperparameters, **record)
     curve = out / "learning_curve.csv"
