@@ -152,8 +152,12 @@ def test_each_entry_point_takes_its_forms_and_shares_the_fixed_ones():
     family, first = pipeline_source("random:hard")
     assert family is SUITES["hard"] and first.name == "hard-000"
     assert resolve_pipeline("heldout-003", 20.0).name == "heldout-003"  # suite pipes: evaluation only
-    for resolve in (resolve_fixed, resolve_training):
-        with pytest.raises(PipelineError, match="not a built-in .* and no such file"):
+    family, pipe = pipeline_source("heldout-003", 20.0)  # the environments, told their episode
+    assert family is None and np.array_equal(pipe.points, resolve_pipeline("heldout-003", 20.0).points)
+    with pytest.raises(PipelineError, match="not a built-in .* and no such file"):
+        resolve_fixed("heldout-003")
+    for resolve in (resolve_training, pipeline_source):  # training, and an environment not told its episode
+        with pytest.raises(PipelineError, match="a suite's pipe is for judging a policy"):
             resolve("heldout-003")
     with pytest.raises(PipelineError, match="no such file"):
         resolve_fixed("random:hard")  # a family is no fixed pipeline

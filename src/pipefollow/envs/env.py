@@ -116,11 +116,13 @@ class PipelineFollowingEnv(gym.Env):
 
     * ``pipeline``: built-in name (``paper-left``, ``paper-right``, ``paper-validation``), path of a
       JSON file ``{"points": [[x, y], ...]}``, the points themselves (``[[0, 0], [5, 0], [5, 5]]``,
-      m, x north, y east) or a :class:`~pipefollow.sim.pipeline.Pipeline`.
-      ``reset(options={"pipeline": ...})`` switches it. ``random`` or ``random:NAME`` (a training
-      family of :mod:`pipefollow.sim.suites`; ``random`` is ``mixed``) draws a new pipe from the
-      environment's generator at every reset, so auto-resetting vector environments train on a
-      fresh pipe every episode.
+      m, x north, y east), a :class:`~pipefollow.sim.pipeline.Pipeline`, or a suite's pipe by the name
+      ``pipefollow suites export`` gives it (``heldout-003``: pipe 3 of ``heldout``, as long as
+      ``episode_seconds`` needs, as ``pipefollow evaluate --pipeline`` takes it; held-out pipes are
+      there to judge a policy, not to train it). ``reset(options={"pipeline": ...})`` switches it.
+      ``random`` or ``random:NAME`` (a training family of :mod:`pipefollow.sim.suites`; ``random``
+      is ``mixed``) draws a new pipe from the environment's generator at every reset, so
+      auto-resetting vector environments train on a fresh pipe every episode.
     * ``episode_seconds``: episode length in seconds (default 20).
     * ``start_lateral_noise``, ``start_heading_noise_deg``: start perturbation (default 0).
     * ``render_mode``: ``None``, ``"rgb_array"`` (the paper's Fig. 2 view as an image) or
@@ -239,7 +241,7 @@ class PipelineFollowingEnv(gym.Env):
             self.randomization = resolve_randomization(randomization)
             check_not_both(setup.params.disturbance, self.randomization)
         self.episode_setup = setup  # this episode's: under a randomization, its own disturbances
-        self.suite, self.pipeline = pipeline_source(pipeline)
+        self.suite, self.pipeline = pipeline_source(pipeline, setup.episode_seconds)
         self.episode_seconds = setup.episode_seconds
         self.max_decisions = setup.max_decisions
         self.start_lateral_noise = setup.start_lateral_noise
@@ -272,7 +274,7 @@ class PipelineFollowingEnv(gym.Env):
         super().reset(seed=seed)
         opts = parse_reset_options(options)
         if opts.switches_pipeline:
-            self.suite, self.pipeline = pipeline_source(opts.pipeline)
+            self.suite, self.pipeline = pipeline_source(opts.pipeline, self.episode_seconds)
         if self.randomization is not None:  # drawn first, before the pipe
             self.episode_setup = randomized_setup(self.setup, self.randomization, self.np_random)
             self._z = np.zeros(self.episode_setup.noise_count)

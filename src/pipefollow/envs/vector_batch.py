@@ -61,11 +61,12 @@ class PipeBatch:
 
     Args:
         specs: one pipeline spec per sub-environment (:func:`pipeline_specs`).
+        seconds: the episode's length, for suite pipes (:func:`pipeline_source`).
     """
 
-    def __init__(self, specs: list) -> None:
+    def __init__(self, specs: list, seconds: float | None = None) -> None:
         n = len(specs)
-        sources = [pipeline_source(s) for s in specs]
+        sources = [pipeline_source(s, seconds) for s in specs]
         self.suites = [suite for suite, _ in sources]
         self.pipelines = [pipe for _, pipe in sources]
         cap = max(len(p.points) for p in self.pipelines)

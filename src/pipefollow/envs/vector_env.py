@@ -154,7 +154,8 @@ class PipelineFollowingVectorEnv(VectorEnv):
             self.randomization = resolve_randomization(randomization)
             check_not_both(setup.params.disturbance, self.randomization)
         self._describe(n, mode, camera)
-        self._pipes = PipeBatch(specs)  # each sub-environment's pipe, padded for step_batch
+        # each sub-environment's pipe, padded for step_batch
+        self._pipes = PipeBatch(specs, setup.episode_seconds)
         self.suites, self.pipelines = self._pipes.suites, self._pipes.pipelines  # the batch's lists
         self._make_buffers()
 
@@ -233,7 +234,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
             if seeds[i] is not None:
                 rngs[i] = seeding.np_random(seeds[i])[0]
         if opts.switches_pipeline:
-            source = pipeline_source(opts.pipeline)
+            source = pipeline_source(opts.pipeline, self.setup.episode_seconds)
             for i in chosen:
                 self.suites[i] = source[0]
                 self._pipes.load(i, source[1])

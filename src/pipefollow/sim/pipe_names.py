@@ -99,17 +99,36 @@ def resolve_fixed(spec) -> Pipeline:
 
 
 def resolve_training(spec) -> Pipeline | Suite:
-    """A fixed pipeline (:func:`resolve_fixed`) or a training family (``random[:NAME]``)."""
+    """A fixed pipeline (:func:`resolve_fixed`) or a training family (``random[:NAME]``).
+
+    A suite pipe's name (``heldout-003``) is refused with the ways to use it: suite pipes are for
+    judging a policy (the environments and ``evaluate`` take them, :func:`pipeline_source`).
+    """
     family = parse_random_spec(spec)
-    return family if family is not None else resolve_fixed(spec)
+    if family is not None:
+        return family
+    if isinstance(spec, str) and not Path(spec).exists():
+        m = _SUITE_PIPE.fullmatch(spec)
+        if m is not None and m.group("suite") in SUITES:
+            raise PipelineError(
+                f"pipeline '{spec}': a suite's pipe is for judging a policy (evaluate --pipeline, benchmark "
+                "--suite, the environments' pipeline=); train on random:FAMILY, a built-in or a pipeline file"
+            )
+    return resolve_fixed(spec)
 
 
-def pipeline_source(spec) -> tuple[Suite | None, Pipeline]:
+def pipeline_source(spec, seconds: float | None = None) -> tuple[Suite | None, Pipeline]:
     """The training family of ``spec`` (or None) and the pipeline to show before the first reset.
 
-    ``spec`` is what :func:`resolve_training` takes; until the first reset, a family shows its
-    first pipe.
+    ``spec`` is what :func:`resolve_training` takes, and with ``seconds`` (the environments' episode)
+    a suite pipe ``SUITE-KKK`` too, as long as that episode needs (:func:`suite_pipe_by_name`, as
+    ``evaluate --pipeline`` takes it): held-out pipes are there to judge a policy on, and a fixed
+    pipe cannot be drawn by training on a family. Until the first reset, a family shows its first pipe.
     """
+    if seconds is not None and isinstance(spec, str):
+        pipe = suite_pipe_by_name(spec, seconds)
+        if pipe is not None:
+            return None, pipe
     resolved = resolve_training(spec)
     if isinstance(resolved, Suite):
         return resolved, resolved.pipe(0)
