@@ -154,7 +154,10 @@ class PipelineFollowingEnv(gym.Env):
       ``"fused"`` (each decision the camera's detection when it finds the pipe, else the sonar's
       view, fed to the vision camera's pipe tracker — or, with the ideal camera, the sonar's view
       while the exact camera sees no pipe). The sonar draws from a generator spawned from
-      ``np_random`` at each reset, so the camera's draws stay what they are.
+      ``np_random`` at each reset, so the camera's draws stay what they are. With
+      ``observation="image"`` the agent observes the camera's image (the frames of
+      ``observation="image"`` alone) while the sensor decides the pipe in view, the search and the
+      −10: the rewards and the episode are those of the same sensor with the state observation.
     * ``randomization``: domain randomization, a
       :class:`~pipefollow.sim.randomization.Randomization`, a preset name (``mild``, ``moderate``,
       ``vision``, ``harsh``) or a table of its keys: every reset draws the episode's disturbances from
