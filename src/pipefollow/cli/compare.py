@@ -75,6 +75,7 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
 
     from pipefollow.evaluation.benchmark import run_episodes
     from pipefollow.evaluation.compare import compare as run_compare
+    from pipefollow.evaluation.compare import format_summary
     from pipefollow.evaluation.success import summary_of_runs
     from pipefollow.readings import parse, sim_params
     from pipefollow.sim.episode import STAT_RETURN
@@ -121,36 +122,4 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
 
         plot_comparison(summary, plot_path)
         summary["plot"] = str(plot_path)
-    echo_result(summary, as_json, lambda: _format(summary, camera))
-
-
-def _format(s: dict, camera=None) -> str:
-    lines = [
-        f"{len(s['learners'])} learners on '{s['suite']}': {s['pipes']} pipes, {s['seconds']:g} s each; "
-        f"95 % stratified-bootstrap intervals over runs ({s['reps']} replicates){camera_text(camera)}",
-        f"{'learner':<34} {'runs':>4} {'IQM':>8} {'95 % CI':>19} {'mean':>8} {'95 % CI':>19} "
-        f"{'success':>7} {'progress':>8} {'back':>4}",
-    ]
-    for label, r in s["learners"].items():
-        iq, mn = r["ci95_iqm"], r["ci95_mean"]
-        lines.append(
-            f"{label[:34]:<34} {r['runs']:>4} {r['iqm']:>8.2f} {iq[0]:>9.2f}–{iq[1]:<9.2f} "
-            f"{r['mean']:>8.2f} {mn[0]:>9.2f}–{mn[1]:<9.2f} "
-            f"{r['success_rate']:>7.0%} {r['mean_progress_share']:>8.0%} {r['turned_back']:>4d}"
-        )
-    lines.append(
-        "success: pipe in view ≥ 95 % of the decisions and followed forward; progress: of the reachable; "
-        "back: episodes that followed the pipe backwards ≥ 3 m"
-    )
-    if s["probability_of_improvement"]:
-        lines.append("probability of improvement P(X > Y), per pipe over runs, averaged over pipes:")
-        for p in s["probability_of_improvement"]:
-            lo, hi = p["ci95"]
-            lines.append(f"  P({p['x']} > {p['y']}) = {p['probability']:.2f}  (95 % CI {lo:.2f}–{hi:.2f})")
-    if any(r["runs"] == 1 for r in s["learners"].values()):
-        lines.append("note: a learner with one run has intervals of no width; train several seeds")
-    if "plot" in s:
-        lines.append(f"plot: {s['plot']}")
-    if "scores_file" in s:
-        lines.append(f"scores (rliable's layout): {s['scores_file']}")
-    return "\n".join(lines)
+    echo_result(summary, as_json, lambda: format_summary(summary, camera_text(camera)))

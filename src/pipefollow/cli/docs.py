@@ -58,11 +58,14 @@ def results(docs_dir, out_dir, names, readme_path, check):
     """Write one results page per result from the stored outputs under DOCS.
 
     Tables are rendered from the stored CSV/JSON files and every number in a page's text is filled
-    from them; the output depends on the stored outputs only (no clock or machine of its own: the
-    dates and machines a page shows are those its outputs record), so a page that differs from
-    its regeneration is stale (--check; tests/test_results_pages.py).
+    from them; so are the generated blocks of guide pages (a command's sample output, a table of
+    results) between their marker lines, rewritten in place. The output depends on the stored
+    outputs only (no clock or machine of its own: the dates and machines a page shows are those its
+    outputs record), so a page that differs from its regeneration is stale (--check;
+    tests/test_results_pages.py).
     """
     from pipefollow.experiments import results_pages
+    from pipefollow.experiments.results_pages import blocks
 
     for n in names:
         if n not in results_pages.PAGES:
@@ -85,11 +88,19 @@ def results(docs_dir, out_dir, names, readme_path, check):
         if readme_path is not None and readme.stale(Path(readme_path), Path(docs_dir)):
             stale.append("README")
             click.echo(f"stale: the generated blocks (claims table, compile time) of {readme_path}")
+        for path in blocks.stale(Path(docs_dir)):
+            stale.append(str(path))
+            click.echo(f"stale: the generated blocks (sample outputs, tables) of {path}")
         if stale:
             raise SystemExit(1)
-        click.echo(f"up to date: {len(names or results_pages.PAGES)} page(s) in {out}")
+        click.echo(
+            f"up to date: {len(names or results_pages.PAGES)} page(s) in {out}, the generated blocks of "
+            f"{len(blocks.pages(Path(docs_dir)))} guide page(s)"
+        )
         return
     for path in results_pages.write_pages(docs_dir, out, names or None):
         click.echo(f"wrote {path}")
     if readme_path is not None and readme.update(Path(readme_path), Path(docs_dir)):
         click.echo(f"wrote the generated blocks (claims table, compile time) of {readme_path}")
+    for path in blocks.update(Path(docs_dir)):
+        click.echo(f"wrote the generated blocks (sample outputs, tables) of {path}")

@@ -230,3 +230,40 @@ def compare(
         "probability_of_improvement": poi,
     }
     return Comparison(summary, mats)
+
+
+def format_summary(s: dict, head: str = "") -> str:
+    """``pipefollow compare``'s text: a row per learner, the probabilities of improvement, the files.
+
+    ``s`` is the command's summary (its ``--json``); ``head`` follows the head line (the camera's
+    line, if any).
+    """
+    lines = [
+        f"{len(s['learners'])} learners on '{s['suite']}': {s['pipes']} pipes, {s['seconds']:g} s each; "
+        f"95 % stratified-bootstrap intervals over runs ({s['reps']} replicates){head}",
+        f"{'learner':<34} {'runs':>4} {'IQM':>8} {'95 % CI':>19} {'mean':>8} {'95 % CI':>19} "
+        f"{'success':>7} {'progress':>8} {'back':>4}",
+    ]
+    for label, r in s["learners"].items():
+        iq, mn = r["ci95_iqm"], r["ci95_mean"]
+        lines.append(
+            f"{label[:34]:<34} {r['runs']:>4} {r['iqm']:>8.2f} {iq[0]:>9.2f}–{iq[1]:<9.2f} "
+            f"{r['mean']:>8.2f} {mn[0]:>9.2f}–{mn[1]:<9.2f} "
+            f"{r['success_rate']:>7.0%} {r['mean_progress_share']:>8.0%} {r['turned_back']:>4d}"
+        )
+    lines.append(
+        "success: pipe in view ≥ 95 % of the decisions and followed forward; progress: of the reachable; "
+        "back: episodes that followed the pipe backwards ≥ 3 m"
+    )
+    if s["probability_of_improvement"]:
+        lines.append("probability of improvement P(X > Y), per pipe over runs, averaged over pipes:")
+        for p in s["probability_of_improvement"]:
+            lo, hi = p["ci95"]
+            lines.append(f"  P({p['x']} > {p['y']}) = {p['probability']:.2f}  (95 % CI {lo:.2f}–{hi:.2f})")
+    if any(r["runs"] == 1 for r in s["learners"].values()):
+        lines.append("note: a learner with one run has intervals of no width; train several seeds")
+    if "plot" in s:
+        lines.append(f"plot: {s['plot']}")
+    if "scores_file" in s:
+        lines.append(f"scores (rliable's layout): {s['scores_file']}")
+    return "\n".join(lines)

@@ -110,6 +110,16 @@ def fill(template: str, **fields: object) -> str:
 # Tables
 
 
+def around_markers(text: str, where: Path | str, begin: str, end: str) -> tuple[str, str]:
+    """What lies before the marker line ``begin`` and after ``end`` in ``text`` (a page at ``where``).
+
+    A generated block sits between the two, and both must stand once, in order.
+    """
+    if text.count(begin) != 1 or text.count(end) != 1 or text.index(begin) > text.index(end):
+        raise PageError(f"{where}: needs the two marker lines {begin!r} and {end!r}, once each, in order")
+    return text[: text.index(begin)], text[text.index(end) + len(end) :]
+
+
 def table(headers: Sequence[str], rows: Iterable[Sequence[object]]) -> str:
     """A Markdown table."""
     lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]

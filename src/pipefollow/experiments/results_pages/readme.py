@@ -14,7 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from pipefollow.experiments.results_pages import speed
-from pipefollow.experiments.results_pages.markdown import PageError, fill, table
+from pipefollow.experiments.results_pages.markdown import PageError, around_markers, fill, table
 from pipefollow.experiments.results_pages.reproduction import claim_parts
 
 BEGIN = "<!-- the claims table: written by `pipefollow docs results` (docs/reproduction, docs/repeats) -->"
@@ -67,17 +67,11 @@ def speed_block(docs: Path) -> str:
 BLOCKS = ((BEGIN, END, block), (SPEED_BEGIN, SPEED_END, speed_block))
 
 
-def _split(text: str, readme: Path, begin: str, end: str) -> tuple[str, str]:
-    if text.count(begin) != 1 or text.count(end) != 1 or text.index(begin) > text.index(end):
-        raise PageError(f"{readme}: needs the two marker lines {begin!r} and {end!r}, once each, in order")
-    return text[: text.index(begin)], text[text.index(end) + len(end) :]
-
-
 def render(readme: Path, docs: Path) -> str:
     """The README with its generated blocks regenerated from ``docs``."""
     text = Path(readme).read_text(encoding="utf-8")
     for begin, end, make in BLOCKS:
-        head, tail = _split(text, readme, begin, end)
+        head, tail = around_markers(text, readme, begin, end)
         text = head + make(docs) + tail
     return text
 

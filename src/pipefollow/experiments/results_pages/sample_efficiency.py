@@ -151,6 +151,53 @@ def vs_ppo(row: dict) -> str:
     return f"{num(row['vs_ppo'], 1, True)} {_ci(row['vs_ppo_ci95'], True)}"
 
 
+FULL_HEADERS = (
+    "variant",
+    "decisions",
+    "seeds",
+    "calm: mean return [95 % CI]",
+    "vs heuristic [95 % CI]",
+    "success",
+    "disturbed: mean return [95 % CI]",
+    "vs heuristic [95 % CI]",
+    "success",
+    "train wall time per seed",
+)
+
+
+def full_rows(rows: list[dict]) -> list[tuple]:
+    """One row of :data:`FULL_HEADERS` per (variant, budget) of stored rows, in their order.
+
+    ``rows``: what ``examples/sample_efficiency.py`` stores, one per variant, budget and condition.
+    """
+    cell = {(r["variant"], r["budget"], r["condition"]): r for r in rows}
+    budgets = sorted({r["budget"] for r in rows})
+    out = []
+    for v, b in ((v, b) for v in dict.fromkeys(r["variant"] for r in rows) for b in budgets):
+        if (v, b, "calm") not in cell:
+            continue
+        if (v, b, "disturbed") not in cell:
+            raise PageError(f"no row for {v} at {b} (disturbed)")
+        c, d = (cell[v, b, k] for k in CONDITIONS)
+        if not c.get("label"):
+            raise PageError(f"the rows of {v} have no label")
+        out.append(
+            (
+                c["label"],
+                count(c["steps"]),
+                c["seeds"],
+                f"{num(c['mean_return'])} {_ci(c['ci95'])}",
+                vs_of(c),
+                pct(c["success_rate"]),
+                f"{num(d['mean_return'])} {_ci(d['ci95'])}",
+                vs_of(d),
+                pct(d["success_rate"]),
+                f"{c['wall_s']:.1f} s",
+            )
+        )
+    return out
+
+
 def heuristic_of(row: dict) -> float:
     """The heuristic's mean return: a row's mean return minus its paired difference to it."""
     return row["mean_return"] - row["vs_heuristic"]
@@ -189,26 +236,9 @@ def render(docs: Path) -> str:
             raise PageError(f"summary.json: the rows of {v} have no label")
         return labels[v]
 
-    out = []
     for v in variants:
-        for b in budgets:
-            if (v, b, "calm") not in cell:
-                continue
-            c, d = get(v, b, "calm"), get(v, b, "disturbed")
-            out.append(
-                (
-                    name_of(v),
-                    count(c["steps"]),
-                    c["seeds"],
-                    f"{num(c['mean_return'])} {_ci(c['ci95'])}",
-                    f"{num(c['vs_heuristic'], 1, True)} {_ci(c['vs_heuristic_ci95'], True)}",
-                    pct(c["success_rate"]),
-                    f"{num(d['mean_return'])} {_ci(d['ci95'])}",
-                    f"{num(d['vs_heuristic'], 1, True)} {_ci(d['vs_heuristic_ci95'], True)}",
-                    pct(d["success_rate"]),
-                    f"{c['wall_s']:.1f} s",
-                )
-            )
+        name_of(v)  # every variant labelled
+    out = full_rows(rows)
 
     def vs(v, b, c="calm"):
         r = get(v, b, c)
@@ -270,21 +300,7 @@ def render(docs: Path) -> str:
         seeds=get("cacla", small, "calm")["seeds"],
         h_calm=num(heur["calm"]),
         h_dist=num(heur["disturbed"]),
-        table=table(
-            (
-                "variant",
-                "decisions",
-                "seeds",
-                "calm: mean return [95 % CI]",
-                "vs heuristic [95 % CI]",
-                "success",
-                "disturbed: mean return [95 % CI]",
-                "vs heuristic [95 % CI]",
-                "success",
-                "train wall time per seed",
-            ),
-            out,
-        ),
+        table=table(FULL_HEADERS, out),
         mid=count(mid),
         big=count(big),
         sup_mid_vs=vs("supervised-cacla", mid),
