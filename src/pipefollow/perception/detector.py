@@ -26,6 +26,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from pipefollow.perception.detector_border import BORDER_HOUGH_SHARE, border_piece
 from pipefollow.perception.detector_edges import EXTEND
 from pipefollow.perception.detector_legs import join_hook, leg
 from pipefollow.perception.follow import extend_ends
@@ -111,6 +112,7 @@ def detect_pipe(
     pipe_diameter: float = 0.25,
     min_confidence: float = 0.3,
     previous: Detection | None = None,
+    border_pieces: bool = False,
 ) -> Detection:
     """Find the pipe in a grey image of the footprint ``x ∈ [−half_width, half_width]``, ``y ∈ [0, depth]``.
 
@@ -126,6 +128,9 @@ def detect_pipe(
         min_confidence: detections below this confidence count as not found.
         previous: the previous frame's detection, when the images come in a sequence: a pipe found
             in both has its ends ordered the previous one's way (:func:`same_way`).
+        border_pieces: where nothing is found, look again for a short piece cut by the border
+            (:func:`second_look`). For a tracker, which orders the ends itself: the piece's way is
+            a guess (docs/decisions.md, "a short piece at the border").
 
     Returns:
         A :class:`Detection`. A blank, saturated or pure-noise image gives ``found=False``.
@@ -153,9 +158,35 @@ def detect_pipe(
         return NOT_FOUND
     segs = np.asarray(segs, dtype=np.float64).reshape(-1, 4)  # (N, 1, 4) in OpenCV 4, (N, 4) in 5
     det = centre_line(segs, edges, half_width, depth, pipe_diameter, min_confidence)
+    if border_pieces and not det.found:  # a second look: a short piece cut by the border
+        det = second_look(smooth, edges, half_width, depth, pipe_diameter, min_confidence, det)
     if previous is None or not previous.found or not det.found:
         return det
     return same_way(det, previous)
+
+
+def second_look(smooth, edges, half_width, depth, diameter, min_confidence, first: Detection) -> Detection:
+    """A short piece at the border on shorter Hough segments (:mod:`~pipefollow.perception.detector_border`).
+
+    ``first`` (the first look's miss) is returned when there is none.
+    """
+    cv2 = require_cv2()
+    short = min(edges.shape)
+    segs = cv2.HoughLinesP(
+        edges,
+        HOUGH_RHO_PX,
+        HOUGH_THETA,
+        threshold=max(HOUGH_MIN_VOTES // 2, short // BORDER_HOUGH_SHARE),
+        minLineLength=short / BORDER_HOUGH_SHARE,
+        maxLineGap=HOUGH_MAX_GAP,
+    )
+    if segs is None:
+        return first
+    segs = np.asarray(segs, dtype=np.float64).reshape(-1, 4)
+    piece = border_piece(segs, edges, smooth, half_width, depth, diameter, min_confidence)
+    if not piece.found:
+        return first
+    return as_detection(piece.ends, piece.confidence, half_width, depth)
 
 
 def same_way(det: Detection, previous: Detection) -> Detection:
@@ -201,6 +232,12 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     direction = math.atan2(ends[1, 1] - ends[0, 1], ends[1, 0] - ends[0, 0])
     extend_ends(ends, edges, 0.5 * sep, half_width, depth, EXTEND)
     join_hook(ends, segs, edges, direction, half_width, depth, diameter, min_confidence)
+    return as_detection(ends, confidence, half_width, depth)
+
+
+@njit(cache=True)
+def as_detection(ends, confidence, half_width, depth):
+    """The centre line's two ends (rows x, y) as a :class:`Detection`: near end first, in the footprint."""
     xa, ya, xb, yb = ends[0, 0], ends[0, 1], ends[1, 0], ends[1, 1]
     # the near end is the one nearer the AUV (the footprint's origin): the pipe comes from behind
     # it, also when it runs across the view after a turn
