@@ -2,7 +2,9 @@
 
 ``water`` holds the one parameter record of water and camera settings, ``pixels`` the image's
 pixel ↔ camera-metre conventions, ``image`` renders the footprint as the camera sees it,
-``detector`` finds the pipe in a grey image (OpenCV, the optional extra ``vision``), ``follow``
+``detector`` finds the pipe in a grey image (OpenCV, the optional extra ``vision``; its edge
+stages in ``detector_edges``, its legs in ``detector_legs``, its second look at the border in
+``detector_border``), ``follow``
 walks along the pipe's edges to the ends of the visible piece (and holds the least-squares edge
 fit both use), and ``camera`` joins them to the simulation's observation slots. ``sonar`` renders
 a multibeam profiler's ping, ``sonar_detect`` finds the pipe in it and ``sonar_track`` turns

@@ -203,7 +203,15 @@ class VisionCamera:
         wt, cam = self.settings.water, self.camera
         if self.usable is None or self.usable(self.image):
             diameter = wt.pipe_diameter
-            det = detect_pipe(self.image, cam.half_width, cam.depth, diameter, previous=self.detection)
+            # a short piece at the border only for the tracker, which orders the ends itself
+            det = detect_pipe(
+                self.image,
+                cam.half_width,
+                cam.depth,
+                diameter,
+                previous=self.detection,
+                border_pieces=self.tracker is not None,
+            )
         else:  # a frame too murky to look for the pipe in
             det = NOT_FOUND
         self.detection = det
