@@ -287,18 +287,47 @@ def test_the_sonar_s_view_is_the_fused_observation_while_the_track_shows_no_pipe
 
 
 @pytest.mark.parametrize("carried", [1, 2, 3])
-def test_a_carried_line_is_lost_after_that_many_frames_without_a_sighting(carried):
+@pytest.mark.parametrize("searched", [True, False])
+def test_a_carried_line_is_lost_after_that_many_frames_without_a_sighting(carried, searched):
     from pipefollow.perception.track_step import ACTIVE as LIVE
+    from pipefollow.perception.track_step import TrackParams
     from pipefollow.perception.tracker import PipeTracker
 
-    tracker = PipeTracker()
+    # a searched frame carries max_misses (the piece in view is long: no edge carry), one the
+    # detector did not search unsearched_misses; the other setting is 4, more than the 5 frames show
+    other = 4
+    if searched:
+        params = TrackParams(max_misses=carried, edge_misses=carried, unsearched_misses=other)
+    else:
+        params = TrackParams(max_misses=other, edge_misses=other, unsearched_misses=carried)
+    tracker = PipeTracker(params=params)
     tracker.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
     pose = [0.0, 0.0, 0.0]
     tracker.step(tuple(pose), True, (0.0, 3.0, 0.0, 0.0))  # a straight pipe under the track
-    tracker.carry(carried, carried)
     alive = 0
     for _ in range(5):  # the vehicle creeps along the pipe, seeing nothing
         pose[0] += 0.05
-        tracker.step(tuple(pose), False, (0.0, 0.0, 0.0, 0.0))
+        tracker.step(tuple(pose), False, (0.0, 0.0, 0.0, 0.0), searched)
         alive += tracker.state[LIVE] != 0.0
     assert alive == carried
+
+
+def test_an_unsearched_frame_does_not_carry_a_short_piece_longer():
+    from pipefollow.perception.track_step import ACTIVE as LIVE
+    from pipefollow.perception.track_step import TrackParams
+    from pipefollow.perception.tracker import PipeTracker
+
+    # a pipe across the footprint's far starboard corner (2 m wide, 3 m deep), from (0.7, 3.0) to
+    # (1.0, 2.7): 0.42 m of its line lies in the footprint (a short piece, < edge_piece 0.6 m), so a
+    # searched frame carries it edge_misses frames; one the detector did not search unsearched_misses
+    lives = {}
+    for searched in (True, False):
+        tracker = PipeTracker(params=TrackParams(max_misses=1, edge_misses=4, unsearched_misses=1))
+        tracker.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
+        tracker.step((0.0, 0.0, 0.0), True, (0.7, 3.0, 1.0, 2.7))
+        alive = 0
+        for _ in range(6):  # the vehicle does not move, seeing nothing
+            tracker.step((0.0, 0.0, 0.0), False, (0.0, 0.0, 0.0, 0.0), searched)
+            alive += tracker.state[LIVE] != 0.0
+        lives[searched] = alive
+    assert lives == {True: 4, False: 1}

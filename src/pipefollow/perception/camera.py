@@ -201,7 +201,8 @@ class VisionCamera:
         if not self.settings.detects:
             return
         wt, cam = self.settings.water, self.camera
-        if self.usable is None or self.usable(self.image):
+        searched = self.usable is None or self.usable(self.image)
+        if searched:
             diameter = wt.pipe_diameter
             det = detect_pipe(self.image, cam.half_width, cam.depth, diameter, previous=self.detection)
         else:  # a frame too murky to look for the pipe in
@@ -210,16 +211,16 @@ class VisionCamera:
         if not det.found and self.fallback is not None:
             det = self.fallback
         if self.tracker is not None:
-            self._track(s, pose, det)
+            self._track(s, pose, det, searched)
             return
         if det.found:
             self._last = sighting_of(det.x1, det.y1, det.x2, det.y_near)
         # a lost pipe keeps the last detection, as the exact camera keeps its last sighting
         write_sighting(s, self._last, det.found)
 
-    def _track(self, s: np.ndarray, pose: tuple[float, float, float], det: Detection) -> None:
-        """The observation slots from the tracker fed with this frame's detection."""
-        out = self.tracker.step(pose, det.found, (det.x1, det.y1, det.x2, det.y_near))
+    def _track(self, s: np.ndarray, pose: tuple[float, float, float], det: Detection, searched: bool) -> None:
+        """The observation slots from the tracker fed with this frame's detection (or the fallback's)."""
+        out = self.tracker.step(pose, det.found, (det.x1, det.y1, det.x2, det.y_near), searched)
         if self.aid is not None:
             out = self.aid(self.tracker)
         self._show(s, out)
