@@ -18,7 +18,8 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
   its own error (:data:`FIX_SD`; :attr:`VisionCamera.aid`, :meth:`PipeTracker.point`); with
   ``"vision-raw"`` the measurement is the observation, and with the ideal camera the sonar's view
   fills the slots while the exact camera does not see the pipe. A frame whose contrast over its
-  noise is below :data:`MIN_CONTRAST` (:func:`clear_enough`; murky water) is not searched: the
+  noise is below :data:`~pipefollow.perception.visibility.MIN_CONTRAST`
+  (:func:`~pipefollow.perception.visibility.clear_enough`; murky water) is not searched: the
   sonar alone feeds the track then, which carries its line
   :attr:`~pipefollow.perception.track_step.TrackParams.unsearched_misses` frames without a
   sighting. The first ping feeds the first frame. While the track shows no pipe, the sonar's view
@@ -58,17 +59,13 @@ from pipefollow.perception.track_step import (
     OUT_Y_NEAR,
 )
 from pipefollow.perception.tracker import PipeTracker
-from pipefollow.perception.visibility import contrast_to_noise
+from pipefollow.perception.visibility import clear_enough
 from pipefollow.perception.water import Water
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams
 from pipefollow.sim.disturbance import NO_BURIAL
 
 FIX_SD = 0.03  # m: the error of the ping's fix on the tracked line (docs/decisions.md, fused sensor)
-# a camera frame's contrast over its noise below which the fused sensor does not search it for the
-# pipe: clear water's frames lie at 3.2–6.8, moderate water's (0.2/m) at 1.7–3.2 and turbid
-# water's (0.25/m) at 1.3–2.1 (1st–99th percentiles; docs/decisions.md, the fused sensor)
-MIN_CONTRAST = 2.15
 
 
 def sonar_burial(water: Water) -> float:
@@ -227,19 +224,9 @@ class SonarSensors:
         return np.zeros((height, 0, 3), dtype=np.uint8)
 
 
-def clear_enough(image: np.ndarray) -> bool:
-    """Whether the fused sensor searches a camera frame for the pipe: its contrast over its noise.
-
-    At least :data:`MIN_CONTRAST` (:func:`~pipefollow.perception.visibility.contrast_to_noise`):
-    in murkier frames the detector's finds are mostly wrong ones that the tracker takes
-    (docs/decisions.md, the fused sensor), so the sonar alone feeds the track there.
-    """
-    return contrast_to_noise(image) >= MIN_CONTRAST
-
-
 def _as_detection(view) -> Detection:
     """The sonar's view as a detection of the pipe's centre line in the camera's footprint."""
     return Detection(True, view.x1, view.y1, view.x2, view.y_near, 1.0)
 
 
-__all__ = ["MIN_CONTRAST", "SonarSensors", "clear_enough", "make_sensor", "sonar_burial", "start_sensor"]
+__all__ = ["SonarSensors", "make_sensor", "sonar_burial", "start_sensor"]

@@ -61,6 +61,11 @@ class TrackParams(NamedTuple):
 
 TRACK = TrackParams()
 
+# what the frame is to the tracker (track_step's ``frame``): searched by the detector in a clear
+# frame; searched in a murky one (below visibility.EDGE_CONTRAST: its misses are not of short
+# pieces, so no edge carry); not searched (the measurement another sensor's: unsearched_misses)
+CLEAR_FRAME, MURKY_FRAME, UNSEARCHED_FRAME = 0, 1, 2
+
 # slots of a track's state array: the line, its covariance (Pθθ, Pθd, Pdd), the far end seen
 # beyond a bend (off the line), the end seen on the line (where it ends or turns), the candidate
 # line, and bookkeeping
@@ -166,7 +171,7 @@ def _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, mode):
 
 
 @njit(cache=True)
-def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, searched=True):
+def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, frame=CLEAR_FRAME):
     """One frame: predict the line by ``motion``, take the detection, write the observation.
 
     Args:
@@ -180,15 +185,17 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, searched=True
         hw: the footprint's lateral half-width (m).
         depth: the footprint's forward extent (m).
         out: the observation (:data:`OUT_SIZE` slots): in view, x1, y1, x2, y_near, side.
-        searched: whether the detector searched this frame; a frame it did not (its measurement
-            another sensor's) carries the line ``unsearched_misses`` frames, short pieces too
-            (no short piece the detector missed).
+        frame: :data:`CLEAR_FRAME`, :data:`MURKY_FRAME` (searched, but a short piece is carried
+            no longer than any) or :data:`UNSEARCHED_FRAME` (the measurement another sensor's: the
+            line is carried ``unsearched_misses`` frames, short pieces too).
     """
     point_sd, bend_sd, shift_sd, gate, point_gate = tp[0], tp[1], tp[2], tp[3], tp[4]
     max_misses, max_offset_sd, confirm, border, far_match = tp[5], tp[6], tp[7], tp[8], tp[10]
     near_reach, edge_misses = tp[11], tp[12]
-    if not searched:
+    if frame == UNSEARCHED_FRAME:
         max_misses, edge_misses = tp[14], tp[14]
+    elif frame == MURKY_FRAME:
+        edge_misses = max_misses
     dl, df, dpsi = motion[0], motion[1], motion[2]
     travelled = math.sqrt(dl * dl + df * df)
     q_theta, q_d = bend_sd * bend_sd * travelled, shift_sd * shift_sd * travelled
