@@ -66,12 +66,6 @@ from pipefollow.sim.camera import CameraParams
 from pipefollow.sim.disturbance import NO_BURIAL
 
 FIX_SD = 0.03  # m: the error of the ping's fix on the tracked line (docs/decisions.md, fused sensor)
-# the fused sensor's sonar track (with a vision camera): the detections of the last 8 pings within
-# 3 m of the fan's line (the sonar alone's: 6 and 4 m); its line lags less at bends (docs/decisions.md,
-# "The fused sensor's sonar memory": tuned on the training suites; the sonar alone lost the paper's
-# pipe with it)
-FUSED_MEMORY = 8
-FUSED_MEMORY_M = 3.0
 
 
 def sonar_burial(water: Water) -> float:
@@ -105,12 +99,8 @@ class SonarSensors:
         self.fused = settings.sensor == "fused"
         # the camera: its image (observation="image"), and with "fused" its detections too
         self.vision = VisionCamera(settings, camera, lost_reward) if settings.renders else None
-        # the vision camera's fused sensor (its detections and the sonar's in one tracker): the
-        # shorter memory; the ideal camera's fused sensor shows the sonar alone's view where it misses
-        tracked = self.fused and settings.detects
-        memory = {"memory": FUSED_MEMORY, "memory_m": FUSED_MEMORY_M} if tracked else {}
         self.sonar = SonarSensor(diameter=settings.water.pipe_diameter, burial=sonar_burial(settings.water),
-                                 camera=camera, **memory)  # fmt: skip
+                                 camera=camera)  # fmt: skip
         self.buried = (NO_BURIAL, NO_BURIAL)
         self.truth = TrueView(False, 0.0, 0.0, 0.0, 0.0)
         self._true_errors = (0.0, 0.0)
