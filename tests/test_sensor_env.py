@@ -230,8 +230,7 @@ def test_a_sonar_fix_updates_the_tracked_line_as_a_kalman_filter_does():
 def test_the_fused_sensor_searches_clear_frames_and_leaves_turbid_ones_to_the_sonar():
     # the frames' contrast over their noise (perception.visibility): clear water's frames lie
     # above MIN_CONTRAST, turbid water's below it (docs/decisions.md has the percentiles)
-    from pipefollow.perception.sensor import MIN_CONTRAST, clear_enough
-    from pipefollow.perception.visibility import contrast_to_noise
+    from pipefollow.perception.visibility import MIN_CONTRAST, clear_enough, contrast_to_noise
 
     for water, searched in (("clear", True), ("turbid", False)):
         env = PipelineFollowingEnv(STRAIGHT, 10.0, camera="vision", sensor="fused", water=water)
@@ -239,7 +238,7 @@ def test_the_fused_sensor_searches_clear_frames_and_leaves_turbid_ones_to_the_so
         assert info["pipe_in_view"]  # the first ping feeds the first frame, murky or not
         for _ in range(8):
             image = env._vision.vision.image
-            assert clear_enough(image) == searched
+            assert clear_enough(contrast_to_noise(image)) == searched
             assert (contrast_to_noise(image) >= MIN_CONTRAST) == searched
             obs, r, _, _, info = env.step(act(obs))
             if not searched:  # no detection where the frame is not searched; the sonar keeps the pipe
@@ -287,18 +286,74 @@ def test_the_sonar_s_view_is_the_fused_observation_while_the_track_shows_no_pipe
 
 
 @pytest.mark.parametrize("carried", [1, 2, 3])
-def test_a_carried_line_is_lost_after_that_many_frames_without_a_sighting(carried):
+@pytest.mark.parametrize("searched", [True, False])
+def test_a_carried_line_is_lost_after_that_many_frames_without_a_sighting(carried, searched):
     from pipefollow.perception.track_step import ACTIVE as LIVE
+    from pipefollow.perception.track_step import CLEAR_FRAME, UNSEARCHED_FRAME, TrackParams
     from pipefollow.perception.tracker import PipeTracker
 
-    tracker = PipeTracker()
+    # a searched frame carries max_misses (the piece in view is long: no edge carry), one the
+    # detector did not search unsearched_misses; the other setting is 4, more than the 5 frames show
+    other = 4
+    if searched:
+        params = TrackParams(max_misses=carried, edge_misses=carried, unsearched_misses=other)
+    else:
+        params = TrackParams(max_misses=other, edge_misses=other, unsearched_misses=carried)
+    tracker = PipeTracker(params=params)
     tracker.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
     pose = [0.0, 0.0, 0.0]
     tracker.step(tuple(pose), True, (0.0, 3.0, 0.0, 0.0))  # a straight pipe under the track
-    tracker.carry(carried, carried)
     alive = 0
     for _ in range(5):  # the vehicle creeps along the pipe, seeing nothing
         pose[0] += 0.05
-        tracker.step(tuple(pose), False, (0.0, 0.0, 0.0, 0.0))
+        tracker.step(tuple(pose), False, (0.0, 0.0, 0.0, 0.0), CLEAR_FRAME if searched else UNSEARCHED_FRAME)
         alive += tracker.state[LIVE] != 0.0
     assert alive == carried
+
+
+def test_a_murky_or_unsearched_frame_does_not_carry_a_short_piece_longer():
+    from pipefollow.perception.track_step import ACTIVE as LIVE
+    from pipefollow.perception.track_step import CLEAR_FRAME, MURKY_FRAME, UNSEARCHED_FRAME, TrackParams
+    from pipefollow.perception.tracker import PipeTracker
+
+    # a pipe across the footprint's far starboard corner (2 m wide, 3 m deep), from (0.7, 3.0) to
+    # (1.0, 2.7): 0.42 m of its line lies in the footprint (a short piece, < edge_piece 0.6 m), so a
+    # clear frame carries it edge_misses frames, a murky one max_misses, one the detector did not
+    # search unsearched_misses
+    lives = {}
+    for frame in (CLEAR_FRAME, MURKY_FRAME, UNSEARCHED_FRAME):
+        tracker = PipeTracker(params=TrackParams(max_misses=2, edge_misses=4, unsearched_misses=1))
+        tracker.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
+        tracker.step((0.0, 0.0, 0.0), True, (0.7, 3.0, 1.0, 2.7))
+        alive = 0
+        for _ in range(6):  # the vehicle does not move, seeing nothing
+            tracker.step((0.0, 0.0, 0.0), False, (0.0, 0.0, 0.0, 0.0), frame)
+            alive += tracker.state[LIVE] != 0.0
+        lives[frame] = alive
+    assert lives == {CLEAR_FRAME: 4, MURKY_FRAME: 2, UNSEARCHED_FRAME: 1}
+
+
+def test_the_camera_alone_tells_the_tracker_its_murky_frames():
+    # the tracker alone searches every frame; a frame below EDGE_CONTRAST is murky to it (no short
+    # piece carried longer), as clear water's frames (3.2–6.8) never are
+    from pipefollow.perception.track_step import CLEAR_FRAME, MURKY_FRAME
+    from pipefollow.perception.visibility import EDGE_CONTRAST, contrast_to_noise
+
+    for water in ("clear", "turbid"):
+        env = PipelineFollowingEnv(STRAIGHT, 10.0, camera="vision", water=water)
+        camera = env._vision
+        seen = []
+        step = camera.tracker.step
+
+        def spy(pose, found, det, frame, step=step, camera=camera, seen=seen):
+            murky = contrast_to_noise(camera.image) < EDGE_CONTRAST
+            seen.append((frame, MURKY_FRAME if murky else CLEAR_FRAME))
+            return step(pose, found, det, frame)
+
+        camera.tracker.step = spy
+        obs, _ = env.reset(seed=0)
+        for _ in range(8):
+            obs, *_ = env.step(act(obs))
+        assert all(frame == expected for frame, expected in seen)
+        kinds = {frame for frame, _ in seen}
+        assert kinds == {CLEAR_FRAME} if water == "clear" else MURKY_FRAME in kinds

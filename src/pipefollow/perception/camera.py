@@ -28,8 +28,19 @@ from pipefollow.perception.image import Renderer
 from pipefollow.perception.pixels import column_at, pixel_grid, row_at
 from pipefollow.perception.slots import Sighting, observed, sighting_of, write_sighting
 from pipefollow.perception.textures import SCENES, Textures
-from pipefollow.perception.track_step import OUT_IN_VIEW, OUT_SIDE, OUT_X1, OUT_X2, OUT_Y1, OUT_Y_NEAR
+from pipefollow.perception.track_step import (
+    CLEAR_FRAME,
+    MURKY_FRAME,
+    OUT_IN_VIEW,
+    OUT_SIDE,
+    OUT_X1,
+    OUT_X2,
+    OUT_Y1,
+    OUT_Y_NEAR,
+    UNSEARCHED_FRAME,
+)
 from pipefollow.perception.tracker import PipeTracker
+from pipefollow.perception.visibility import EDGE_CONTRAST, contrast_to_noise
 from pipefollow.perception.water import Water, water_from
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams
@@ -148,9 +159,9 @@ class VisionCamera:
         # a second sensor's update of the track after each frame's detection (sensor="fused": the
         # sonar's fix), set by its owner: it returns the tracker's output
         self.aid: Callable[[PipeTracker], np.ndarray] | None = None
-        # whether a frame shows enough to look for the pipe in (sensor="fused": its contrast over
-        # its noise), set by its owner; None: the detector searches every frame
-        self.usable: Callable[[np.ndarray], bool] | None = None
+        # whether a frame of this contrast over its noise (perception.visibility) is searched for
+        # the pipe (sensor="fused"), set by its owner; None: the detector searches every frame
+        self.usable: Callable[[float], bool] | None = None
 
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
         """A new scene (seabed and growth textures from ``rng``) and its first image.
@@ -201,7 +212,15 @@ class VisionCamera:
         if not self.settings.detects:
             return
         wt, cam = self.settings.water, self.camera
-        if self.usable is None or self.usable(self.image):
+        frame, searched = CLEAR_FRAME, True
+        if self.tracker is not None or self.usable is not None:  # how much the frame shows
+            contrast = contrast_to_noise(self.image)
+            searched = self.usable is None or self.usable(contrast)
+            if not searched:
+                frame = UNSEARCHED_FRAME
+            elif contrast < EDGE_CONTRAST:
+                frame = MURKY_FRAME
+        if searched:
             diameter = wt.pipe_diameter
             # a short piece at the border only for the tracker, which orders the ends itself
             det = detect_pipe(
@@ -218,16 +237,16 @@ class VisionCamera:
         if not det.found and self.fallback is not None:
             det = self.fallback
         if self.tracker is not None:
-            self._track(s, pose, det)
+            self._track(s, pose, det, frame)
             return
         if det.found:
             self._last = sighting_of(det.x1, det.y1, det.x2, det.y_near)
         # a lost pipe keeps the last detection, as the exact camera keeps its last sighting
         write_sighting(s, self._last, det.found)
 
-    def _track(self, s: np.ndarray, pose: tuple[float, float, float], det: Detection) -> None:
-        """The observation slots from the tracker fed with this frame's detection."""
-        out = self.tracker.step(pose, det.found, (det.x1, det.y1, det.x2, det.y_near))
+    def _track(self, s: np.ndarray, pose: tuple[float, float, float], det: Detection, frame: int) -> None:
+        """The observation slots from the tracker fed with this frame's detection (or the fallback's)."""
+        out = self.tracker.step(pose, det.found, (det.x1, det.y1, det.x2, det.y_near), frame)
         if self.aid is not None:
             out = self.aid(self.tracker)
         self._show(s, out)

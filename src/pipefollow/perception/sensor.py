@@ -18,10 +18,13 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
   its own error (:data:`FIX_SD`; :attr:`VisionCamera.aid`, :meth:`PipeTracker.point`); with
   ``"vision-raw"`` the measurement is the observation, and with the ideal camera the sonar's view
   fills the slots while the exact camera does not see the pipe. A frame whose contrast over its
-  noise is below :data:`MIN_CONTRAST` (:func:`clear_enough`; murky water) is not searched: the
-  sonar alone feeds the track then. The first ping feeds the first frame. While the track shows
-  no pipe, the sonar's view is the observation if it has the pipe in the footprint, and a fix
-  outside the footprint turns the search towards it.
+  noise is below :data:`~pipefollow.perception.visibility.MIN_CONTRAST`
+  (:func:`~pipefollow.perception.visibility.clear_enough`; murky water) is not searched: the
+  sonar alone feeds the track then, which carries its line
+  :attr:`~pipefollow.perception.track_step.TrackParams.unsearched_misses` frames without a
+  sighting. The first ping feeds the first frame. While the track shows no pipe, the sonar's view
+  is the observation if it has the pipe in the footprint, and a fix outside the footprint turns
+  the search towards it.
 
 The sonar draws its noise (128 normals a ping) from a generator of its own, spawned from the
 environment's at each reset (:func:`spawn`, which draws nothing from it): after the camera's reset
@@ -56,20 +59,13 @@ from pipefollow.perception.track_step import (
     OUT_Y_NEAR,
 )
 from pipefollow.perception.tracker import PipeTracker
-from pipefollow.perception.visibility import contrast_to_noise
+from pipefollow.perception.visibility import clear_enough
 from pipefollow.perception.water import Water
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams
 from pipefollow.sim.disturbance import NO_BURIAL
 
 FIX_SD = 0.03  # m: the error of the ping's fix on the tracked line (docs/decisions.md, fused sensor)
-# a camera frame's contrast over its noise below which the fused sensor does not search it for the
-# pipe: clear water's frames lie at 3.2–6.8, moderate water's (0.2/m) at 1.7–3.2 and turbid
-# water's (0.25/m) at 1.3–2.1 (1st–99th percentiles; docs/decisions.md, the fused sensor)
-MIN_CONTRAST = 2.15
-# frames a track fed by the sonar alone (a murky frame) is carried without a sighting; the camera's 2
-# (TrackParams.max_misses) kept a lagging line at the sonar's bends (docs/decisions.md, fused sensor)
-SONAR_MISSES = 1
 
 
 def sonar_burial(water: Water) -> float:
@@ -122,7 +118,7 @@ class SonarSensors:
             self._feed(self._ping(state, points, cum))
             if self.vision.tracker is not None:
                 self.vision.aid = self._aid  # each frame's fix a point on the tracked pipe
-            self.vision.usable = self._judge  # a murky frame is not searched for the pipe
+            self.vision.usable = clear_enough  # a murky frame is not searched for the pipe
             self.vision.reset(state, points, cum, rng)
             return
         if self.vision is not None:
@@ -150,21 +146,6 @@ class SonarSensors:
         if s[sim.OVERRIDDEN] != 0.0 or s[sim.IN_VIEW] == 0.0:
             return self.lost_reward
         return sim_reward
-
-    def _judge(self, image: np.ndarray) -> bool:
-        """Whether the frame is searched (:func:`clear_enough`); the track of a murky one is the sonar's.
-
-        A track fed by the sonar alone is carried :data:`SONAR_MISSES` frames without a sighting
-        (the camera's: :attr:`TrackParams.max_misses`).
-        """
-        ok = clear_enough(image)
-        tracker = self.vision.tracker
-        if tracker is not None:
-            if ok:
-                tracker.carry(tracker.params.max_misses, tracker.params.edge_misses)
-            else:  # not searched by the detector: no short piece it missed, the sonar's carry alone
-                tracker.carry(SONAR_MISSES, SONAR_MISSES)
-        return ok
 
     def _feed(self, view) -> None:
         """The sonar's view as the camera's measurement where the camera finds no pipe (or none yet)."""
@@ -243,19 +224,9 @@ class SonarSensors:
         return np.zeros((height, 0, 3), dtype=np.uint8)
 
 
-def clear_enough(image: np.ndarray) -> bool:
-    """Whether the fused sensor searches a camera frame for the pipe: its contrast over its noise.
-
-    At least :data:`MIN_CONTRAST` (:func:`~pipefollow.perception.visibility.contrast_to_noise`):
-    in murkier frames the detector's finds are mostly wrong ones that the tracker takes
-    (docs/decisions.md, the fused sensor), so the sonar alone feeds the track there.
-    """
-    return contrast_to_noise(image) >= MIN_CONTRAST
-
-
 def _as_detection(view) -> Detection:
     """The sonar's view as a detection of the pipe's centre line in the camera's footprint."""
     return Detection(True, view.x1, view.y1, view.x2, view.y_near, 1.0)
 
 
-__all__ = ["MIN_CONTRAST", "SonarSensors", "clear_enough", "make_sensor", "sonar_burial", "start_sensor"]
+__all__ = ["SonarSensors", "make_sensor", "sonar_burial", "start_sensor"]

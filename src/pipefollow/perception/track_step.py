@@ -53,9 +53,18 @@ class TrackParams(NamedTuple):
     near_reach: float = 0.5  # m: a rejected detection with an end this near the line's entry: the pipe
     edge_misses: int = 5  # frames a line is carried without a detection while its piece in view is short
     edge_piece: float = 0.6  # m: a piece in view shorter than this is short (the detector misses such pieces)
+    # frames a line is carried without a sighting after a frame the detector did not search (a murky
+    # frame of the fused sensor, fed by the sonar alone): the camera's 2 kept a lagging line at the
+    # sonar's bends (docs/decisions.md, "Murky frames left to the sonar")
+    unsearched_misses: int = 1
 
 
 TRACK = TrackParams()
+
+# what the frame is to the tracker (track_step's ``frame``): searched by the detector in a clear
+# frame; searched in a murky one (below visibility.EDGE_CONTRAST: its misses are not of short
+# pieces, so no edge carry); not searched (the measurement another sensor's: unsearched_misses)
+CLEAR_FRAME, MURKY_FRAME, UNSEARCHED_FRAME = 0, 1, 2
 
 # slots of a track's state array: the line, its covariance (Pθθ, Pθd, Pdd), the far end seen
 # beyond a bend (off the line), the end seen on the line (where it ends or turns), the candidate
@@ -162,7 +171,7 @@ def _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, mode):
 
 
 @njit(cache=True)
-def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
+def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, frame=CLEAR_FRAME):
     """One frame: predict the line by ``motion``, take the detection, write the observation.
 
     Args:
@@ -176,10 +185,17 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
         hw: the footprint's lateral half-width (m).
         depth: the footprint's forward extent (m).
         out: the observation (:data:`OUT_SIZE` slots): in view, x1, y1, x2, y_near, side.
+        frame: :data:`CLEAR_FRAME`, :data:`MURKY_FRAME` (searched, but a short piece is carried
+            no longer than any) or :data:`UNSEARCHED_FRAME` (the measurement another sensor's: the
+            line is carried ``unsearched_misses`` frames, short pieces too).
     """
     point_sd, bend_sd, shift_sd, gate, point_gate = tp[0], tp[1], tp[2], tp[3], tp[4]
     max_misses, max_offset_sd, confirm, border, far_match = tp[5], tp[6], tp[7], tp[8], tp[10]
-    near_reach = tp[11]
+    near_reach, edge_misses = tp[11], tp[12]
+    if frame == UNSEARCHED_FRAME:
+        max_misses, edge_misses = tp[14], tp[14]
+    elif frame == MURKY_FRAME:
+        edge_misses = max_misses
     dl, df, dpsi = motion[0], motion[1], motion[2]
     travelled = math.sqrt(dl * dl + df * df)
     q_theta, q_d = bend_sd * bend_sd * travelled, shift_sd * shift_sd * travelled
@@ -293,10 +309,10 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out):
                     T[EVENT] = REPLACED
     if T[ACTIVE] != 0.0:
         limit = max_misses
-        if T[MISS] > max_misses and tp[12] > max_misses:
+        if T[MISS] > max_misses and edge_misses > max_misses:
             a, b = _line_end(T, hw, depth)
             if a <= b and b - a < tp[13]:  # a short piece at the view's edge: the detector misses those
-                limit = tp[12]
+                limit = edge_misses
         if T[MISS] > limit or T[P + 2] > max_offset_sd * max_offset_sd:
             T[ACTIVE] = 0.0
     if T[HAS_FAR] != 0.0 and (T[FAR_AGE] > max_misses or T[ACTIVE] == 0.0):

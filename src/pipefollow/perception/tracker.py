@@ -39,8 +39,10 @@ line's when the two are near parallel, else away from the corner where they meet
 far end beyond the bend for the next leg; never the detector's order of the ends, which swaps.
 Through missed detections the prediction goes on and its uncertainty grows; beyond
 ``max_misses`` frames (``edge_misses`` while the line's piece in view is shorter than
-``edge_piece``: the detector misses short pieces at the view's edge), or an offset uncertain by
-more than ``max_offset_sd`` (:class:`TrackParams`), the pipe is lost.
+``edge_piece``: the detector misses short pieces at the view's edge, though not in a murky frame;
+``unsearched_misses`` after a frame the detector did not search, whose measurement is a second
+sensor's), or an offset uncertain by more than ``max_offset_sd`` (:class:`TrackParams`), the pipe
+is lost.
 
 **Observation.** In the exact camera's format (:mod:`pipefollow.sim.camera`): the near end is
 the accepted detection's (else where the line enters the view), the far end the far end beyond a
@@ -63,6 +65,7 @@ from pipefollow.perception.line_ekf import CHI2_1DOF_99, point_correct, point_in
 from pipefollow.perception.navigation import NAV, Navigation, NavParams
 from pipefollow.perception.track_step import (
     ACTIVE,
+    CLEAR_FRAME,
     CONFIDENCE,
     EVENT,
     MISS,
@@ -135,10 +138,17 @@ class PipeTracker:
         self._pose = None
 
     def step(
-        self, pose: tuple[float, float, float], found: bool, det: tuple[float, float, float, float]
+        self,
+        pose: tuple[float, float, float],
+        found: bool,
+        det: tuple[float, float, float, float],
+        frame: int = CLEAR_FRAME,
     ) -> np.ndarray:
         """A frame from the true ``pose`` with the detection ``det`` = (x1, y1, x2, y_near): the observation.
 
+        ``frame``: what the frame was to the detector (``track_step.CLEAR_FRAME``, ``MURKY_FRAME``:
+        no short piece carried longer, ``UNSEARCHED_FRAME``: ``det`` is a second sensor's and the
+        line is carried :attr:`TrackParams.unsearched_misses` frames without a sighting).
         Returns the output array (in view, x1, y1, x2, y_near, side), reused frame after frame.
         """
         if self._pose is None:
@@ -150,7 +160,7 @@ class PipeTracker:
         d[0], d[1], d[2], d[3] = det
         track_step(
             self.state, found, d, motion, self.navigation.variances, self._tp,
-            self.half_width, self.depth, self.out,
+            self.half_width, self.depth, self.out, frame,
         )  # fmt: skip
         return self.out
 
@@ -162,15 +172,6 @@ class PipeTracker:
         if track_point(self.state, float(x), float(y), float(point_sd), float(gate)):
             observe_track(self.state, self._tp, self.half_width, self.depth, self.out)
         return self.out
-
-    def carry(self, max_misses: int, edge_misses: int) -> None:
-        """From the next frame on, carry the line this many frames without a sighting (not ``params``').
-
-        ``edge_misses`` is the same for a line whose piece in view is short
-        (:attr:`TrackParams.edge_misses`: the detector misses such pieces).
-        """
-        self._tp[TrackParams._fields.index("max_misses")] = float(max_misses)
-        self._tp[TrackParams._fields.index("edge_misses")] = float(edge_misses)
 
     def search_towards(self, x: float) -> np.ndarray:
         """While no pipe is in view: search on the side of ``x`` (a second sensor's sighting off the view).

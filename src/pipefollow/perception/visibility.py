@@ -25,6 +25,14 @@ import numpy as np
 from numba import njit
 
 BLOCK = 8  # pixels: the side of the blocks whose means make the contrast
+# a frame's contrast over its noise below which the fused sensor does not search it for the pipe:
+# clear water's frames lie at 3.2–6.8, moderate water's (0.2/m) at 1.7–3.2 and turbid water's
+# (0.25/m) at 1.3–2.1 (1st–99th percentiles; docs/decisions.md, "Murky frames left to the sonar")
+MIN_CONTRAST = 2.15
+# ... and below which the pipe tracker does not carry a short piece at the view's edge longer: the
+# detector's misses there are not of short pieces (turbid water's median frame, moderate water's
+# 1st percentile 1.7; docs/decisions.md, "Murky frames left to the sonar")
+EDGE_CONTRAST = 1.9
 
 
 @njit(cache=True)
@@ -73,4 +81,16 @@ def contrast_to_noise(image: np.ndarray, block: int = BLOCK) -> float:
     return contrast / noise
 
 
-__all__ = ["BLOCK", "block_contrast", "contrast_to_noise", "noise_sd"]
+def clear_enough(contrast: float) -> bool:
+    """Whether the fused sensor searches a frame of this :func:`contrast_to_noise` for the pipe.
+
+    At least :data:`MIN_CONTRAST`: in murkier frames the detector's finds are mostly wrong ones
+    that the tracker takes (docs/decisions.md, the fused sensor), so the sonar alone feeds the track.
+    """
+    return contrast >= MIN_CONTRAST
+
+
+__all__ = [
+    "BLOCK", "EDGE_CONTRAST", "MIN_CONTRAST", "block_contrast", "clear_enough", "contrast_to_noise",
+    "noise_sd",
+]  # fmt: skip
