@@ -21,11 +21,14 @@ from numba import njit
 from pipefollow.perception.detector_edges import (
     LegFrame,
     aligned_segments,
+    best_pair,
     dominant_direction,
     edge_groups,
     pair_confidence,
+    pair_span,
     refine_edges,
     segment_geometry,
+    segment_offsets,
 )
 from pipefollow.perception.detector_legs import Leg, leg_ends
 from pipefollow.perception.pixels import column_at, pixel_grid, row_at
@@ -71,35 +74,13 @@ def border_piece(segs, edges, smooth, half_width, depth, diameter, min_confidenc
         return fail
     dx, dy = math.cos(dirn), math.sin(dirn)
     nx, ny = -dy, dx
-    rho = np.empty(k)
-    wk = np.empty(k)
-    idx = np.empty(k, dtype=np.int64)
-    for j in range(k):
-        i = sel[idx_local[j]]
-        idx[j] = i
-        rho[j] = 0.5 * (sg.ax[i] + sg.bx[i]) * nx + 0.5 * (sg.ay[i] + sg.by[i]) * ny
-        wk[j] = sg.length[i]
+    idx = sel[idx_local]
+    rho, wk = segment_offsets(sg, idx, nx, ny)
     group, g_rho, g_len = edge_groups(rho, wk, diameter)
-    pa, pb, score = -1, -1, 0.0
-    for a in range(g_rho.size):
-        for b in range(a + 1, g_rho.size):
-            sep = g_rho[b] - g_rho[a]
-            total = g_len[a] + g_len[b]
-            if (
-                BORDER_MIN_SEP * diameter <= sep <= BORDER_MAX_SEP * diameter
-                and min(g_len[a], g_len[b]) >= BORDER_MIN_SHARE * max(g_len[a], g_len[b])
-                and total > score
-            ):
-                pa, pb, score = a, b, total
+    pa, pb, score = best_pair(g_rho, g_len, diameter, BORDER_MIN_SEP, BORDER_MAX_SEP, BORDER_MIN_SHARE)
     if pa < 0:
         return fail
-    t_lo, t_hi = math.inf, -math.inf
-    for j in range(k):
-        if group[j] == pa or group[j] == pb:
-            i = idx[j]
-            ta = sg.ax[i] * dx + sg.ay[i] * dy
-            tb = sg.bx[i] * dx + sg.by[i] * dy
-            t_lo, t_hi = min(t_lo, ta, tb), max(t_hi, ta, tb)
+    t_lo, t_hi = pair_span(sg, idx, group, pa, pb, dx, dy)
     extent = t_hi - t_lo
     confidence = pair_confidence(score, extent, g_rho[pb] - g_rho[pa], diameter)
     if confidence < min_confidence:

@@ -146,8 +146,18 @@ def edge_pair(g_rho, g_len, diameter):
 
     A pair qualifies if its edges lie :data:`MIN_PAIR_SEPARATION` to :data:`MAX_PAIR_SEPARATION`
     diameters apart and its weaker edge has at least :data:`MIN_EDGE_SHARE` of the stronger's
-    segment length; of those, the pair with the most segment length wins (``score``, m). An edge
-    cut short by the border still counts.
+    segment length (:func:`best_pair`). An edge cut short by the border still counts.
+    """
+    return best_pair(g_rho, g_len, diameter, MIN_PAIR_SEPARATION, MAX_PAIR_SEPARATION, MIN_EDGE_SHARE)
+
+
+@njit(cache=True)
+def best_pair(g_rho, g_len, diameter, min_sep, max_sep, min_share):
+    """The pair of edge groups with the most segment length: ``(pa, pb, score)``, ``pa = −1`` if none.
+
+    A pair qualifies if its edges lie ``min_sep`` to ``max_sep`` diameters apart and its weaker
+    edge has at least ``min_share`` of the stronger's segment length; ``score`` is the pair's
+    segment length (m).
     """
     pa, pb, score = -1, -1, 0.0
     for i in range(g_rho.size):
@@ -155,12 +165,38 @@ def edge_pair(g_rho, g_len, diameter):
             sep = g_rho[j] - g_rho[i]
             total = g_len[i] + g_len[j]
             if (
-                MIN_PAIR_SEPARATION * diameter <= sep <= MAX_PAIR_SEPARATION * diameter
-                and min(g_len[i], g_len[j]) >= MIN_EDGE_SHARE * max(g_len[i], g_len[j])
+                min_sep * diameter <= sep <= max_sep * diameter
+                and min(g_len[i], g_len[j]) >= min_share * max(g_len[i], g_len[j])
                 and total > score
             ):
                 pa, pb, score = i, j, total
     return pa, pb, score
+
+
+@njit(cache=True)
+def segment_offsets(sg, idx, nx, ny):
+    """Each segment ``idx[j]``'s offset across the leg (normal ``nx, ny``) at its midpoint, and its length."""
+    k = idx.size
+    rho = np.empty(k)
+    wk = np.empty(k)
+    for j in range(k):
+        i = idx[j]
+        rho[j] = 0.5 * (sg.ax[i] + sg.bx[i]) * nx + 0.5 * (sg.ay[i] + sg.by[i]) * ny
+        wk[j] = sg.length[i]
+    return rho, wk
+
+
+@njit(cache=True)
+def pair_span(sg, idx, group, pa, pb, dx, dy):
+    """``(t_lo, t_hi)``: along the leg (``dx, dy``), the extent of edge groups ``pa`` and ``pb``."""
+    t_lo, t_hi = math.inf, -math.inf
+    for j in range(idx.size):
+        if group[j] == pa or group[j] == pb:
+            i = idx[j]
+            ta = sg.ax[i] * dx + sg.ay[i] * dy
+            tb = sg.bx[i] * dx + sg.by[i] * dy
+            t_lo, t_hi = min(t_lo, ta, tb), max(t_hi, ta, tb)
+    return t_lo, t_hi
 
 
 @njit(cache=True)

@@ -21,8 +21,10 @@ from pipefollow.perception.detector_edges import (
     edge_groups,
     edge_pair,
     pair_confidence,
+    pair_span,
     refine_edges,
     segment_geometry,
+    segment_offsets,
 )
 from pipefollow.perception.pixels import pixel_grid, pixel_pitch
 from pipefollow.sim.camera import clip_segment
@@ -65,24 +67,12 @@ def leg(segs, edges, half_width, depth, diameter, min_confidence):
         return Leg(False, nothing, 0.0, 0.0)
     dx, dy = math.cos(dirn), math.sin(dirn)
     nx, ny = -dy, dx
-    rho = np.empty(k)  # each segment's offset across, at its midpoint
-    wk = np.empty(k)
-    for j in range(k):
-        i = idx[j]
-        rho[j] = 0.5 * (sg.ax[i] + sg.bx[i]) * nx + 0.5 * (sg.ay[i] + sg.by[i]) * ny
-        wk[j] = sg.length[i]
+    rho, wk = segment_offsets(sg, idx, nx, ny)  # each segment's offset across, at its midpoint
     group, g_rho, g_len = edge_groups(rho, wk, diameter)
     pa, pb, score = edge_pair(g_rho, g_len, diameter)
     if pa < 0:
         return Leg(False, nothing, 0.0, 0.0)
-    # the pair's extent along the leg: from the first to the last end of its segments
-    t_lo, t_hi = math.inf, -math.inf
-    for j in range(k):
-        if group[j] == pa or group[j] == pb:
-            i = idx[j]
-            ta = sg.ax[i] * dx + sg.ay[i] * dy
-            tb = sg.bx[i] * dx + sg.by[i] * dy
-            t_lo, t_hi = min(t_lo, ta, tb), max(t_hi, ta, tb)
+    t_lo, t_hi = pair_span(sg, idx, group, pa, pb, dx, dy)  # the pair's extent along the leg
     extent = t_hi - t_lo
     confidence = pair_confidence(score, extent, g_rho[pb] - g_rho[pa], diameter)
     if confidence < min_confidence or score < MIN_SUPPORT * max(depth, 2.0 * half_width):
