@@ -248,7 +248,7 @@ def test_the_fused_sensor_searches_clear_frames_and_leaves_turbid_ones_to_the_so
 def test_the_camera_alone_searches_every_frame_however_murky():
     env = PipelineFollowingEnv(STRAIGHT, 10.0, camera="vision", water="turbid")
     env.reset(seed=0)
-    assert env._vision.usable is None and env._vision.aid is None and env._vision.fallback is None
+    assert not env._vision.skips_murky and env._vision.aid is None and env._vision.fallback is None
 
 
 def test_a_sonar_fix_off_the_view_turns_the_search_towards_it():

@@ -40,7 +40,7 @@ from pipefollow.perception.track_step import (
     UNSEARCHED_FRAME,
 )
 from pipefollow.perception.tracker import PipeTracker
-from pipefollow.perception.visibility import EDGE_CONTRAST, contrast_to_noise
+from pipefollow.perception.visibility import EDGE_CONTRAST, clear_enough, contrast_to_noise
 from pipefollow.perception.water import Water, water_from
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams
@@ -159,9 +159,9 @@ class VisionCamera:
         # a second sensor's update of the track after each frame's detection (sensor="fused": the
         # sonar's fix), set by its owner: it returns the tracker's output
         self.aid: Callable[[PipeTracker], np.ndarray] | None = None
-        # whether a frame of this contrast over its noise (perception.visibility) is searched for
-        # the pipe (sensor="fused"), set by its owner; None: the detector searches every frame
-        self.usable: Callable[[float], bool] | None = None
+        # whether a frame too murky for the detector (perception.visibility.clear_enough) is left
+        # unsearched (sensor="fused", whose sonar then feeds the track), set by its owner
+        self.skips_murky = False
 
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
         """A new scene (seabed and growth textures from ``rng``) and its first image.
@@ -213,9 +213,9 @@ class VisionCamera:
             return
         wt, cam = self.settings.water, self.camera
         frame, searched = CLEAR_FRAME, True
-        if self.tracker is not None or self.usable is not None:  # how much the frame shows
+        if self.tracker is not None or self.skips_murky:  # how much the frame shows
             contrast = contrast_to_noise(self.image)
-            searched = self.usable is None or self.usable(contrast)
+            searched = not self.skips_murky or clear_enough(contrast)
             if not searched:
                 frame = UNSEARCHED_FRAME
             elif contrast < EDGE_CONTRAST:

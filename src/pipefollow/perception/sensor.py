@@ -59,7 +59,6 @@ from pipefollow.perception.track_step import (
     OUT_Y_NEAR,
 )
 from pipefollow.perception.tracker import PipeTracker
-from pipefollow.perception.visibility import clear_enough
 from pipefollow.perception.water import Water
 from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import CameraParams
@@ -118,7 +117,7 @@ class SonarSensors:
             self._feed(self._ping(state, points, cum))
             if self.vision.tracker is not None:
                 self.vision.aid = self._aid  # each frame's fix a point on the tracked pipe
-            self.vision.usable = clear_enough  # a murky frame is not searched for the pipe
+            self.vision.skips_murky = True  # a murky frame is not searched for the pipe
             self.vision.reset(state, points, cum, rng)
             return
         if self.vision is not None:
