@@ -159,6 +159,29 @@ def test_clear_water_detection_rate_error_and_false_detections():
     assert false / len(frames) <= 0.02
 
 
+@pytest.mark.slow  # 200 rendered frames with and without the pipe (≈ 12 s); CI runs it
+def test_half_buried_pipe_is_found_as_its_visible_half():
+    # burial 0.5 leaves the pipe's port half in view (test_burial_covers_the_pipes_starboard_side):
+    # two edges half a diameter apart, whose centre line lies a quarter diameter to port of the axis
+    water = WATER_PRESETS["clear"]._replace(burial=0.5)
+    d = water.pipe_diameter
+    frames = random_frames(water, 200, seed=2027)
+    offsets, found, false = [], 0, 0
+    for image, empty, (x1, y1, x2, y_near) in frames:
+        det = detect_pipe(image, pipe_diameter=d)
+        false += detect_pipe(empty, pipe_diameter=d).found
+        if not det.found:
+            continue
+        found += 1
+        # signed distance of the detection's ends to the true axis, to port negative (camera x at y)
+        for x, y in ((det.x1, det.y1), (det.x2, det.y_near)):
+            t = (y - y_near) / (y1 - y_near) if y1 != y_near else 0.0
+            offsets.append(x - (x2 + t * (x1 - x2)))
+    assert found / len(frames) >= 0.9
+    assert abs(np.median(offsets) - (-0.25 * d)) <= 0.2 * d
+    assert false / len(frames) <= 0.02
+
+
 def test_detector_reads_a_foreign_image_of_another_size_and_footprint():
     cv2 = pytest.importorskip("cv2")
     # a dark pipe on a bright, noisy seabed drawn by OpenCV: 128 × 160 pixels over a 4 m × 4 m footprint

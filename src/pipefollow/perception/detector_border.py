@@ -36,7 +36,7 @@ from pipefollow.perception.pixels import column_at, pixel_grid, row_at
 BORDER_HOUGH_SHARE = 16  # the second look's Hough segments: 1/this of the shorter side in votes and length
 BORDER_BAND = 0.5  # m: a segment of the second look lies with both ends this near the border
 BORDER_MIN_SEP = 0.7  # diameters: the two edges at least this far apart and ...
-BORDER_MAX_SEP = 1.3  # ... at most this far (the first look: 0.45–1.4)
+BORDER_MAX_SEP = 1.3  # ... at most this far (the first look: MIN_PAIR_SEPARATION to MAX_PAIR_SEPARATION)
 BORDER_MIN_SHARE = 0.1  # weaker edge's length / stronger's, ≥ this
 BORDER_REACH = 0.25  # m: both ends of the centre line this near the border (the border cuts the piece)
 BORDER_SUPPORT = 0.8  # the two edges' length, ≥ this share of the centre line's visible length
