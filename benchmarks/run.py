@@ -93,8 +93,9 @@ def bench_env_step_disturbed(repeats):
 
     dist = make_disturbance(0.1, 45.0, camera_noise=0.05)
     envs = [
-        gym.make("pipefollow/PipelineFollowing-v0", episode_seconds=86_400, max_episode_steps=86_400,
-                 disturbance=d)
+        gym.make(
+            "pipefollow/PipelineFollowing-v0", episode_seconds=86_400, max_episode_steps=86_400, disturbance=d
+        )
         for d in (None, dist)
     ]
     action = np.array([0.1], dtype=np.float32)

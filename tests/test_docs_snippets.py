@@ -44,7 +44,9 @@ from pipefollow import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md"] + sorted(
-    p for p in (ROOT / "docs").rglob("*.md") if p.name != "REPORT.md"  # REPORT.md: generated results
+    p
+    for p in (ROOT / "docs").rglob("*.md")
+    if p.name != "REPORT.md"  # REPORT.md: generated results
 )
 FENCE = re.compile(  # a fence may be indented (in a list item): its code is dedented
     r"^(?P<indent>[ \t]*)```(?P<lang>\w*)[^\n]*\n(?P<code>.*?)^(?P=indent)```[ \t]*$",

@@ -63,7 +63,10 @@ def test_trial_defaults_are_the_learners_records():
 
     t = TrialConfig()
     assert (t.alpha_v, t.alpha_pi, t.discount, t.delta_k) == (
-        PAPER_CACLA.alpha_v, PAPER_CACLA.alpha_pi, PAPER_CACLA.discount, PAPER_CACLA.delta_k
+        PAPER_CACLA.alpha_v,
+        PAPER_CACLA.alpha_pi,
+        PAPER_CACLA.discount,
+        PAPER_CACLA.delta_k,
     )
     assert (t.alpha_q, t.discount) == (PAPER_SARSA.alpha, PAPER_SARSA.discount)
     assert tuple(PAPER_AC)[: len(PAPER_CACLA)] == tuple(PAPER_CACLA)

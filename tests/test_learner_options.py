@@ -20,9 +20,19 @@ from pipefollow.training.policy_files import load_policy, policy_options
 CASES = {
     # supervised CACLA+Var with the critic's trace, every step size, its own σ schedule, the DVL's drift
     "cacla": dict(
-        algorithm="cacla", supervised=True, critic_lambda=0.9, actor_repeats="var", var_rate=0.01,
-        alpha_v=0.3, alpha_pi=0.15, discount=0.85, delta_k=0.04, forgetting=0.001, sigma_start=0.7,
-        sigma_end=0.05, state="paper+drift",
+        algorithm="cacla",
+        supervised=True,
+        critic_lambda=0.9,
+        actor_repeats="var",
+        var_rate=0.01,
+        alpha_v=0.3,
+        alpha_pi=0.15,
+        discount=0.85,
+        delta_k=0.04,
+        forgetting=0.001,
+        sigma_start=0.7,
+        sigma_end=0.05,
+        state="paper+drift",
     ),  # fmt: skip
     # the general actor-critic's sign factor, and the yaw rate
     "ac": dict(algorithm="ac", actor_update="sign", critic_lambda=0.5, state="paper+yaw", sigma_start=0.8),

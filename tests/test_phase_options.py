@@ -68,10 +68,10 @@ def test_experiment_file_phase_learner_table(tmp_path):
 @pytest.mark.parametrize(
     ("table", "algorithm", "message"),
     [
-        ('{skew_deg = 22.5}', "cacla", "may set actor_repeats, critic_lambda"),
-        ('{critic_lambda = 1.5}', "cacla", r"key 'learner.critic_lambda' must be in \[0, 1\], got 1.5"),
+        ("{skew_deg = 22.5}", "cacla", "may set actor_repeats, critic_lambda"),
+        ("{critic_lambda = 1.5}", "cacla", r"key 'learner.critic_lambda' must be in \[0, 1\], got 1.5"),
         ('{actor_repeats = "often"}', "cacla", "key 'learner.actor_repeats' must be one of once, var"),
-        ('{alpha_q = 0.1}', "cacla", "key 'learner.alpha_q' applies to algorithm sarsa only"),
+        ("{alpha_q = 0.1}", "cacla", "key 'learner.alpha_q' applies to algorithm sarsa only"),
         ('{actor_repeats = "var"}', "sarsa", "key 'learner.actor_repeats' applies to algorithm cacla only"),
         ('"var"', "cacla", "must be a table of learner options"),
     ],

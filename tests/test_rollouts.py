@@ -98,8 +98,25 @@ def test_a_rollouts_dataset_recovers_an_environment_that_runs_its_episodes(tmp_p
     from pipefollow.evaluation.rollouts import episode_reset
 
     # camera noise and misses draw from the environment's generator: only the same seed repeats them
-    args = ["rollouts", "--pipes", "2", "--seconds", "12", "--camera-noise", "0.05", "--miss-prob", "0.1",
-            "--current", "0.1,45", "--seed", "7", "--out", str(tmp_path), "--name", "pipefollow/noisy-v0"]
+    args = [
+        "rollouts",
+        "--pipes",
+        "2",
+        "--seconds",
+        "12",
+        "--camera-noise",
+        "0.05",
+        "--miss-prob",
+        "0.1",
+        "--current",
+        "0.1,45",
+        "--seed",
+        "7",
+        "--out",
+        str(tmp_path),
+        "--name",
+        "pipefollow/noisy-v0",
+    ]
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 0, res.output
     data = _load(tmp_path, "pipefollow/noisy-v0", monkeypatch)
@@ -116,8 +133,9 @@ def test_a_rollouts_dataset_recovers_an_environment_that_runs_its_episodes(tmp_p
 
 
 # (not the image id: Minari 0.5 stores image spaces as JPEG through Pillow, which takes no (H, W, 1))
-@pytest.mark.parametrize("env_id", ["pipefollow/PipelineFollowing-v0",
-                                    "pipefollow/PipelineFollowingRandom-v0"])
+@pytest.mark.parametrize(
+    "env_id", ["pipefollow/PipelineFollowing-v0", "pipefollow/PipelineFollowingRandom-v0"]
+)
 def test_minaris_own_data_collector_records_every_info_of_a_registered_id(tmp_path, monkeypatch, env_id):
     import gymnasium as gym
 

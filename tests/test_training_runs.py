@@ -36,7 +36,9 @@ def test_train_into_writes_what_the_command_writes(tmp_path):
     }
     np.testing.assert_array_equal(load_policy(run.policy).weights, load_policy(from_cli["policy"]).weights)
     assert run.text().splitlines()[1:] == [
-        "options: skew 22.5°", f"policy: {run.policy}", f"learning curve: {run.learning_curve}"
+        "options: skew 22.5°",
+        f"policy: {run.policy}",
+        f"learning curve: {run.learning_curve}",
     ]
 
 

@@ -235,7 +235,12 @@ class PipelineFollowingEnv(gym.Env):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None, 'human' or 'rgb_array', got {render_mode!r}")
         setup = make_setup(
-            episode_seconds, start_lateral_noise, start_heading_noise_deg, params, disturbance, obs_dtype,
+            episode_seconds,
+            start_lateral_noise,
+            start_heading_noise_deg,
+            params,
+            disturbance,
+            obs_dtype,
             state,
         )
         self.setup = setup

@@ -87,8 +87,9 @@ def repeats(delta, var, p):
 
 
 @njit(cache=True)
-def update(w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX, var=None, trace=None,
-           heads=None):
+def update(
+    w, phi, a_rl, a_sup, reward, discount, phi_next, p, rule=SIGN_AND_MAX, var=None, trace=None, heads=None
+):
     """One CACLA update for the transition from φ(s) with reward and bootstrap ``discount``·V(s').
 
     ``discount`` is γ_d^n for a transition of n decisions (semi-Markov, docs/design.md). Returns δ.

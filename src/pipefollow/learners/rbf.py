@@ -321,4 +321,6 @@ def state_centres(state: str = "paper") -> tuple[np.ndarray, ...]:
 
     extra = components(state)[len(STATE_CENTRES) :]
     return STATE_CENTRES + tuple(MEASURED_CENTRES[c.name] for c in extra)
+
+
 ACTION_GRID = RBFGrid((ACTION_CENTRES,))  # 13 action features

@@ -56,8 +56,6 @@ class Piece(NamedTuple):
     s_far: float  # ... and of the far end
 
 
-
-
 @njit(cache=True)
 def to_camera(px, py, x, y, psi):
     """Earth point ``(px, py)`` in camera coordinates ``(lateral, forward)`` of pose (x, y, ψ)."""

@@ -296,8 +296,17 @@ def unpack_params(a):
     cam = CameraParams(*to_fixed_tuple(a[_CAMERA : _CAMERA + _N_CAMERA], _N_CAMERA))
     dist = unpack_disturbance(a, _DISTURBANCE)
     return SimParams(
-        auv, ctrl, cam, a[_DT], int(a[_SUBSTEPS]), a[_LOST_REWARD], a[_BACK], a[_AHEAD], dist,
-        a[_START_SPEED], a[_END_AT_PIPE_END] != 0.0,
+        auv,
+        ctrl,
+        cam,
+        a[_DT],
+        int(a[_SUBSTEPS]),
+        a[_LOST_REWARD],
+        a[_BACK],
+        a[_AHEAD],
+        dist,
+        a[_START_SPEED],
+        a[_END_AT_PIPE_END] != 0.0,
     )
 
 

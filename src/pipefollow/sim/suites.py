@@ -244,8 +244,6 @@ def suite_pipe(
     return Pipeline(np.array(pts), name or f"{family}-{stream}-{k}")
 
 
-
-
 def _turn(lv: Level, heading: float, u_turn: float, u_side: float, max_heading: float) -> float:
     """A bend's turn (rad) from its two uniforms.
 
