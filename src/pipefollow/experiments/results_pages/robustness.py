@@ -79,7 +79,9 @@ against PPO's {ppo_succ_max} and {ppo_ret_max}, whose seeds spread from {ppo_see
 ## Training under randomized disturbances
 
 Trained under a randomization preset (seeds as above) and judged as above; cells: mean return,
-success rate:
+success rate. The `vision` columns were trained under an earlier calibration of that preset (the
+detector's noise and misses measured before later changes to the detector; docs/decisions.md, "the
+`vision` preset"), not under today's values:
 
 {randomized}
 
