@@ -152,27 +152,3 @@ def test_far_end_of_a_rendered_hook_lies_after_the_corner(turn):
         assert det.found
         assert math.hypot(det.x1 - x1, det.y1 - y1) < 0.2, seed
         assert math.hypot(det.x2 - x2, det.y_near - y_near) < 0.2, seed
-
-
-@pytest.mark.parametrize("turn", [120.0, 150.0])
-def test_far_end_beyond_a_corner_just_inside_the_far_border(turn):
-    # a corner within the walk's last pixels of the far border stops the walk on the border; the
-    # exact camera's far end is where the second leg leaves through the side, ≥ 0.5 m from there.
-    # With border_corner the far end follows the second leg; without it stays on the far border
-    renderer = Renderer(WATER_PRESETS["clear"])
-    joined = stayed = 0
-    for seed in range(8):
-        rng = np.random.default_rng(seed)
-        lat0, vertex_fwd = rng.uniform(-0.2, 0.2), rng.uniform(2.9, 2.97)
-        pts, cum = l_bend(turn, lat0, vertex_fwd)
-        seen, x1, y1, x2, y_near, _, _ = observe(pts, cum, 0.0, 0.0, 0.0, 20.0, PAPER_CAMERA)
-        assert seen and math.hypot(x1 - lat0, y1 - vertex_fwd) > 0.5
-        image = renderer.render(pts, cum, (0.0, 0.0, 0.0), make_textures(rng), rng)
-        det = detect_pipe(image, border_corner=True)
-        assert det.found
-        joined += math.hypot(det.x1 - x1, det.y1 - y1) < 0.1
-        assert math.hypot(det.x2 - x2, det.y_near - y_near) < 0.1, seed
-        first = detect_pipe(image)
-        stayed += math.hypot(first.x1 - x1, first.y1 - y1) > 0.3
-    assert joined >= 6
-    assert stayed >= 6

@@ -230,7 +230,6 @@ class VisionCamera:
                 diameter,
                 previous=self.detection,
                 border_pieces=self.tracker is not None,
-                border_corner=self.tracker is not None,
             )
         else:  # a frame too murky to look for the pipe in
             det = NOT_FOUND

@@ -113,7 +113,6 @@ def detect_pipe(
     min_confidence: float = 0.3,
     previous: Detection | None = None,
     border_pieces: bool = False,
-    border_corner: bool = False,
 ) -> Detection:
     """Find the pipe in a grey image of the footprint ``x ∈ [−half_width, half_width]``, ``y ∈ [0, depth]``.
 
@@ -132,10 +131,6 @@ def detect_pipe(
         border_pieces: where nothing is found, look again for a short piece cut by the border
             (:func:`second_look`). For a tracker, which orders the ends itself: the piece's way is
             a guess (docs/decisions.md, "a short piece at the border").
-        border_corner: where both ends of the piece lie on the border, carry the one just past a
-            corner on along the second leg (:func:`~pipefollow.perception.detector_legs.join_hook`).
-            For a tracker: through the detector alone it lowered the heuristic's success
-            (docs/decisions.md, "a corner at the border").
 
     Returns:
         A :class:`Detection`. A blank, saturated or pure-noise image gives ``found=False``.
@@ -162,7 +157,7 @@ def detect_pipe(
     if segs is None:
         return NOT_FOUND
     segs = np.asarray(segs, dtype=np.float64).reshape(-1, 4)  # (N, 1, 4) in OpenCV 4, (N, 4) in 5
-    det = centre_line(segs, edges, half_width, depth, pipe_diameter, min_confidence, border_corner)
+    det = centre_line(segs, edges, half_width, depth, pipe_diameter, min_confidence)
     if border_pieces and not det.found:  # a second look: a short piece cut by the border
         det = second_look(smooth, edges, half_width, depth, pipe_diameter, min_confidence, det)
     if previous is None or not previous.found or not det.found:
@@ -222,7 +217,7 @@ def gradient_level(img):
 
 
 @njit(cache=True)
-def centre_line(segs, edges, half_width, depth, diameter, min_confidence, corner=False):
+def centre_line(segs, edges, half_width, depth, diameter, min_confidence):
     """From Hough segments (pixels ``x0, y0, x1, y1``) and the edge image to the pipe's centre line.
 
     Returns a :class:`Detection` in camera metres (see :func:`detect_pipe`). The strongest straight
@@ -236,7 +231,7 @@ def centre_line(segs, edges, half_width, depth, diameter, min_confidence, corner
         return Detection(False, 0.0, 0.0, 0.0, 0.0, confidence)
     direction = math.atan2(ends[1, 1] - ends[0, 1], ends[1, 0] - ends[0, 0])
     extend_ends(ends, edges, 0.5 * sep, half_width, depth, EXTEND)
-    join_hook(ends, segs, edges, direction, half_width, depth, diameter, min_confidence, corner)
+    join_hook(ends, segs, edges, direction, half_width, depth, diameter, min_confidence)
     return as_detection(ends, confidence, half_width, depth)
 
 

@@ -2,8 +2,8 @@
 
 :func:`leg` chains the edge stages of :mod:`pipefollow.perception.detector_edges` into one
 straight leg with its centre line's ends (:func:`leg_ends`, ends near the border carried onto it
-by :func:`snap_to_border`); :func:`join_hook` carries an end that stops inside the footprint (or,
-on request, on the border just past a corner) on along a second leg after a sharp corner.
+by :func:`snap_to_border`); :func:`join_hook` carries an end that stops inside the footprint on
+along a second leg after a sharp corner.
 """
 
 from __future__ import annotations
@@ -35,8 +35,6 @@ MIN_SUPPORT = 0.25  # the two edges' length, ≥ this share of the footprint's l
 SNAP_PX = 4.0  # pixels: an end this near the border goes onto it (Canny loses the last pixels at the border)
 HOOK_MIN_TURN = math.radians(20.0)  # rad: a second leg's segments turn at least this from the first leg
 HOOK_JOIN = 0.45  # m: a second leg starting this near an end stopped inside the view continues the pipe
-CORNER_JOIN = 0.25  # m: ... and this near an end on the border (a corner just inside it; tracked camera)
-CORNER_STRAIGHT = 0.15  # m: ... if that end lies this near the straight leg's line (no bend followed there)
 
 
 class Leg(NamedTuple):
@@ -89,15 +87,14 @@ def leg(segs, edges, half_width, depth, diameter, min_confidence):
 
 
 @njit(cache=True)
-def join_hook(ends, segs, edges, direction, half_width, depth, diameter, min_confidence, corner=False):
+def join_hook(ends, segs, edges, direction, half_width, depth, diameter, min_confidence):
     """Carry an end that stops inside the footprint on along a second leg that starts there (in place).
 
     The walk along the edges turns at most 60° a step and stops at a corner sharper than about
     100°. There the pipe goes on as a second straight leg in another direction: the strongest leg
     among the Hough segments more than :data:`HOOK_MIN_TURN` off the first leg's ``direction``
-    (rad) (:func:`turned_leg`); if one of its ends lies within :data:`HOOK_JOIN` of the stopped
-    end, that end moves to the second leg's other end. With ``corner``, where both ends lie on the
-    border, a corner just inside it is looked for too (:func:`corner_at_border`).
+    (rad); if one of its ends lies within :data:`HOOK_JOIN` of the stopped end, that end moves to
+    the second leg's other end.
     """
     h, w = edges.shape
     reach = SNAP_PX * pixel_pitch(pixel_grid(half_width, depth, h, w))
@@ -106,44 +103,8 @@ def join_hook(ends, segs, edges, direction, half_width, depth, diameter, min_con
         x, y = ends[e, 0], ends[e, 1]
         if min(half_width - abs(x), y, depth - y) > reach:
             inner = e if inner < 0 else 2  # both inside: a short piece, no hook to follow
-    if inner == 2:
+    if inner < 0 or inner == 2:
         return
-    if inner < 0:
-        if corner:
-            corner_at_border(ends, segs, edges, direction, half_width, depth, diameter, min_confidence)
-        return
-    found, second, _, _ = turned_leg(segs, edges, direction, half_width, depth, diameter, min_confidence)
-    if found:
-        join_at(ends, inner, second, HOOK_JOIN)
-
-
-@njit(cache=True)
-def corner_at_border(ends, segs, edges, direction, half_width, depth, diameter, min_confidence):
-    """Both ends on the border: the one where a second leg starts carried on along it (in place).
-
-    A corner within the walk's last pixels of the border stops the walk on the border; the exact
-    camera's piece goes on along the second leg to where that leaves the view. The second leg
-    (:func:`turned_leg`) must start within :data:`CORNER_JOIN` of the end, and the end must lie on
-    the straight leg's line (within :data:`CORNER_STRAIGHT`): at a bend the walk has followed, the
-    end is already the second leg's exit.
-    """
-    found, second, _, _ = turned_leg(segs, edges, direction, half_width, depth, diameter, min_confidence)
-    if not found:
-        return
-    near0 = min(_distance(second, 0, ends, 0), _distance(second, 1, ends, 0))
-    near1 = min(_distance(second, 0, ends, 1), _distance(second, 1, ends, 1))
-    e = 0 if near0 < near1 else 1
-    # the end's offset across the straight leg's line through the other end
-    across = -(ends[e, 0] - ends[1 - e, 0]) * math.sin(direction) + (ends[e, 1] - ends[1 - e, 1]) * math.cos(
-        direction
-    )
-    if abs(across) < CORNER_STRAIGHT:
-        join_at(ends, e, second, CORNER_JOIN)
-
-
-@njit(cache=True)
-def turned_leg(segs, edges, direction, half_width, depth, diameter, min_confidence):
-    """The strongest :func:`leg` of the segments turned over :data:`HOOK_MIN_TURN` from ``direction``."""
     keep = np.zeros(segs.shape[0], dtype=np.bool_)
     for i in range(segs.shape[0]):
         # pixel rows run against y: the segment's direction in metres has its row difference negated
@@ -151,23 +112,16 @@ def turned_leg(segs, edges, direction, half_width, depth, diameter, min_confiden
         diff = abs((t - direction + 0.5 * math.pi) % math.pi - 0.5 * math.pi)
         keep[i] = diff > HOOK_MIN_TURN
     if keep.sum() < 2:
-        return Leg(False, np.zeros((2, 2)), 0.0, 0.0)
-    return leg(segs[keep], edges, half_width, depth, diameter, min_confidence)
-
-
-@njit(cache=True)
-def join_at(ends, e, second, within):
-    """Move ``ends[e]`` to ``second``'s far end if its near end lies within ``within`` (m) (in place)."""
-    da, db = _distance(second, 0, ends, e), _distance(second, 1, ends, e)
-    if min(da, db) < within:
+        return
+    found, second, _, _ = leg(segs[keep], edges, half_width, depth, diameter, min_confidence)
+    if not found:
+        return
+    x, y = ends[inner, 0], ends[inner, 1]
+    da = math.hypot(second[0, 0] - x, second[0, 1] - y)
+    db = math.hypot(second[1, 0] - x, second[1, 1] - y)
+    if min(da, db) < HOOK_JOIN:
         o = 1 if da < db else 0
-        ends[e, 0], ends[e, 1] = second[o, 0], second[o, 1]
-
-
-@njit(cache=True)
-def _distance(a, i, b, j):
-    """Distance (m) between point ``a[i]`` and point ``b[j]``."""
-    return math.hypot(a[i, 0] - b[j, 0], a[i, 1] - b[j, 1])
+        ends[inner, 0], ends[inner, 1] = second[o, 0], second[o, 1]
 
 
 @njit(cache=True)
