@@ -40,7 +40,7 @@ def patch(mode: str, log: list) -> None:
     from pipefollow.perception import camera as cam
     from pipefollow.perception import track_step as ts
 
-    def _track(self, s, pose, det):
+    def _track(self, s, pose, det, frame=ts.CLEAR_FRAME):
         tv = self.truth
         found, d = det.found, (det.x1, det.y1, det.x2, det.y_near)
         if mode == "truth-detections":
@@ -50,7 +50,7 @@ def patch(mode: str, log: list) -> None:
             swapped = math.hypot(d[2] - tv.x1, d[3] - tv.y1) + math.hypot(d[0] - tv.x2, d[1] - tv.y_near)
             if swapped < kept:
                 d = (d[2], d[3], d[0], d[1])
-        out = self.tracker.step(pose, found, d).copy()
+        out = self.tracker.step(pose, found, d, frame).copy()
         T, event = self.tracker.state, int(self.tracker.event)
         if mode == "detection-verbatim" and found and event != int(ts.REJECTED) and event != 0:
             nx, ny = T[ts.NEAR_X], T[ts.NEAR_Y]
