@@ -8,7 +8,10 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
 
 * ``"sonar"``: the observation slots (``x1, y1, x2, y_near``, ``e_dist``, ``e_angl``, in view, the
   side of the last sighting) come from :class:`~pipefollow.perception.sonar_track.SonarSensor`
-  (the look-ahead fan): the water's turbidity does not reach it. A lost pipe keeps the last
+  (the look-ahead fan): the water's turbidity does not reach it. After a ping that misses the
+  pipe, the line through the remembered detections still shows it for
+  :data:`~pipefollow.perception.sonar_track.CARRY` ping(s) if it crosses the footprint (not when
+  it feeds a rendered camera's measurements, below: the tracker carries the line). A lost pipe keeps the last
   sighting, is a lost decision (−10) and the next decision searches, as with the vision camera.
 * ``"fused"``: one estimate from both sensors. Each decision the camera's own measurement comes
   first; when it finds no pipe the sonar's view of the pipe is the measurement instead
@@ -46,7 +49,7 @@ import numpy as np
 from pipefollow.perception.camera import CameraSettings, TrueView, VisionCamera, _spawn
 from pipefollow.perception.detector import Detection
 from pipefollow.perception.slots import Sighting, observed, sighting_of, write_sighting
-from pipefollow.perception.sonar_track import SonarSensor
+from pipefollow.perception.sonar_track import CARRY, SonarSensor
 from pipefollow.perception.track_step import (
     ACCEPTED,
     BEND,
@@ -99,8 +102,11 @@ class SonarSensors:
         self.fused = settings.sensor == "fused"
         # the camera: its image (observation="image"), and with "fused" its detections too
         self.vision = VisionCamera(settings, camera, lost_reward) if settings.renders else None
+        # the sonar's line shown CARRY pings past a miss, but not as the measurement of a rendered
+        # camera (fused): its tracker carries its line itself
+        carry = 0 if self.fused and settings.detects else CARRY
         self.sonar = SonarSensor(diameter=settings.water.pipe_diameter, burial=sonar_burial(settings.water),
-                                 camera=camera)  # fmt: skip
+                                 camera=camera, carry=carry)  # fmt: skip
         self.buried = (NO_BURIAL, NO_BURIAL)
         self.truth = TrueView(False, 0.0, 0.0, 0.0, 0.0)
         self._true_errors = (0.0, 0.0)
