@@ -285,6 +285,38 @@ def test_the_sonar_s_view_is_the_fused_observation_while_the_track_shows_no_pipe
     assert tracker.out[OUT_IN_VIEW] == 0.0  # the track itself is left as it is
 
 
+def test_in_a_murky_frame_the_fused_observation_is_the_sonar_s_view_even_while_the_track_shows_one():
+    from pipefollow.perception.track_step import OUT_IN_VIEW, OUT_X1, OUT_X2, OUT_Y1, OUT_Y_NEAR
+
+    for water, murky in (("turbid", True), ("clear", False)):
+        env = PipelineFollowingEnv(STRAIGHT, 10.0, camera="vision", sensor="fused", water=water)
+        obs, _ = env.reset(seed=0)
+        for _ in range(3):
+            obs, *_ = env.step(act(obs))
+            assert env._vision._murky == murky  # the frame's contrast, as the camera judged it
+    fused = env._vision  # clear water: the track shows the pipe, the ping has it in the footprint
+    view, tracker = fused.sonar.view, fused.vision.tracker
+    assert view.in_view and tracker.out[OUT_IN_VIEW] == 1.0
+    tracker.out[OUT_X1] = view.x1 + 0.4  # a tracked line off the sonar's view by 0.4 m
+    track = (tracker.out[OUT_X1], tracker.out[OUT_Y1], tracker.out[OUT_X2], tracker.out[OUT_Y_NEAR])
+    shown = fused._aid(tracker)  # a clear frame: the track's line
+    assert shown[OUT_IN_VIEW] == 1.0
+    assert (shown[OUT_X1], shown[OUT_Y1], shown[OUT_X2], shown[OUT_Y_NEAR]) == track
+    fused._murky = True  # a murky frame: the sonar's view, the track left as it is
+    shown = fused._aid(tracker)
+    assert shown[OUT_IN_VIEW] == 1.0
+    assert (shown[OUT_X1], shown[OUT_Y1], shown[OUT_X2], shown[OUT_Y_NEAR]) == (
+        view.x1,
+        view.y1,
+        view.x2,
+        view.y_near,
+    )
+    assert tracker.out[OUT_X1] == track[0]
+    fused.sonar.view = view._replace(in_view=False)  # the ping misses: the track's line again
+    shown = fused._aid(tracker)
+    assert (shown[OUT_X1], shown[OUT_Y1], shown[OUT_X2], shown[OUT_Y_NEAR]) == track
+
+
 @pytest.mark.parametrize("carried", [1, 2, 3])
 @pytest.mark.parametrize("searched", [True, False])
 def test_a_carried_line_is_lost_after_that_many_frames_without_a_sighting(carried, searched):

@@ -25,8 +25,9 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
   (:func:`~pipefollow.perception.visibility.clear_enough`; murky water) is not searched: the
   sonar alone feeds the track then, which carries its line
   :attr:`~pipefollow.perception.track_step.TrackParams.unsearched_misses` frames without a
-  sighting. The first ping feeds the first frame. While the track shows no pipe, the sonar's view
-  is the observation if it has the pipe in the footprint, and a fix outside the footprint turns
+  sighting. The first ping feeds the first frame. In such a murky frame, and while the track
+  shows no pipe, the sonar's own view is the observation if it has the pipe in the footprint (the
+  track, fed all the same, is shown when the ping misses), and a fix outside the footprint turns
   the search towards it.
 
 The sonar draws its noise (128 normals a ping) from a generator of its own, spawned from the
@@ -113,6 +114,7 @@ class SonarSensors:
         self._last = Sighting()
         self._rng: np.random.Generator | None = None
         self._shown = np.zeros(OUT_SIZE)  # the sonar's view as a tracker's output (see _aid)
+        self._murky = False  # the last frame was too murky to search (``_usable``)
 
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
         """A new episode: the sonar's generator spawned and the camera's reset (module docstring)."""
@@ -124,7 +126,7 @@ class SonarSensors:
             self._feed(self._ping(state, points, cum))
             if self.vision.tracker is not None:
                 self.vision.aid = self._aid  # each frame's fix a point on the tracked pipe
-            self.vision.usable = clear_enough  # a murky frame is not searched for the pipe
+            self.vision.usable = self._usable  # a murky frame is not searched for the pipe
             self.vision.reset(state, points, cum, rng)
             return
         if self.vision is not None:
@@ -153,30 +155,43 @@ class SonarSensors:
             return self.lost_reward
         return sim_reward
 
+    def _usable(self, contrast: float) -> bool:
+        """Whether the camera searches a frame of this contrast (:func:`clear_enough`), kept for ``_aid``."""
+        self._murky = not clear_enough(contrast)
+        return not self._murky
+
     def _feed(self, view) -> None:
         """The sonar's view as the camera's measurement where the camera finds no pipe (or none yet)."""
         self.vision.fallback = _as_detection(view) if view.in_view else None
 
     def _aid(self, tracker: PipeTracker) -> np.ndarray:
-        """After the camera's frame: the ping's fix on the tracked pipe; the sonar's view if it shows none.
+        """After the camera's frame: the ping's fix on the tracked pipe; the sonar's view if murky or none.
 
         The fix is a point on the tracked pipe (:data:`FIX_SD`) only in a frame whose camera
         detection the tracker did not take (none, rejected, or one that started the line again):
         a detection it took already places the line, and adding the fix there made clear water
-        worse (docs/decisions.md). While the track shows no pipe, the sonar's own view is this
-        decision's observation if it has the pipe in the footprint (the track stays as it is),
-        else the search turns towards the ping's fix if it found the pipe outside the footprint.
+        worse (docs/decisions.md). In a frame too murky to search, and while the track shows no
+        pipe, the sonar's own view is this decision's observation if it has the pipe in the
+        footprint (the track stays as it is: it carries the line through the sonar's misses); else,
+        the track showing none, the search turns towards the ping's fix if it found the pipe
+        outside the footprint.
         """
         fix = self.sonar.fix
         out = tracker.out
         if fix.found and tracker.event not in (ACCEPTED, BEND):
             out = tracker.point(fix.lateral, fix.forward, FIX_SD)
+        view = self.sonar.view
+        if self._murky and view.in_view:
+            return self._as_output(view)
         if out[OUT_IN_VIEW] != 0.0 or not fix.found:
             return out
         out = tracker.search_towards(fix.lateral)
-        view = self.sonar.view
         if not view.in_view:
             return out
+        return self._as_output(view)
+
+    def _as_output(self, view) -> np.ndarray:
+        """The sonar's view in the footprint as a tracker's output (in view, the ends, the side)."""
         shown = self._shown
         shown[OUT_IN_VIEW], shown[OUT_X1], shown[OUT_Y1] = 1.0, view.x1, view.y1
         shown[OUT_X2], shown[OUT_Y_NEAR] = view.x2, view.y_near
