@@ -19,7 +19,7 @@ from pipefollow.perception.sonar import (
     render_ping,
 )
 from pipefollow.perception.sonar_detect import SonarFix, detect_profile
-from pipefollow.perception.sonar_track import SonarSensor, SonarTrack
+from pipefollow.perception.sonar_track import CARRY, NO_VIEW, SonarSensor, SonarTrack
 from pipefollow.sim.camera import PAPER_CAMERA, observe
 
 EMPTY = np.zeros((0, 2))
@@ -389,6 +389,42 @@ def test_the_track_with_one_ping_takes_the_pipe_along_the_track_and_forgets_on_r
     assert view.angle == pytest.approx(math.atan(0.2))
 
 
+def test_a_carried_line_is_the_remembered_pipe_drawn_from_the_new_pose_for_carry_pings():
+    # exact fixes of a pipe along north 0.3 m to starboard, 2 m ahead of poses 0.5 m apart
+    tracks = {carry: SonarTrack(carry=carry) for carry in (0, 1, 2)}
+    for track in tracks.values():
+        for k in range(4):
+            view = track.update((0.5 * k, 0.0, 0.0), SonarFix(True, lateral=0.3, forward=2.0))
+        assert view.in_view and view.detected and view.angle == pytest.approx(0.0, abs=1e-12)
+    # a miss from a pose turned 0.1 rad to starboard: the pipe along north 0.3 m to starboard is,
+    # in that camera frame, at 0.3 / cos 0.1 m at forward 0 and at −0.1 rad to the track
+    psi = 0.1
+    views = {
+        c: [t.update((2.0 + 0.5 * k, 0.0, psi), SonarFix(False)) for k in range(3)] for c, t in tracks.items()
+    }
+    for carry, seen in views.items():
+        for k, view in enumerate(seen):
+            assert not view.detected and view.pings == 4
+            assert view.lateral == pytest.approx(0.3 / math.cos(psi), abs=1e-9)
+            assert view.angle == pytest.approx(-psi, abs=1e-9)
+            assert view.in_view == (k < carry)  # shown for `carry` misses in a row, then lost
+            if view.in_view:  # the near end at forward 0, the far end at the footprint's depth
+                assert (view.y_near, view.y1) == (0.0, pytest.approx(3.0))
+                assert view.x2 == pytest.approx(0.3 / math.cos(psi))
+                assert view.x1 == pytest.approx(0.3 / math.cos(psi) - 3.0 * math.tan(psi))
+    # a new detection ends the carry count: the next miss is carried again
+    track = tracks[1]
+    assert track.update((4.0, 0.0, 0.0), SonarFix(True, lateral=0.3, forward=2.0)).in_view
+    assert track.update((4.5, 0.0, 0.0), SonarFix(False)).in_view
+    assert not track.update((5.0, 0.0, 0.0), SonarFix(False)).in_view
+    # nothing remembered: nothing to carry
+    empty = SonarTrack(carry=1)
+    assert empty.update((0.0, 0.0, 0.0), SonarFix(False)) == NO_VIEW
+    assert SonarSensor().track.carry == CARRY == 1
+    with pytest.raises(ValueError, match="carry"):
+        SonarTrack(carry=-1)
+
+
 def test_the_sensor_is_render_detect_and_track_from_one_generator():
     pts, cum = straight_pipe(0.2, 0.1)
     sensor = SonarSensor(burial=0.5)
@@ -399,11 +435,14 @@ def test_the_sensor_is_render_detect_and_track_from_one_generator():
         pose = (0.6 * k, 0.0, 0.0)
         view = sensor.step(pts, cum, pose, rng)
         fix = detect_profile(render_ping(pts, cum, pose, twin, LOOK_AHEAD_SONAR, burial=0.5))
-        assert view == track.update(pose, fix) == sensor.view
+        assert view == track.update(pose, fix) == sensor.view  # every ping finds the pipe
     assert view.in_view and view.pings == 4 and sensor.fix.found
     truth = observe(pts, cum, *pose, 10.0, PAPER_CAMERA)
     assert view.x1 == pytest.approx(truth.x1, abs=0.05) and view.x2 == pytest.approx(truth.x2, abs=0.05)
-    buried = sensor.step(pts, cum, (3.0, 0.0, 0.0), rng, (0.0, math.inf, math.inf, math.inf))
+    hidden = (0.0, math.inf, math.inf, math.inf)
+    buried = sensor.step(pts, cum, (3.0, 0.0, 0.0), rng, hidden)
+    assert buried.in_view and not buried.detected and buried.pings == 4  # the memory, carried one ping
+    buried = sensor.step(pts, cum, (3.5, 0.0, 0.0), rng, hidden)
     assert not buried.in_view and not buried.detected and buried.pings == 4  # the memory stays
     sensor.reset()
     assert sensor.view.pings == 0 and sensor.track.view((0.0, 0.0, 0.0)).pings == 0
@@ -425,9 +464,12 @@ def test_the_sensor_writes_the_observation_slots_as_the_vision_camera_does():
     assert view.in_view and s[sim.IN_VIEW] == 1.0
     assert (s[sim.X1], s[sim.Y1], s[sim.X2], s[sim.Y_NEAR]) == (view.x1, view.y1, view.x2, view.y_near)
     assert s[sim.E_DIST] == pytest.approx(0.3, abs=0.03) and s[sim.E_ANGL] == 0.0 and s[sim.LAST_SIDE] == 1.0
-    # the pipe buried under the fan: lost, the last sighting's slots stay
+    # the pipe buried under the fan: the remembered line one ping (CARRY), then lost, the last
+    # sighting's slots staying
+    hidden = (0.0, math.inf, math.inf, math.inf)
+    assert sensor.look(s, pts, cum, rng, hidden).in_view and s[sim.IN_VIEW] == 1.0
     kept = s[: sim.E_ANGL + 1].copy()
-    sensor.look(s, pts, cum, rng, (0.0, math.inf, math.inf, math.inf))
+    sensor.look(s, pts, cum, rng, hidden)
     assert s[sim.IN_VIEW] == 0.0 and np.array_equal(s[: sim.E_DIST], kept[: sim.E_DIST])
 
 

@@ -162,6 +162,9 @@ class VisionCamera:
         # whether a frame too murky for the detector (perception.visibility.clear_enough) is left
         # unsearched (sensor="fused", whose sonar then feeds the track), set by its owner
         self.skips_murky = False
+        # what the last frame was to the tracker (track_step's CLEAR_FRAME, MURKY_FRAME or
+        # UNSEARCHED_FRAME: too murky to search, with skips_murky)
+        self.frame = CLEAR_FRAME
 
     def reset(self, state: np.ndarray, points: np.ndarray, cum: np.ndarray, rng: np.random.Generator) -> None:
         """A new scene (seabed and growth textures from ``rng``) and its first image.
@@ -220,6 +223,7 @@ class VisionCamera:
                 frame = UNSEARCHED_FRAME
             elif contrast < EDGE_CONTRAST:
                 frame = MURKY_FRAME
+        self.frame = frame
         if searched:
             diameter = wt.pipe_diameter
             # a short piece at the border only for the tracker, which orders the ends itself

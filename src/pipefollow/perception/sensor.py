@@ -8,7 +8,10 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
 
 * ``"sonar"``: the observation slots (``x1, y1, x2, y_near``, ``e_dist``, ``e_angl``, in view, the
   side of the last sighting) come from :class:`~pipefollow.perception.sonar_track.SonarSensor`
-  (the look-ahead fan): the water's turbidity does not reach it. A lost pipe keeps the last
+  (the look-ahead fan): the water's turbidity does not reach it. After a ping that misses the
+  pipe, the line through the remembered detections still shows it for
+  :data:`~pipefollow.perception.sonar_track.CARRY` ping(s) if it crosses the footprint (not when
+  it feeds a rendered camera's measurements, below: the tracker carries the line). A lost pipe keeps the last
   sighting, is a lost decision (−10) and the next decision searches, as with the vision camera.
 * ``"fused"``: one estimate from both sensors. Each decision the camera's own measurement comes
   first; when it finds no pipe the sonar's view of the pipe is the measurement instead
@@ -22,8 +25,9 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
   (:func:`~pipefollow.perception.visibility.clear_enough`; murky water) is not searched: the
   sonar alone feeds the track then, which carries its line
   :attr:`~pipefollow.perception.track_step.TrackParams.unsearched_misses` frames without a
-  sighting. The first ping feeds the first frame. While the track shows no pipe, the sonar's view
-  is the observation if it has the pipe in the footprint, and a fix outside the footprint turns
+  sighting. The first ping feeds the first frame. In such a murky frame, and while the track
+  shows no pipe, the sonar's own view is the observation if it has the pipe in the footprint (the
+  track, fed all the same, is shown when the ping misses), and a fix outside the footprint turns
   the search towards it.
 
 The sonar draws its noise (128 normals a ping) from a generator of its own, spawned from the
@@ -46,7 +50,7 @@ import numpy as np
 from pipefollow.perception.camera import CameraSettings, TrueView, VisionCamera, _spawn
 from pipefollow.perception.detector import Detection
 from pipefollow.perception.slots import Sighting, observed, sighting_of, write_sighting
-from pipefollow.perception.sonar_track import SonarSensor
+from pipefollow.perception.sonar_track import CARRY, SonarSensor
 from pipefollow.perception.track_step import (
     ACCEPTED,
     BEND,
@@ -57,6 +61,7 @@ from pipefollow.perception.track_step import (
     OUT_X2,
     OUT_Y1,
     OUT_Y_NEAR,
+    UNSEARCHED_FRAME,
 )
 from pipefollow.perception.tracker import PipeTracker
 from pipefollow.perception.water import Water
@@ -98,8 +103,11 @@ class SonarSensors:
         self.fused = settings.sensor == "fused"
         # the camera: its image (observation="image"), and with "fused" its detections too
         self.vision = VisionCamera(settings, camera, lost_reward) if settings.renders else None
+        # the sonar's line shown CARRY pings past a miss, but not as the measurement of a rendered
+        # camera (fused): its tracker carries its line itself
+        carry = 0 if self.fused and settings.detects else CARRY
         self.sonar = SonarSensor(diameter=settings.water.pipe_diameter, burial=sonar_burial(settings.water),
-                                 camera=camera)  # fmt: skip
+                                 camera=camera, carry=carry)  # fmt: skip
         self.buried = (NO_BURIAL, NO_BURIAL)
         self.truth = TrueView(False, 0.0, 0.0, 0.0, 0.0)
         self._true_errors = (0.0, 0.0)
@@ -151,25 +159,33 @@ class SonarSensors:
         self.vision.fallback = _as_detection(view) if view.in_view else None
 
     def _aid(self, tracker: PipeTracker) -> np.ndarray:
-        """After the camera's frame: the ping's fix on the tracked pipe; the sonar's view if it shows none.
+        """After the camera's frame: the ping's fix on the tracked pipe; the sonar's view if murky or none.
 
         The fix is a point on the tracked pipe (:data:`FIX_SD`) only in a frame whose camera
         detection the tracker did not take (none, rejected, or one that started the line again):
         a detection it took already places the line, and adding the fix there made clear water
-        worse (docs/decisions.md). While the track shows no pipe, the sonar's own view is this
-        decision's observation if it has the pipe in the footprint (the track stays as it is),
-        else the search turns towards the ping's fix if it found the pipe outside the footprint.
+        worse (docs/decisions.md). In a frame too murky to search, and while the track shows no
+        pipe, the sonar's own view is this decision's observation if it has the pipe in the
+        footprint (the track stays as it is: it carries the line through the sonar's misses); else,
+        the track showing none, the search turns towards the ping's fix if it found the pipe
+        outside the footprint.
         """
         fix = self.sonar.fix
         out = tracker.out
         if fix.found and tracker.event not in (ACCEPTED, BEND):
             out = tracker.point(fix.lateral, fix.forward, FIX_SD)
+        view = self.sonar.view
+        if self.vision.frame == UNSEARCHED_FRAME and view.in_view:  # a frame too murky to search
+            return self._as_output(view)
         if out[OUT_IN_VIEW] != 0.0 or not fix.found:
             return out
         out = tracker.search_towards(fix.lateral)
-        view = self.sonar.view
         if not view.in_view:
             return out
+        return self._as_output(view)
+
+    def _as_output(self, view) -> np.ndarray:
+        """The sonar's view in the footprint as a tracker's output (in view, the ends, the side)."""
         shown = self._shown
         shown[OUT_IN_VIEW], shown[OUT_X1], shown[OUT_Y1] = 1.0, view.x1, view.y1
         shown[OUT_X2], shown[OUT_Y_NEAR] = view.x2, view.y_near

@@ -4,7 +4,9 @@
 straight line through them in the current camera frame, which gives the camera's observation
 ``(x1, y1, x2, y_near)`` (:mod:`pipefollow.sim.camera`): the line clipped to the camera's
 footprint. The direction comes from the pings behind the AUV, so at a bend it lags the camera
-(which sees 3 m ahead); with one ping only the pipe is taken parallel to the track.
+(which sees 3 m ahead); with one ping only the pipe is taken parallel to the track. After a ping
+without a detection the remembered line, drawn from the new pose, still counts as in view for
+``carry`` pings (:data:`CARRY` for the sonar alone).
 
 :class:`SonarSensor` is one decision's work for an environment: render a ping from the pose
 (:func:`~pipefollow.perception.sonar.render_ping`), detect the pipe
@@ -36,11 +38,17 @@ from pipefollow.sim import decision as sim
 from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, clip_segment
 from pipefollow.sim.disturbance import NO_BURIAL
 
+# Pings after a ping without a detection during which the sonar alone still shows the remembered
+# line (drawn from the new pose) if it crosses the footprint: measured on the training suites with
+# every controller (docs/decisions.md, "The sonar's line carried one ping"); the fused sensor's
+# sonar carries none (its tracker carries the line instead).
+CARRY = 1
+
 
 class SonarView(NamedTuple):
     """The camera's observation from the sonar track (camera metres; see :class:`SonarTrack`)."""
 
-    in_view: bool  # the current ping found the pipe and its line crosses the camera's footprint
+    in_view: bool  # the line crosses the camera's footprint, found by this ping or carried (``carry``)
     x1: float  # the line's far end in the footprint ...
     y1: float
     x2: float  # ... and its near end
@@ -64,8 +72,10 @@ class SonarTrack:
     camera frame (at most ``memory`` of them, the newest) and clips the line from forward 0 to the
     footprint's depth to the footprint, as :func:`pipefollow.sim.camera.observe` clips the pipe.
     With detections spread less than ``min_spread`` m along the track the line is the newest
-    detection's, parallel to the track. A ping without a detection keeps the memory but gives no
-    view (the pipe counts as not seen).
+    detection's, parallel to the track. A ping without a detection keeps the memory; the line
+    through it, drawn from the ping's pose, is still the view for ``carry`` such pings in a row
+    (``detected`` False, ``in_view`` if it crosses the footprint), after which the pipe counts as
+    not seen until a ping finds it again.
     """
 
     def __init__(
@@ -75,9 +85,12 @@ class SonarTrack:
         memory_m: float = 4.0,
         min_spread: float = 0.3,
         camera: CameraParams = PAPER_CAMERA,
+        carry: int = 0,
     ) -> None:
         if isinstance(memory, bool) or not isinstance(memory, int) or memory < 1:
             raise ValueError(f"memory must be a whole number of pings ≥ 1, got {memory!r}")
+        if isinstance(carry, bool) or not isinstance(carry, int) or carry < 0:
+            raise ValueError(f"carry must be a whole number of pings ≥ 0, got {carry!r}")
         for name, value in (("memory_m", memory_m), ("min_spread", min_spread), ("along", along)):
             if not (isinstance(value, int | float) and math.isfinite(value)):
                 raise ValueError(f"{name} must be a finite number of metres, got {value!r}")
@@ -86,17 +99,21 @@ class SonarTrack:
         if min_spread < 0.0:
             raise ValueError(f"min_spread must be ≥ 0 (m), got {min_spread!r}")
         self.along, self.memory_m, self.min_spread, self.camera = along, memory_m, min_spread, camera
+        self.carry = carry
         self._ring = np.zeros((memory, 2))  # earth positions, the newest at index (count − 1) % memory
         self._count = 0
+        self._misses = 0  # pings without a detection since the last one
         self.last = NO_VIEW
 
     def reset(self) -> None:
         """Forget every detection (a new episode)."""
         self._count = 0
+        self._misses = 0
         self.last = NO_VIEW
 
     def update(self, pose: tuple[float, float, float], fix: SonarFix) -> SonarView:
         """Add the ping's detection (if found) taken at ``pose``; returns :meth:`view` from ``pose``."""
+        self._misses = 0 if fix.found else self._misses + 1
         if fix.found:
             x, y, psi = pose
             cs, sn = math.cos(psi), math.sin(psi)
@@ -104,11 +121,16 @@ class SonarTrack:
             self._ring[k, 0] = x + cs * fix.forward - sn * fix.lateral
             self._ring[k, 1] = y + sn * fix.forward + cs * fix.lateral
             self._count += 1
-        self.last = self.view(pose, fix.found)
+        self.last = self.view(pose, fix.found, fix.found or self._misses <= self.carry)
         return self.last
 
-    def view(self, pose: tuple[float, float, float], detected: bool = True) -> SonarView:
-        """The line through the remembered detections, in the camera frame of ``pose``."""
+    def view(
+        self, pose: tuple[float, float, float], detected: bool = True, shown: bool | None = None
+    ) -> SonarView:
+        """The line through the remembered detections, in the camera frame of ``pose``.
+
+        ``shown`` (``detected`` if None): whether the line may count as in view at all.
+        """
         x, y, psi = pose
         cam = self.camera
         r = _track_line(
@@ -118,7 +140,7 @@ class SonarTrack:
         pings, c0, angle, clipped, x1, y1, x2, yn = r
         if pings == 0:
             return NO_VIEW
-        if not detected or not clipped:
+        if not (detected if shown is None else shown) or not clipped:
             return SonarView(False, 0.0, 0.0, 0.0, 0.0, c0, angle, detected, pings)
         return SonarView(True, x1, y1, x2, yn, c0, angle, detected, pings)
 
@@ -173,11 +195,12 @@ class SonarSensor:
         camera: CameraParams = PAPER_CAMERA,
         memory: int = 6,
         memory_m: float = 4.0,
+        carry: int = CARRY,
     ) -> None:
         self.sonar = check_sonar(sonar)
         check_pipe(diameter, burial)
         self.diameter, self.burial, self.threshold = float(diameter), float(burial), float(threshold)
-        self.track = SonarTrack(fan_line(self.sonar), memory, memory_m, camera=camera)
+        self.track = SonarTrack(fan_line(self.sonar), memory, memory_m, camera=camera, carry=carry)
         self._angles = beam_angles(self.sonar)
         self._ranges = np.empty(self.sonar.n_beams)
         self.ping: Ping | None = None
@@ -234,4 +257,4 @@ class SonarSensor:
         return view
 
 
-__all__ = ["NO_VIEW", "SonarSensor", "SonarTrack", "SonarView"]
+__all__ = ["CARRY", "NO_VIEW", "SonarSensor", "SonarTrack", "SonarView"]
