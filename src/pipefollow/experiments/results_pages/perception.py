@@ -118,7 +118,10 @@ at ≥ 95 % of the decisions **and** followed forward (`pipefollow.evaluation.su
   to {turbid_drop_hi_t} with the tracker, while the true pipe stays in view
   {turbid_view_lo}–{turbid_view_hi} of the time.
 * **Training under the calibrated camera model** ({calibrated}): against the same recipe without it,
-  {calibrated_diffs}.
+  {calibrated_diffs}. Each is one training of the same seed: a difference between two trainings,
+  not a measured effect of the camera model (retrained under the calibration measured again, which
+  had moved by a few percent, the calibrated policy's returns moved by more than this difference;
+  docs/decisions.md, "the `vision` preset").
 
 ## PPO on pixels
 
