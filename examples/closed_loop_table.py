@@ -32,11 +32,9 @@ recomputes everything without being told. ``--suites``, ``--sensors``, ``--water
 always holds every row whose cells the store has for today's code. ``--jobs N`` runs N cells at a
 time in separate processes.
 
-Run time (2 cores shared with other work at a load of 5–11): under 2 s a cell on the ideal
-camera, 2–8 s on the sonar, 10–40 s through the rendered camera (100 pipes each); all 255 cells
-took 45 minutes of wall time with ``--jobs 2`` and a second process beside it (measured: see
-docs/decisions.md, "Every controller through every sensor"), plus about 5 minutes to train the
-three policies when ``--policies`` lacks them.
+Run time (2 cores): all 255 cells in 328 s with ``--jobs 2`` and nothing else running, 11 minutes
+with ``--jobs 1`` beside other work (docs/decisions.md, "Every controller through every sensor"),
+plus about 5 minutes to train the three policies when ``--policies`` lacks them.
 """
 
 from __future__ import annotations
