@@ -10,7 +10,7 @@ from scipy import stats as sps
 
 from pipefollow.cli import main
 from pipefollow.envs.env import PipelineFollowingEnv
-from pipefollow.evaluation.benchmark import _env_episodes, _rms, benchmark, run_episodes
+from pipefollow.evaluation.benchmark import _env_episodes, _rms, benchmark, heuristic_camera, run_episodes
 from pipefollow.evaluation.stats import N_RESAMPLES, bootstrap_ci
 from pipefollow.learners.heuristic import Heuristic
 from pipefollow.sim.suites import get_suite
@@ -267,6 +267,28 @@ def test_a_controller_on_images_is_compared_with_the_heuristic_through_the_same_
     through = benchmark(Heuristic(), suite, controller="heuristic", camera=vectors, **kw)
     np.testing.assert_array_equal(run.heuristic_returns, through.returns)
     assert run.summary["camera"] == "vision" and "vs_heuristic_ideal" in run.summary
+
+
+def test_a_controller_on_the_ideal_cameras_image_is_compared_with_the_heuristic_on_the_ideal_camera():
+    # the image of clear water with the exact camera's in-view decision (examples/ppo_pixels.py's row
+    # "ideal"): the heuristic's reference reads the ideal camera's end points, where water does nothing
+    from pipefollow.perception.water import CLEAR
+
+    class Still:
+        def begin_episode(self, sigma):
+            pass
+
+        def act(self, obs, explore=False):
+            assert obs.shape == (96, 64, 1) and obs.dtype == np.uint8
+            return 0.0
+
+    suite, kw = get_suite("heldout"), {"seconds": 6.0, "n_pipes": 2}
+    pixels = {"camera": "ideal", "observation": "image", "water": CLEAR}
+    run = benchmark(Still(), suite, controller="still", camera=pixels, **kw)
+    ideal = benchmark(Heuristic(), suite, controller="heuristic", **kw)
+    np.testing.assert_array_equal(run.heuristic_returns, ideal.returns)
+    assert heuristic_camera(pixels) == {"camera": "ideal"}
+    assert heuristic_camera({"camera": "ideal", "sensor": "sonar", "water": CLEAR})["water"] == CLEAR
 
 
 def test_cli_benchmark_with_a_sensor_prints_both_references():

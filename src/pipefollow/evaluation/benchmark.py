@@ -283,11 +283,15 @@ def heuristic_camera(camera: dict | None) -> dict | None:
     """The heuristic's camera arguments beside a controller's.
 
     The same camera, sensor and water with the vector observation: the heuristic reads the pipe's
-    end points, not an image.
+    end points, not an image. On the ideal camera alone the water then changes nothing (the
+    environment refuses it there), so it is left out.
     """
     if not camera:
         return camera
-    return {k: v for k, v in camera.items() if k != "observation"}
+    out = {k: v for k, v in camera.items() if k != "observation"}
+    if out.get("camera", "ideal") == "ideal" and out.get("sensor", "camera") == "camera":
+        out.pop("water", None)
+    return out
 
 
 def benchmark(
