@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -324,6 +325,37 @@ def test_in_a_murky_frame_the_fused_observation_is_the_sonar_s_view_even_while_t
     fused.sonar.view = view._replace(in_view=False)  # the ping misses: the track's line again
     shown = fused._aid(tracker)
     assert (shown[OUT_X1], shown[OUT_Y1], shown[OUT_X2], shown[OUT_Y_NEAR]) == track
+
+
+def test_the_sonar_s_view_is_shown_the_way_of_the_tracked_line():
+    # the view's far end is the one further forward; the tracked line keeps the pipe's way, which
+    # after a bend that leaves the pipe across the track can run back: the view takes the line's way
+    from pipefollow.perception.track_step import (
+        HAD_LINE,
+        OUT_X1,
+        OUT_X2,
+        OUT_Y1,
+        OUT_Y_NEAR,
+        TH,
+        UNSEARCHED_FRAME,
+    )
+
+    env = PipelineFollowingEnv(STRAIGHT, 10.0, camera="vision", sensor="fused", water="turbid")
+    obs, _ = env.reset(seed=0)
+    for _ in range(3):
+        obs, *_ = env.step(act(obs))
+    fused = env._vision
+    view, tracker = fused.sonar.view, fused.vision.tracker
+    assert view.in_view and view.y1 > view.y_near  # the far end ahead of the near one
+    fused.vision.frame = UNSEARCHED_FRAME
+    forward = (view.x1, view.y1, view.x2, view.y_near)
+    for theta, expected in ((0.0, forward), (math.pi, (view.x2, view.y_near, view.x1, view.y1))):
+        tracker.state[HAD_LINE], tracker.state[TH] = 1.0, theta  # a line along the track, or against it
+        shown = fused._aid(tracker)
+        assert (shown[OUT_X1], shown[OUT_Y1], shown[OUT_X2], shown[OUT_Y_NEAR]) == expected
+    tracker.state[HAD_LINE] = 0.0  # no line tracked yet: the view as it is
+    shown = fused._aid(tracker)
+    assert (shown[OUT_X1], shown[OUT_Y1], shown[OUT_X2], shown[OUT_Y_NEAR]) == forward
 
 
 @pytest.mark.parametrize("carried", [1, 2, 3])

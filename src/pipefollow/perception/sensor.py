@@ -45,6 +45,8 @@ line of sight. The buried stretches of the disturbance bury the pipe fully for b
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from pipefollow.perception.camera import CameraSettings, TrueView, VisionCamera, _spawn
@@ -54,6 +56,7 @@ from pipefollow.perception.sonar_track import CARRY, SonarSensor
 from pipefollow.perception.track_step import (
     ACCEPTED,
     BEND,
+    HAD_LINE,
     OUT_IN_VIEW,
     OUT_SIDE,
     OUT_SIZE,
@@ -61,6 +64,7 @@ from pipefollow.perception.track_step import (
     OUT_X2,
     OUT_Y1,
     OUT_Y_NEAR,
+    TH,
     UNSEARCHED_FRAME,
 )
 from pipefollow.perception.tracker import PipeTracker
@@ -176,20 +180,30 @@ class SonarSensors:
             out = tracker.point(fix.lateral, fix.forward, FIX_SD)
         view = self.sonar.view
         if self.vision.frame == UNSEARCHED_FRAME and view.in_view:  # a frame too murky to search
-            return self._as_output(view)
+            return self._as_output(view, tracker)
         if out[OUT_IN_VIEW] != 0.0 or not fix.found:
             return out
         out = tracker.search_towards(fix.lateral)
         if not view.in_view:
             return out
-        return self._as_output(view)
+        return self._as_output(view, tracker)
 
-    def _as_output(self, view) -> np.ndarray:
-        """The sonar's view in the footprint as a tracker's output (in view, the ends, the side)."""
+    def _as_output(self, view, tracker: PipeTracker) -> np.ndarray:
+        """The sonar's view in the footprint as a tracker's output (in view, the ends, the side).
+
+        Its ends are taken the way of the tracked line (or of the line last tracked), which keeps
+        the pipe's way; the view's own far end is the one further forward, which after a bend
+        that leaves the pipe across the track is as likely the way back.
+        """
+        x1, y1, x2, y_near = view.x1, view.y1, view.x2, view.y_near
+        T = tracker.state
+        if T[HAD_LINE] != 0.0:
+            if (x1 - x2) * math.sin(T[TH]) + (y1 - y_near) * math.cos(T[TH]) < 0.0:
+                x1, y1, x2, y_near = x2, y_near, x1, y1
         shown = self._shown
-        shown[OUT_IN_VIEW], shown[OUT_X1], shown[OUT_Y1] = 1.0, view.x1, view.y1
-        shown[OUT_X2], shown[OUT_Y_NEAR] = view.x2, view.y_near
-        shown[OUT_SIDE] = 1.0 if view.x1 >= 0.0 else -1.0
+        shown[OUT_IN_VIEW], shown[OUT_X1], shown[OUT_Y1] = 1.0, x1, y1
+        shown[OUT_X2], shown[OUT_Y_NEAR] = x2, y_near
+        shown[OUT_SIDE] = 1.0 if x1 >= 0.0 else -1.0
         return shown
 
     def _keep_truth(self, s: np.ndarray) -> None:
