@@ -248,21 +248,24 @@ def test_with_a_sensor_the_reference_is_the_heuristic_through_the_same_sensor_an
     np.testing.assert_array_equal(plain.heuristic_returns, h_ideal.returns)
 
 
+class StillOnImages:
+    """Acts on the image it is given (checked to be the environment's); a fixed action."""
+
+    def begin_episode(self, sigma):
+        pass
+
+    def act(self, obs, explore=False):
+        assert obs.shape == (96, 64, 1) and obs.dtype == np.uint8
+        return 0.0
+
+
 def test_a_controller_on_images_is_compared_with_the_heuristic_through_the_same_camera_on_its_vector():
     # the heuristic reads end points, not pixels: its reference keeps the camera and water, not the image
     from pipefollow.perception.water import CLEAR
 
-    class Still:  # acts on the image it is given; a fixed action
-        def begin_episode(self, sigma):
-            pass
-
-        def act(self, obs, explore=False):
-            assert obs.shape == (96, 64, 1) and obs.dtype == np.uint8
-            return 0.0
-
     suite, kw = get_suite("heldout"), {"seconds": 6.0, "n_pipes": 2}
     pixels = {"camera": "vision", "observation": "image", "water": CLEAR}
-    run = benchmark(Still(), suite, controller="still", camera=pixels, **kw)
+    run = benchmark(StillOnImages(), suite, controller="still", camera=pixels, **kw)
     vectors = {"camera": "vision", "water": CLEAR}
     through = benchmark(Heuristic(), suite, controller="heuristic", camera=vectors, **kw)
     np.testing.assert_array_equal(run.heuristic_returns, through.returns)
@@ -274,17 +277,9 @@ def test_a_controller_on_the_ideal_cameras_image_is_compared_with_the_heuristic_
     # "ideal"): the heuristic's reference reads the ideal camera's end points, where water does nothing
     from pipefollow.perception.water import CLEAR
 
-    class Still:
-        def begin_episode(self, sigma):
-            pass
-
-        def act(self, obs, explore=False):
-            assert obs.shape == (96, 64, 1) and obs.dtype == np.uint8
-            return 0.0
-
     suite, kw = get_suite("heldout"), {"seconds": 6.0, "n_pipes": 2}
     pixels = {"camera": "ideal", "observation": "image", "water": CLEAR}
-    run = benchmark(Still(), suite, controller="still", camera=pixels, **kw)
+    run = benchmark(StillOnImages(), suite, controller="still", camera=pixels, **kw)
     ideal = benchmark(Heuristic(), suite, controller="heuristic", **kw)
     np.testing.assert_array_equal(run.heuristic_returns, ideal.returns)
     assert heuristic_camera(pixels) == {"camera": "ideal"}
