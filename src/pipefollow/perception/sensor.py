@@ -45,8 +45,6 @@ line of sight. The buried stretches of the disturbance bury the pipe fully for b
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from pipefollow.perception.camera import CameraSettings, TrueView, VisionCamera, _spawn
@@ -56,7 +54,6 @@ from pipefollow.perception.sonar_track import CARRY, SonarSensor
 from pipefollow.perception.track_step import (
     ACCEPTED,
     BEND,
-    HAD_LINE,
     OUT_IN_VIEW,
     OUT_SIDE,
     OUT_SIZE,
@@ -64,7 +61,6 @@ from pipefollow.perception.track_step import (
     OUT_X2,
     OUT_Y1,
     OUT_Y_NEAR,
-    TH,
     UNSEARCHED_FRAME,
 )
 from pipefollow.perception.tracker import PipeTracker
@@ -195,11 +191,7 @@ class SonarSensors:
         the pipe's way; the view's own far end is the one further forward, which after a bend
         that leaves the pipe across the track is as likely the way back.
         """
-        x1, y1, x2, y_near = view.x1, view.y1, view.x2, view.y_near
-        T = tracker.state
-        if T[HAD_LINE] != 0.0:
-            if (x1 - x2) * math.sin(T[TH]) + (y1 - y_near) * math.cos(T[TH]) < 0.0:
-                x1, y1, x2, y_near = x2, y_near, x1, y1
+        x1, y1, x2, y_near = tracker.ordered(view.x1, view.y1, view.x2, view.y_near)
         shown = self._shown
         shown[OUT_IN_VIEW], shown[OUT_X1], shown[OUT_Y1] = 1.0, x1, y1
         shown[OUT_X2], shown[OUT_Y_NEAR] = x2, y_near

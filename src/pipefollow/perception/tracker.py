@@ -61,13 +61,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from pipefollow.perception.line_ekf import CHI2_1DOF_99, point_correct, point_innovation
+from pipefollow.perception.line_ekf import CHI2_1DOF_99, along, point_correct, point_innovation
 from pipefollow.perception.navigation import NAV, Navigation, NavParams
 from pipefollow.perception.track_step import (
     ACTIVE,
     CLEAR_FRAME,
     CONFIDENCE,
     EVENT,
+    HAD_LINE,
     MISS,
     OUT_IN_VIEW,
     OUT_SIDE,
@@ -183,6 +184,17 @@ class PipeTracker:
             self.state[SIDE] = side
             self.out[OUT_SIDE] = side
         return self.out
+
+    def ordered(self, x1: float, y1: float, x2: float, y_near: float) -> tuple[float, float, float, float]:
+        """A piece's ends (far ``x1, y1``, near ``x2, y_near``) taken the way of the tracked line.
+
+        Of the line last tracked if it is lost (it is still predicted), which keeps the pipe's way
+        (``track_step._reversed``); as given while no line was tracked yet.
+        """
+        T = self.state
+        if T[HAD_LINE] != 0.0 and along(T[TH], x1 - x2, y1 - y_near) < 0.0:
+            return x2, y_near, x1, y1
+        return x1, y1, x2, y_near
 
     @property
     def confidence(self) -> float:
