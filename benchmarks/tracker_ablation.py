@@ -7,8 +7,12 @@ Each mode runs the heuristic through ``camera="vision"`` in clear water (as
 ``benchmarks/tracker_suites.py`` does) with one part of the chain replaced by the exact camera's
 answer, and prints per suite the loss of return against the ideal camera, the pipes lost, the
 turned-back episodes and the success, then the decisions where the tracker and the exact camera
-disagree on "in view" and the far end's error as the heuristic's action (|Δa|, the action is the
-far end's bearing) split by what the frame's detection did:
+disagree on "in view" (of the decisions the tracker misses, in brackets those whose piece's centre
+line stays within half a pipe diameter of the footprint's border, where the image holds less than
+the pipe's width), the decisions whose piece is the exact camera's drawn the other way (its ends
+within 0.3 m of the exact ones, swapped) with their share of the far end's error, and the far
+end's error as the heuristic's action (|Δa|, the action is the far end's bearing) split by what
+the frame's detection did:
 
 * ``base``: the tracker as it is;
 * ``truth-detections``: the tracker fed with the exact camera's piece instead of the detector's
@@ -31,6 +35,7 @@ import math
 import numpy as np
 
 MODES = ("base", "truth-detections", "truth-order", "detection-verbatim", "truth-geometry", "truth-in-view")
+SAME_PIECE = 0.3  # m: a shown piece whose ends (summed) lie this near the exact camera's is the same piece
 EVENTS = ("none", "accepted", "bend", "rejected", "started", "replaced")
 
 
@@ -66,15 +71,32 @@ def patch(mode: str, log: list) -> None:
                 out[1:5] = (tv.x1, tv.y1, tv.x2, tv.y_near)
         self._show(s, out)
         seen = out[0] != 0.0
-        err = math.nan
+        err, reversed_ends = math.nan, 0.0
         if seen and tv.in_view:
             err = abs(heuristic_action(out[1], out[2]) - heuristic_action(tv.x1, tv.y1))
-        log.append((event, float(tv.in_view), float(seen), err))
+            flipped = _ends_apart(out[1:5], (tv.x2, tv.y_near, tv.x1, tv.y1))
+            # the exact camera's piece within SAME_PIECE, drawn the other way
+            reversed_ends = float(flipped < min(SAME_PIECE, _ends_apart(out[1:5], tv[1:5])))
+        inside = _deepest(tv, self.camera) if tv.in_view else 0.0
+        log.append((event, float(tv.in_view), float(seen), err, reversed_ends, inside))
 
     cam.VisionCamera._track = _track
 
 
+def _ends_apart(a, b) -> float:
+    """The summed distance (m) of two pieces' far ends and of their near ends (``x1, y1, x2, y_near``)."""
+    return math.hypot(a[0] - b[0], a[1] - b[1]) + math.hypot(a[2] - b[2], a[3] - b[3])
+
+
+def _deepest(tv, camera) -> float:
+    """How far (m) the exact camera's piece (its chord, 21 points) reaches inside the footprint's border."""
+    t = np.linspace(0.0, 1.0, 21)
+    x, y = tv.x2 + t * (tv.x1 - tv.x2), tv.y_near + t * (tv.y1 - tv.y_near)
+    return float(np.max(np.minimum(np.minimum(camera.half_width - np.abs(x), y), camera.depth - y)))
+
+
 def main() -> None:
+    from pipefollow.perception.water import CLEAR
     from tracker_suites import judge
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -83,25 +105,32 @@ def main() -> None:
     ap.add_argument("--pipes", type=int, default=None)
     ap.add_argument("--noise-seed", type=int, default=0)
     args = ap.parse_args()
-    print("| mode | suite | loss | lost | turned back | success | missed in view | false in view | "
+    print("| mode | suite | loss | lost | turned back | success | missed in view (within ½ D of the border) "
+          "| false in view | shown reversed: n, Σ\\|Δa\\| of all Σ\\|Δa\\| | "
           + " | ".join(f"{e}: n, mean \\|Δa\\|" for e in EVENTS) + " |")  # fmt: skip
-    print("|---" * (8 + len(EVENTS)) + "|")
+    print("|---" * (9 + len(EVENTS)) + "|")
     for mode in args.modes:
         for name in args.suites:
             log: list = []
             patch(mode, log)
             r = judge(name, args.pipes, "vision", "clear", args.noise_seed)
             rows = np.array(log)
-            event, true_in, seen, err = rows.T
+            event, true_in, seen, err, rev, inside = rows.T
             both = (true_in == 1.0) & (seen == 1.0)
+            missed = (true_in == 1.0) & (seen == 0.0)
+            grazing = int(np.sum(missed & (inside <= 0.5 * CLEAR.pipe_diameter)))
+            flipped = both & (rev == 1.0)
             cells = []
             for k in range(len(EVENTS)):
                 m = both & (event == k)
                 cells.append(f"{int(m.sum())}, {np.mean(err[m]) if m.any() else 0.0:.3f}")
             print(
                 f"| {mode} | {name} | {r['loss']:.1f} | {len(r['lost'])} | {len(r['turned_back'])} | "
-                f"{r['success']:.0%} | {int(np.sum((true_in == 1.0) & (seen == 0.0)))} | "
-                f"{int(np.sum((true_in == 0.0) & (seen == 1.0)))} | " + " | ".join(cells) + " |",
+                f"{r['success']:.0%} | {int(missed.sum())} ({grazing}) | "
+                f"{int(np.sum((true_in == 0.0) & (seen == 1.0)))} | "
+                f"{int(flipped.sum())}, {np.sum(err[flipped]):.0f} of {np.sum(err[both]):.0f} | "
+                + " | ".join(cells)
+                + " |",
                 flush=True,
             )
 
