@@ -5,16 +5,19 @@
 
 Controllers: the heuristic, LOS (Δ = 1.5 m), CACLA and supervised CACLA (the README's recipe:
 5,000 episodes of 90 s on random:mixed) and PPO (100,000 steps on random:mixed, the extra
-``deep``), the learned ones from ``--policies`` (trained there if missing, as
-``examples/vision_table.py`` trains them). Sensors: ``ideal`` (the exact camera), ``raw`` (the
-rendered camera's detector alone, ``camera="vision-raw"``), ``tracker`` (the detector and the pipe
-tracker, ``camera="vision"``), ``sonar`` (the look-ahead multibeam alone) and ``fused`` (the
-tracked camera, the sonar's detections where it finds none). Waters: the presets ``clear``,
-``moderate`` and ``turbid``, and ``half-buried`` (clear water, ``burial`` 0.5: half the pipe's
-width under sand for the camera, half its diameter for the sonar, ``perception.sensor``). The
-ideal camera sees through any water: one cell per suite (water ``any``). Suites: ``heldout``,
-``heldout-hard`` and ``heldout-sharp``, 100 pipes × 60 s each, noise seed 0: one deterministic
-episode per pipe, every controller meeting the same noise on the same pipe.
+``deep``), all trained on the ideal camera, and PPO trained the same way through the sensor it
+meets in murky water (``--camera vision --sensor fused --water turbid``; the paper's learners
+train in the ideal camera's compiled loop only), the learned ones from ``--policies`` (trained
+there if missing, as ``examples/vision_table.py`` trains them). Sensors: ``ideal`` (the exact
+camera), ``raw`` (the rendered camera's detector alone, ``camera="vision-raw"``), ``tracker``
+(the detector and the pipe tracker, ``camera="vision"``), ``sonar`` (the look-ahead multibeam
+alone) and ``fused`` (the tracked camera, the sonar's detections where it finds none). Waters:
+the presets ``clear``, ``moderate`` and ``turbid``, and ``half-buried`` (clear water, ``burial``
+0.5: half the pipe's width under sand for the camera, half its diameter for the sonar,
+``perception.sensor``). The ideal camera sees through any water: one cell per suite (water
+``any``). Suites: ``heldout``, ``heldout-hard`` and ``heldout-sharp``, 100 pipes × 60 s each,
+noise seed 0: one deterministic episode per pipe, every controller meeting the same noise on the
+same pipe.
 
 Each row is compared, paired per pipe, with the heuristic through the same sensor in the same
 water (``vs_same``) and with the heuristic on the ideal camera (``vs_ideal``), with bootstrap 95 %
@@ -34,7 +37,7 @@ time in separate processes.
 
 Run time (2 cores): all 255 cells in 328 s with ``--jobs 2`` and nothing else running, 11 minutes
 with ``--jobs 1`` beside other work (docs/decisions.md, "Every controller through every sensor"),
-plus about 5 minutes to train the three policies when ``--policies`` lacks them.
+plus about 6 minutes to train the four policies when ``--policies`` lacks them.
 """
 
 from __future__ import annotations
@@ -66,7 +69,10 @@ CONTROLLERS = {  # key → label in the table
     "cacla": "CACLA",
     "supervised-cacla": "supervised CACLA",
     "ppo": "PPO",
+    "ppo-fused-turbid": "PPO trained through the fused sensor in turbid water",
 }
+# the options PPO's sensor-trained row trains with (``pipefollow train``; the other rows: the ideal camera)
+FUSED_TURBID = ("--camera", "vision", "--sensor", "fused", "--water", "turbid")
 SENSORS = {  # key → (label, camera, sensor)
     "ideal": ("ideal camera", "ideal", "camera"),
     "raw": ("camera, detector alone", "vision-raw", "camera"),
@@ -153,6 +159,7 @@ def specs_of(policies: Path | None) -> dict[str, str]:
         specs["cacla"] = train(policies / "plain", 2010, 0.0, 0.0)
         specs["supervised-cacla"] = train(policies / "supervised", 2010, 0.0, 0.0, supervised=True)
         specs["ppo"] = train_ppo(policies / "ppo", 0)
+        specs["ppo-fused-turbid"] = train_ppo(policies / "ppo-fused-turbid", 0, *FUSED_TURBID)
     return specs
 
 

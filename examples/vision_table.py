@@ -61,9 +61,12 @@ def train(folder: Path, seed: int, noise: float, miss: float, supervised: bool =
     return trained(folder, seed, "--algorithm", "cacla", "--episodes", "5000", *options)
 
 
-def train_ppo(folder: Path, seed: int) -> str:
-    """PPO's policy file in ``folder`` (the README's recipe: 100,000 steps), trained if missing."""
-    return trained(folder, seed, "--algorithm", "ppo", "--steps", "100000")
+def train_ppo(folder: Path, seed: int, *options: str) -> str:
+    """PPO's policy file in ``folder`` (the README's recipe: 100,000 steps), trained if missing.
+
+    ``options``: more ``pipefollow train`` options, e.g. the sensor and water to train through.
+    """
+    return trained(folder, seed, "--algorithm", "ppo", "--steps", "100000", *options)
 
 
 CAMERAS = ("vision-raw", "vision")  # the detector alone; the detector and the tracker

@@ -36,7 +36,9 @@ TEXT = """\
 
 `python examples/closed_loop_table.py --policies FOLDER --out docs/vision/closed_loop_sensors`
 ({n_rows} rows): the heuristic, LOS and the learned controllers (CACLA and supervised CACLA,
-5,000 episodes on `random:mixed`; PPO, 100,000 steps) on {suites}, {pipes} pipes × 60 s each,
+5,000 episodes on `random:mixed`; PPO, 100,000 steps; all on the ideal camera; and PPO trained
+the same way through the fused sensor in turbid water, `pipefollow train --algorithm ppo --camera
+vision --sensor fused --water turbid`) on {suites}, {pipes} pipes × 60 s each,
 noise seed 0, through each sensor: the ideal camera, the rendered camera's detector alone
 (`--camera vision-raw`), the detector and the tracker (`--camera vision`), the look-ahead sonar
 alone (`--sensor sonar`) and both fused (`--sensor fused --camera vision`); in clear, moderate and
