@@ -35,7 +35,8 @@ recomputes everything without being told. ``--suites``, ``--sensors``, ``--water
 always holds every row whose cells the store has for today's code. ``--jobs N`` runs N cells at a
 time in separate processes.
 
-Run time (2 cores): all 255 cells in 328 s with ``--jobs 2`` and nothing else running, 11 minutes
+Run time (2 cores): all 255 cells in 328 s with ``--jobs 2`` and nothing else running (306 with the
+sensor-trained PPO: 688 s beside another process), 11 minutes
 with ``--jobs 1`` beside other work (docs/decisions.md, "Every controller through every sensor"),
 plus about 6 minutes to train the four policies when ``--policies`` lacks them.
 """
