@@ -132,13 +132,23 @@ def test_rollouts_record_the_sensor_in_the_dataset(tmp_path):
     assert sums == pytest.approx(sonar, abs=1e-3)  # float32 storage
 
 
-@pytest.mark.slow  # ≈ 15 s: torch and one PPO rollout
-def test_train_ppo_observes_through_the_camera(tmp_path):
+@pytest.mark.slow  # ≈ 15 s each: torch and one PPO rollout
+@pytest.mark.parametrize(
+    "options, camera, sensor, turbidity",
+    [
+        (["--camera", "vision-raw"], "vision-raw", "camera", 0.1),
+        # the closed-loop table's sensor-trained PPO (examples/closed_loop_table.py, FUSED_TURBID)
+        (["--camera", "vision", "--sensor", "fused", "--water", "turbid"], "vision", "fused", 0.25),
+    ],
+)
+def test_train_ppo_observes_through_the_camera(tmp_path, options, camera, sensor, turbidity):
     pytest.importorskip("stable_baselines3")
     pytest.importorskip("cv2")
     res = _invoke(["train", "--algorithm", "ppo", "--steps", "64", "--seconds", "10",
-                   "--camera", "vision-raw", "--out", str(tmp_path / "o"), "--json"])  # fmt: skip
+                   *options, "--out", str(tmp_path / "o"), "--json"])  # fmt: skip
     assert res.exit_code == 0, res.output
-    assert json.loads(res.output)["camera"] == "vision-raw"
+    assert json.loads(res.output)["camera"] == camera
     record = json.loads((tmp_path / "o" / "hyperparameters.json").read_text())
-    assert record["observed_through"]["camera"] == "vision-raw"
+    seen = record["observed_through"]
+    assert (seen["camera"], seen.get("sensor", "camera")) == (camera, sensor)
+    assert seen["water"]["turbidity"] == turbidity
