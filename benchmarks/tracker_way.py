@@ -26,8 +26,9 @@ from collections import defaultdict
 
 import numpy as np
 
-SAME_PIECE = 0.3  # m: as benchmarks/tracker_ablation.py
-EVENTS = ("none", "accepted", "bend", "rejected", "started", "replaced")
+from tracker_ablation import EVENTS, SAME_PIECE
+from tracker_ablation import _ends_apart as _apart
+
 MODES = ("as-given", "towards-far", "after-line", "contradicted")
 
 
@@ -62,10 +63,6 @@ def _install(log: list) -> None:
         log.append(row)
 
     cam.VisionCamera._track = _track
-
-
-def _apart(a, b) -> float:
-    return math.hypot(a[0] - b[0], a[1] - b[1]) + math.hypot(a[2] - b[2], a[3] - b[3])
 
 
 def line_against(row) -> bool:
