@@ -323,3 +323,48 @@ def test_after_a_lost_line_a_piece_it_crosses_runs_from_the_end_nearer_the_vehic
     assert t.event == ts.STARTED
     assert direction_of(out) == pytest.approx(math.atan2(-1.5, 2.0), abs=1e-9)
     assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(near)
+
+
+def still_detections(tracker, det, frames=3, pose=(0.0, 0.0, 0.0)):
+    """Frames of the same detection from a vehicle that does not move."""
+    for _ in range(frames):
+        tracker.step(pose, True, det)
+    return pose
+
+
+@pytest.mark.parametrize("swapped", [False, True])
+def test_a_pipe_crossed_where_the_line_grazes_the_side_runs_from_the_near_border(swapped):
+    # the tracked line grazes the starboard side: it enters the view there at (1.0, 1.0) and runs
+    # ahead to (0.9, 3.0). The pipe seen now comes from under the vehicle at (0.7, 0.0), off the
+    # line, and leaves the view where the line enters it: no bend ahead (the end off the line lies
+    # 0.98 m behind the other along the line), so the piece runs from (0.7, 0.0), the line's way
+    t = quiet_tracker()
+    pose = still_detections(t, (0.9, 3.0, 1.0, 1.0))
+    th = math.atan2(-0.1, 2.0)
+    assert t.state[ts.TH] == pytest.approx(th, abs=1e-9)
+    near, far = (0.7, 0.0), (1.0, 1.0)
+    out = t.step(pose, True, (*near, *far) if swapped else (*far, *near))
+    assert t.event == ts.ACCEPTED and t.state[ts.HAS_FAR] == 0.0
+    assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(near)
+    # the far end where the line leaves the view (the pipe seen to go on along it): ahead of the near end
+    assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx((0.9, 3.0), abs=1e-6)
+    assert abs(t.state[ts.TH] - th) < 0.5 * math.pi
+
+
+@pytest.mark.parametrize("far", [(1.0, 0.1), (1.0, 0.0)])
+def test_a_hooks_far_end_behind_the_near_end_is_a_bend_unless_it_lies_on_the_near_border(far):
+    # the tracked line runs from (0, 0) ahead to port, to (-1.0, 1.5); the pipe seen now turns back
+    # at the near end to the starboard side, 0.47–0.55 m behind it along the line. At the side
+    # (0.1 m ahead of the near border) it is a hook's far end beyond the bend; on the near border it
+    # is where the pipe comes from under the vehicle, the line's end its far one
+    t = quiet_tracker()
+    pose = still_detections(t, (-1.0, 1.5, 0.0, 0.0))
+    out = t.step(pose, True, (*far, 0.0, 0.0))
+    if far[1] > t.params.border:
+        assert t.event == ts.BEND
+        assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx(far)
+        assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx((0.0, 0.0))
+    else:
+        assert t.event == ts.ACCEPTED
+        assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(far)
+        assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx((-1.0, 1.5), abs=1e-6)

@@ -57,6 +57,9 @@ class TrackParams(NamedTuple):
     # frame of the fused sensor, fed by the sonar alone): the camera's 2 kept a lagging line at the
     # sonar's bends (docs/decisions.md, "Murky frames left to the sonar")
     unsearched_misses: int = 1
+    # m: an end off the line this far behind the end on it (along the line's way) is no bend's far
+    # end but where the pipe comes from (docs/decisions.md, "The way of a piece the vehicle crosses")
+    bend_behind: float = 0.3
 
 
 TRACK = TrackParams()
@@ -157,6 +160,20 @@ def _reversed(T, x1, y1, x2, y_near, th, d, mode, point_sd):
 
 
 @njit(cache=True)
+def _crossed(T, x1, y1, x2, y_near, border, behind):
+    """Whether a detection with its near end ``(x2, y_near)`` on the line and ``(x1, y1)`` off it is no bend.
+
+    The end off the line lies on the view's near border and more than ``behind`` (m) behind the
+    other along the line's way, and no bend is being followed (no far end beyond one carried):
+    the vehicle crosses the pipe where the line grazes the view's side and enters it there, and
+    the pipe comes from under the vehicle, off the line; a hook's far end beyond its corner, which
+    may also lie behind, leaves by the sides (docs/decisions.md, "The way of a piece the vehicle
+    crosses").
+    """
+    return T[HAS_FAR] == 0.0 and y1 < border and along(T[TH], x1, y1) < along(T[TH], x2, y_near) - behind
+
+
+@njit(cache=True)
 def _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, mode):
     """The line through a detection, its direction chosen by ``mode`` (:func:`_reversed`)."""
     th, d, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
@@ -231,16 +248,23 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, frame=CLEAR_F
                 t_in, _ = in_footprint(T[TH], T[D], -REACH, REACH, hw, depth)
                 ex, ey = on_line(T[TH], T[D], t_in)
                 if math.hypot(x2 - ex, y_near - ey) < math.hypot(x1 - ex, y1 - ey):
+                    crossed = _crossed(T, x1, y1, x2, y_near, border, tp[15])
                     point_correct(T, TH, nu_a, j_a, s_a)
-                    T[EVENT] = BEND
-                    T[HAS_FAR], T[FAR_X], T[FAR_Y], T[FAR_AGE] = 1.0, x1, y1, 0.0
-                    # the line ends at the corner, about where the far end lies along it (its
-                    # extension beyond is no pipe: shown once the far end is out of view, it led
-                    # the vehicle back along the first leg)
-                    t_c = max(along(T[TH], x1, y1), along(T[TH], x2, y_near))
-                    T[HAS_END] = 1.0
-                    T[END_X], T[END_Y] = on_line(T[TH], T[D], t_c)
                     taken = True
+                    if crossed:
+                        # the pipe comes from the end off the line: the end on it is the far one
+                        T[EVENT] = ACCEPTED
+                        x1, y1, x2, y_near = x2, y_near, x1, y1
+                        _take_end(T, x1, y1, hw, depth, border)
+                    else:
+                        T[EVENT] = BEND
+                        T[HAS_FAR], T[FAR_X], T[FAR_Y], T[FAR_AGE] = 1.0, x1, y1, 0.0
+                        # the line ends at the corner, about where the far end lies along it (its
+                        # extension beyond is no pipe: shown once the far end is out of view, it led
+                        # the vehicle back along the first leg)
+                        t_c = max(along(T[TH], x1, y1), along(T[TH], x2, y_near))
+                        T[HAS_END] = 1.0
+                        T[END_X], T[END_Y] = on_line(T[TH], T[D], t_c)
             elif ok_a and ok_b:
                 # both ends on the line: ordered along it (the detector's order is a guess)
                 if along(T[TH], x2, y_near) > along(T[TH], x1, y1):
