@@ -169,10 +169,10 @@ def _crossed(T, x1, y1, x2, y_near, border, behind):
 
     The end off the line lies within ``border`` (m, ``TrackParams.cross_border``) of the view's
     near border and more than ``behind`` (m) behind the other along the line's way, and no bend is
-    being followed (no far end beyond one carried): the vehicle crosses the pipe where the line grazes the view's side and enters it there, and
-    the pipe comes from under the vehicle, off the line; a hook's far end beyond its corner, which
-    may also lie behind, leaves by the sides (docs/decisions.md, "The way of a piece the vehicle
-    crosses").
+    being followed (no far end beyond one carried): the vehicle crosses the pipe where the line
+    grazes the view's side and enters it there, and the pipe comes from under the vehicle, off the
+    line; a hook's far end beyond its corner, which may also lie behind, leaves by the sides
+    (docs/decisions.md, "The way of a piece the vehicle crosses").
     """
     return T[HAS_FAR] == 0.0 and y1 < border and along(T[TH], x1, y1) < along(T[TH], x2, y_near) - behind
 
