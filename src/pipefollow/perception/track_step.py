@@ -60,6 +60,10 @@ class TrackParams(NamedTuple):
     # m: an end off the line this far behind the end on it (along the line's way) is no bend's far
     # end but where the pipe comes from (docs/decisions.md, "The way of a piece the vehicle crosses")
     bend_behind: float = 0.3
+    # m: the end off the line of a piece the vehicle crosses lies this near the view's near border:
+    # ``border`` and a quarter of the 0.25-m pipe, as a half-buried pipe's visible half ends beside
+    # its axis (docs/decisions.md, "Half buried at sharp turns")
+    cross_border: float = 0.12
 
 
 TRACK = TrackParams()
@@ -163,12 +167,12 @@ def _reversed(T, x1, y1, x2, y_near, th, d, mode, point_sd):
 def _crossed(T, x1, y1, x2, y_near, border, behind):
     """Whether a detection with its near end ``(x2, y_near)`` on the line and ``(x1, y1)`` off it is no bend.
 
-    The end off the line lies on the view's near border and more than ``behind`` (m) behind the
-    other along the line's way, and no bend is being followed (no far end beyond one carried):
-    the vehicle crosses the pipe where the line grazes the view's side and enters it there, and
-    the pipe comes from under the vehicle, off the line; a hook's far end beyond its corner, which
-    may also lie behind, leaves by the sides (docs/decisions.md, "The way of a piece the vehicle
-    crosses").
+    The end off the line lies within ``border`` (m, ``TrackParams.cross_border``) of the view's
+    near border and more than ``behind`` (m) behind the other along the line's way, and no bend is
+    being followed (no far end beyond one carried): the vehicle crosses the pipe where the line
+    grazes the view's side and enters it there, and the pipe comes from under the vehicle, off the
+    line; a hook's far end beyond its corner, which may also lie behind, leaves by the sides
+    (docs/decisions.md, "The way of a piece the vehicle crosses").
     """
     return T[HAS_FAR] == 0.0 and y1 < border and along(T[TH], x1, y1) < along(T[TH], x2, y_near) - behind
 
@@ -248,7 +252,7 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, frame=CLEAR_F
                 t_in, _ = in_footprint(T[TH], T[D], -REACH, REACH, hw, depth)
                 ex, ey = on_line(T[TH], T[D], t_in)
                 if math.hypot(x2 - ex, y_near - ey) < math.hypot(x1 - ex, y1 - ey):
-                    crossed = _crossed(T, x1, y1, x2, y_near, border, tp[15])
+                    crossed = _crossed(T, x1, y1, x2, y_near, tp[16], tp[15])
                     point_correct(T, TH, nu_a, j_a, s_a)
                     taken = True
                     if crossed:

@@ -31,10 +31,10 @@ of freedom (else the near end alone does). One end on it, nearer than the other 
 line enters the view: the pipe bends in view; that end updates the line and the other is the far
 end beyond the bend, and the line ends at the corner (taken where the far end lies along it),
 so its extension beyond is not shown once the far end is out of view; unless, with no bend being
-followed, the end off the line lies on the view's near border and behind the other along the
-line's way: then the vehicle crosses the pipe where the line grazes the view's side, and the end
-off the line is the near one (``track_step._crossed``). Otherwise the detection
-is rejected: it starts (or feeds) a candidate line that replaces the line when seen
+followed, the end off the line lies within :attr:`TrackParams.cross_border` of the view's near
+border and behind the other along the line's way: then the vehicle crosses the pipe where the
+line grazes the view's side, and the end off the line is the near one (``track_step._crossed``).
+Otherwise the detection is rejected: it starts (or feeds) a candidate line that replaces the line when seen
 :attr:`TrackParams.confirm` times, and at once if it starts where the line enters the view (an
 arc the line cannot follow), ends where the far end beyond a bend was seen (the next leg), or if
 the line is out of view. A new line keeps the pipe's way (``track_step._reversed``): the last
