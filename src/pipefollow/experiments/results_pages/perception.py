@@ -130,7 +130,9 @@ on a small convolutional network, `random:mixed` in clear water; {pixel_runs}); 
 search" comes from the camera it was trained with, which also judges it: the tracker
 (`--camera vision`, the default: `ppo_pixels.json`) or the detector alone (`--camera vision-raw`:
 `ppo_pixels_raw.json`). The rows "ideal" are the policy on the image of clear water with the exact
-camera's in-view decision. {pixel_success_text}
+camera's in-view decision. {pixel_success_text} Each row is one training seed: with the tracker,
+other seeds and small changes of the code swing it widely, some training runs not learning at all
+(docs/decisions.md, "PPO on pixels with the tracker").
 
 {pixel_table}
 
