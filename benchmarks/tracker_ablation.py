@@ -51,9 +51,7 @@ def patch(mode: str, log: list) -> None:
         if mode == "truth-detections":
             found, d = tv.in_view, (tv.x1, tv.y1, tv.x2, tv.y_near)
         elif mode == "truth-order" and found and tv.in_view:
-            kept = math.hypot(d[0] - tv.x1, d[1] - tv.y1) + math.hypot(d[2] - tv.x2, d[3] - tv.y_near)
-            swapped = math.hypot(d[2] - tv.x1, d[3] - tv.y1) + math.hypot(d[0] - tv.x2, d[1] - tv.y_near)
-            if swapped < kept:
+            if _ends_apart(d, (tv.x2, tv.y_near, tv.x1, tv.y1)) < _ends_apart(d, tv[1:5]):
                 d = (d[2], d[3], d[0], d[1])
         out = self.tracker.step(pose, found, d, frame).copy()
         T, event = self.tracker.state, int(self.tracker.event)
