@@ -122,13 +122,13 @@ LEARNER_OPTIONS: tuple[LearnerOption, ...] = (
         0.0,
         180.0,
         flag="--skew",
-    ),  # fmt: skip
+    ),
     LearnerOption(
         "supervised",
         False,
         "switch",
         "the heuristic as supervisor: supervised CACLA (eqs. 10-13) or actor-critic (eq. 11)",
-    ),  # fmt: skip
+    ),
     LearnerOption(
         "actor_update",
         "delta",
@@ -136,7 +136,7 @@ LEARNER_OPTIONS: tuple[LearnerOption, ...] = (
         "actor-critic: the actor's step factor on (a - A(s)): delta (eq. 9), positive (max(δ, 0): eq. 7's "
         "max term alone) or sign (sgn δ: eq. 7's sign term alone)",
         choices=("delta", "positive", "sign"),
-    ),  # fmt: skip
+    ),
     LearnerOption(
         "actor_repeats",
         "once",
@@ -144,7 +144,7 @@ LEARNER_OPTIONS: tuple[LearnerOption, ...] = (
         "CACLA, beyond the paper: one actor update per δ > 0 (once, eq. 7) or ⌈δ/√var⌉ of them, var a "
         "running variance of δ (var: CACLA+Var, Van Hasselt & Wiering 2007)",
         choices=("once", "var"),
-    ),  # fmt: skip
+    ),
     _number(
         "critic_lambda",
         0.0,
@@ -152,7 +152,7 @@ LEARNER_OPTIONS: tuple[LearnerOption, ...] = (
         "beyond the paper: λ of the critic's TD(λ) trace; 0 = TD(0) (eqs. 5-6)",
         0.0,
         1.0,
-    ),  # fmt: skip
+    ),
     _number("alpha_v", PAPER_CACLA.alpha_v, "step", "critic step size α_V (paper §4)", **_UNIT),
     _number("alpha_pi", PAPER_CACLA.alpha_pi, "step", "actor step size α_π (paper §4)", **_UNIT),
     _number("alpha_q", PAPER_SARSA.alpha, "step", "SARSA step size α (paper §4)", **_UNIT),
@@ -163,7 +163,7 @@ LEARNER_OPTIONS: tuple[LearnerOption, ...] = (
         "step",
         "supervised learners: increment Δk of k(s) per visit (paper §4.1)",
         0.0,
-    ),  # fmt: skip
+    ),
     _number(
         "forgetting",
         PAPER_CACLA.forgetting,
@@ -172,7 +172,7 @@ LEARNER_OPTIONS: tuple[LearnerOption, ...] = (
         0.0,
         1.0,
         high_open=True,
-    ),  # fmt: skip
+    ),
     _number(
         "var_rate",
         PAPER_CACLA.var_rate,
@@ -180,21 +180,21 @@ LEARNER_OPTIONS: tuple[LearnerOption, ...] = (
         "CACLA+Var: rate β of the running variance of δ, "
         "var ← (1 - β) var + β δ² (Van Hasselt & Wiering 2007)",
         **_UNIT,
-    ),  # fmt: skip
+    ),
     _number(
         "sigma_start",
         SIGMA_START,
         "schedule",
         "exploration σ of the first episode, normalized action units (paper §4: 1)",
         0.0,
-    ),  # fmt: skip
+    ),
     _number(
         "sigma_end",
         SIGMA_END,
         "schedule",
         "exploration σ of the last episode (paper §4: 0.01); σ falls linearly in between",
         0.0,
-    ),  # fmt: skip
+    ),
     LearnerOption(
         "state",
         "paper",
@@ -202,7 +202,7 @@ LEARNER_OPTIONS: tuple[LearnerOption, ...] = (
         "what the learner observes: paper = (x1, y1, x2, v_x) (§4); +drift adds the DVL's sway velocity "
         "over ground (m/s), +yaw the gyro's yaw rate (rad/s) (pipefollow.sim.observation)",
         choices=STATE_NAMES,
-    ),  # fmt: skip
+    ),
 )
 OPTION = {o.name: o for o in LEARNER_OPTIONS}
 # The options a training phase may set for its own episodes (an experiment file's phase ``learner``
