@@ -35,9 +35,9 @@ recomputes everything without being told. ``--suites``, ``--sensors``, ``--water
 always holds every row whose cells the store has for today's code. ``--jobs N`` runs N cells at a
 time in separate processes.
 
-Run time (2 cores): all 255 cells in 328 s with ``--jobs 2`` and nothing else running (306 with the
-sensor-trained PPO: 688 s beside another process), 11 minutes
-with ``--jobs 1`` beside other work (docs/decisions.md, "Every controller through every sensor"),
+Run time (2 cores): all 255 cells in 328 s with ``--jobs 2`` and nothing else running, 11 minutes
+with ``--jobs 1`` beside other work; the 306 cells with the sensor-trained PPO in 442–688 s with
+``--jobs 2`` beside other processes (docs/decisions.md, "Every controller through every sensor");
 plus about 6 minutes to train the four policies when ``--policies`` lacks them.
 """
 
