@@ -94,20 +94,6 @@ def test_bad_camera_values_are_one_line_errors_naming_the_option(command, bad, n
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("algorithm", ["sarsa", "cacla", "ac"])
-@pytest.mark.parametrize("given, named", [(["--camera", "vision"], "--camera vision"),
-                                          (["--sensor", "sonar"], "--sensor sonar")])  # fmt: skip
-def test_train_refuses_a_camera_for_the_compiled_learners(algorithm, given, named, tmp_path):
-    res = _invoke(
-        ["train", "--algorithm", algorithm, "--episodes", "2", "--out", str(tmp_path / "o"), *given]
-    )
-    assert res.exit_code == 2
-    line = res.output.strip()
-    assert line.startswith(f"pipefollow: error: {named}: --algorithm {algorithm} ") and "\n" not in line
-    assert "--randomization vision" in line
-    assert not (tmp_path / "o").exists()
-
-
 def test_rollouts_record_the_sensor_in_the_dataset(tmp_path):
     minari = pytest.importorskip("minari")
     pytest.importorskip("h5py")

@@ -118,8 +118,9 @@ def train(
     Every learner option of experiment files is an option here too (--critic-lambda, --alpha-v,
     --sigma-start, --state, ...): the same values give the same policy. An --out folder that already
     holds them is refused unless --force is given. Ctrl-C stops without writing anything (exit status 130).
-    PPO and SAC train through --camera vision (or --sensor sonar, fused) and its water; the paper's
-    learners train in the compiled loop of the ideal camera and refuse them.
+    With --camera vision (or --sensor sonar, fused) and its water every learner trains through that
+    camera or sensor: the paper's learners then run in the environment, frame by frame, instead of
+    their compiled loop of the ideal camera.
     """
     _refuse_existing(out_dir, force)
     randomization = _randomization(randomization, disturbance)
@@ -130,7 +131,6 @@ def train(
         return _train_deep(
             algorithm, pipeline, seconds, steps, seed, out_dir, as_json, disturbance, randomization, camera
         )
-    _refuse_camera(algorithm, camera)
     if steps is not None:
         raise UserError("--steps applies to --algorithm ppo and sac only (use --episodes)")
     from pipefollow.files.output_paths import first_missing
@@ -147,12 +147,12 @@ def train(
                 out, agent, pipeline, episodes, seed=seed, readings=reading, disturbance=disturbance,
                 randomization=randomization, seconds=seconds, progress=_counter(bar),
                 tensorboard=tensorboard_dir, made=made, sigma_start=options["sigma_start"],
-                sigma_end=options["sigma_end"], options=options,
+                sigma_end=options["sigma_end"], options=options, camera=camera,
             )  # fmt: skip
     except KeyboardInterrupt:
         click.echo(f"pipefollow: interrupted; nothing written to '{out_dir}'", err=True)
         sys.exit(130)
-    _echo_trained(run.summary(), disturbance, randomization, as_json, run.text)
+    _echo_trained({**run.summary(), **camera_record(camera)}, disturbance, randomization, as_json, run.text)
 
 
 def _counter(bar, every: int = 0, total: int | None = None):
@@ -286,19 +286,6 @@ def _given(*names: str) -> list[str]:
     ctx = click.get_current_context()
     option = {p.name: p.opts[0] for p in ctx.command.params}  # a parameter's name → its option
     return [option[n] for n in names if ctx.get_parameter_source(n) == ParameterSource.COMMANDLINE]
-
-
-def _refuse_camera(algorithm: str, camera) -> None:
-    """The paper's learners train in their compiled loop, which observes through the ideal camera only."""
-    if camera:
-        given = (
-            ("--camera", camera["camera"]) if camera["camera"] != "ideal" else ("--sensor", camera["sensor"])
-        )
-        raise UserError(
-            f"{' '.join(given)}: --algorithm {algorithm} trains in the compiled loop of the ideal camera; "
-            "train it under the camera's calibrated noise with --randomization vision, or train ppo or sac "
-            "through the camera"
-        )
 
 
 def _train_deep(

@@ -137,8 +137,11 @@ def train(
     sigma_start: float = SIGMA_START,
     sigma_end: float = SIGMA_END,
     callback: Callable[[int, EpisodeStats], None] | None = None,
+    seed: int | None = None,
 ) -> np.ndarray:
     """Train ``agent`` for ``episodes`` episodes in ``env``; returns (episodes, 4) statistics.
+
+    ``seed`` seeds the environment's first reset (None: it goes on with its generator).
 
     Raises:
         ValueError: ``env`` observes another named state than ``agent`` (``env.setup.state``).
@@ -148,7 +151,8 @@ def train(
         raise ValueError(f"the environment observes state {observed!r}, the agent {agent.state!r}")
     stats = np.empty((episodes, len(TRAINING_STAT_NAMES)))
     for e, sigma in enumerate(sigma_schedule(episodes, sigma_start, sigma_end)):
-        stats_e = run_episode(env, agent, learn=True, explore=True, sigma=float(sigma))
+        first = seed if e == 0 else None
+        stats_e = run_episode(env, agent, learn=True, explore=True, sigma=float(sigma), seed=first)
         stats[e] = stats_e.as_row()
         if callback is not None:
             callback(e, stats_e)

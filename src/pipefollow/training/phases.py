@@ -66,6 +66,7 @@ def train_phases(
     sigma_end: float = SIGMA_END,
     progress: Callable[[int], None] | None = None,
     phase_params: Sequence | None = None,
+    camera: dict | None = None,
 ) -> list[np.ndarray]:
     """Train ``agent`` (its ``rng`` from :func:`agent_rng`) through ``phases`` of (pipeline, episodes).
 
@@ -76,7 +77,11 @@ def train_phases(
     every episode's disturbances from the disturbances' stream instead of ``disturbance``.
     ``phase_params`` gives each phase the learner's parameter record for its episodes (None: the
     agent's record at the start; :meth:`~pipefollow.learners.protocol.Agent.retune`); the agent
-    ends with the last phase's. Returns one (episodes, 4) statistics array per phase.
+    ends with the last phase's. ``camera`` (the environment's camera arguments: ``camera``,
+    ``water``, ``sensor``) trains every phase through that camera or sensor in the environment
+    (:mod:`pipefollow.training.through_env`; its own generator, :func:`.through_env.env_seed`)
+    instead of the learner's compiled loop of the ideal camera. Returns one (episodes, 4)
+    statistics array per phase.
     """
     from pipefollow.sim.pipe_names import resolve_training
     from pipefollow.sim.suites import Suite
@@ -100,12 +105,20 @@ def train_phases(
     if len(records) != len(phases):
         raise ValueError(f"phase_params must have one entry per phase ({len(phases)}), got {len(records)}")
     out, done, pipe_rng = [], 0, None
-    for pipe, (_, episodes), record in zip(pipes, phases, records, strict=True):
+    for k, (pipe, (name, episodes), record) in enumerate(zip(pipes, phases, records, strict=True)):
         wanted = own if record is None else record
         if wanted is not agent.params:
             agent.retune(wanted)
         report = None if progress is None else (lambda n, before=done: progress(before + n))
-        if isinstance(pipe, Suite):  # a new pipe every episode, from a child of the agent's generator
+        if camera is not None:  # a sensor of the environment's, frame by frame
+            from pipefollow.training.through_env import train_through_env
+
+            stats = train_through_env(
+                agent, name, episodes, camera=camera, seed=seed, phase=k, progress=report,
+                episode_seconds=episode_seconds, sigma_start=start, sigma_end=end,
+                params=schedule["params"], randomization=randomization,
+            )  # fmt: skip
+        elif isinstance(pipe, Suite):  # a new pipe every episode, from a child of the agent's generator
             pipe_rng = pipe_rng if pipe_rng is not None else agent.rng.spawn(1)[0]
             stats = train_random_compiled(
                 agent, pipe, episodes, pipe_rng=pipe_rng, progress=report, **schedule

@@ -203,6 +203,7 @@ def train_into(
     sigma_start: float = SIGMA_START,
     sigma_end: float = SIGMA_END,
     options: dict | None = None,
+    camera: dict | None = None,
 ) -> LearnerRun:
     """Train ``agent`` on ``pipeline`` for ``episodes`` and write its policy and learning curve into ``out``.
 
@@ -224,6 +225,8 @@ def train_into(
         sigma_end: of the last.
         options: the learner options given for the run (option → value): stored with the policy,
             completed by :func:`run_options`.
+        camera: the environment's camera arguments (``camera``, ``water``, ``sensor``) to train
+            through (:mod:`pipefollow.training.through_env`); None: the ideal camera's compiled loop.
     """
     from pipefollow.files.output_paths import remove_empty_folders
     from pipefollow.sim.pipe_names import resolve_training
@@ -241,6 +244,7 @@ def train_into(
             sigma_start=sigma_start,
             sigma_end=sigma_end,
             progress=progress,
+            camera=camera,
         )
         name = resolve_training(pipeline).name
         sigmas = phase_sigmas(episodes, readings, sigma_start, sigma_end)  # the σ train_phases trained with
