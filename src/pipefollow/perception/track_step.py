@@ -29,6 +29,7 @@ from pipefollow.perception.line_ekf import (
     point_innovation,
     predict,
 )
+from pipefollow.sim import records
 from pipefollow.sim.controller import wrap_angle as wrap
 
 
@@ -67,6 +68,18 @@ class TrackParams(NamedTuple):
 
 
 TRACK = TrackParams()
+# where each setting sits in pack_params' array, from the field names (the compiled code reads them so)
+_AT = records.offsets(TRACK)
+_POINT_SD, _BEND_SD, _SHIFT_SD, _GATE, _POINT_GATE = (
+    _AT[n] for n in ("point_sd", "bend_sd", "shift_sd", "gate", "point_gate")
+)
+_MAX_MISSES, _MAX_OFFSET_SD, _CONFIRM, _BORDER, _FAR_MARGIN, _FAR_MATCH = (
+    _AT[n] for n in ("max_misses", "max_offset_sd", "confirm", "border", "far_margin", "far_match")
+)
+_NEAR_REACH, _EDGE_MISSES, _EDGE_PIECE, _UNSEARCHED_MISSES, _BEND_BEHIND, _CROSS_BORDER = (
+    _AT[n]
+    for n in ("near_reach", "edge_misses", "edge_piece", "unsearched_misses", "bend_behind", "cross_border")
+)
 
 # what the frame is to the tracker (track_step's ``frame``): searched by the detector in a clear
 # frame; searched in a murky one (below visibility.EDGE_CONTRAST: its misses are not of short
@@ -92,8 +105,8 @@ REACH = 20.0  # m: a line is clipped to the footprint as a segment this far eith
 
 
 def pack_params(p: TrackParams) -> np.ndarray:
-    """The settings as the compiled code takes them."""
-    return np.array([float(v) for v in p], dtype=np.float64)
+    """The settings as the compiled code takes them (in field order, read by name: ``_AT``)."""
+    return records.pack(p)
 
 
 @njit(cache=True)
@@ -210,11 +223,13 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, frame=CLEAR_F
             no longer than any) or :data:`UNSEARCHED_FRAME` (the measurement another sensor's: the
             line is carried ``unsearched_misses`` frames, short pieces too).
     """
-    point_sd, bend_sd, shift_sd, gate, point_gate = tp[0], tp[1], tp[2], tp[3], tp[4]
-    max_misses, max_offset_sd, confirm, border, far_match = tp[5], tp[6], tp[7], tp[8], tp[10]
-    near_reach, edge_misses = tp[11], tp[12]
+    point_sd, bend_sd, shift_sd = tp[_POINT_SD], tp[_BEND_SD], tp[_SHIFT_SD]
+    gate, point_gate = tp[_GATE], tp[_POINT_GATE]
+    max_misses, max_offset_sd, confirm = tp[_MAX_MISSES], tp[_MAX_OFFSET_SD], tp[_CONFIRM]
+    border, far_match = tp[_BORDER], tp[_FAR_MATCH]
+    near_reach, edge_misses = tp[_NEAR_REACH], tp[_EDGE_MISSES]
     if frame == UNSEARCHED_FRAME:
-        max_misses, edge_misses = tp[14], tp[14]
+        max_misses = edge_misses = tp[_UNSEARCHED_MISSES]
     elif frame == MURKY_FRAME:
         edge_misses = max_misses
     dl, df, dpsi = motion[0], motion[1], motion[2]
@@ -252,7 +267,7 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, frame=CLEAR_F
                 t_in, _ = in_footprint(T[TH], T[D], -REACH, REACH, hw, depth)
                 ex, ey = on_line(T[TH], T[D], t_in)
                 if math.hypot(x2 - ex, y_near - ey) < math.hypot(x1 - ex, y1 - ey):
-                    crossed = _crossed(T, x1, y1, x2, y_near, tp[16], tp[15])
+                    crossed = _crossed(T, x1, y1, x2, y_near, tp[_CROSS_BORDER], tp[_BEND_BEHIND])
                     point_correct(T, TH, nu_a, j_a, s_a)
                     taken = True
                     if crossed:
@@ -339,7 +354,8 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, frame=CLEAR_F
         limit = max_misses
         if T[MISS] > max_misses and edge_misses > max_misses:
             a, b = _line_end(T, hw, depth)
-            if a <= b and b - a < tp[13]:  # a short piece at the view's edge: the detector misses those
+            # a short piece at the view's edge: the detector misses those
+            if a <= b and b - a < tp[_EDGE_PIECE]:
                 limit = edge_misses
         if T[MISS] > limit or T[P + 2] > max_offset_sd * max_offset_sd:
             T[ACTIVE] = 0.0
@@ -366,7 +382,7 @@ def observe_track(T, tp, hw, depth, out):
     th, d = T[TH], T[D]
     a, b = _line_end(T, hw, depth)
     seen_line = a <= b
-    far_beyond = T[HAS_FAR] != 0.0 and inside(T[FAR_X], T[FAR_Y], hw, depth, tp[9])
+    far_beyond = T[HAS_FAR] != 0.0 and inside(T[FAR_X], T[FAR_Y], hw, depth, tp[_FAR_MARGIN])
     if far_beyond:
         out[OUT_X1], out[OUT_Y1] = T[FAR_X], T[FAR_Y]
     elif seen_line:
@@ -378,7 +394,7 @@ def observe_track(T, tp, hw, depth, out):
     elif far_beyond:
         out[OUT_X2], out[OUT_Y_NEAR] = T[FAR_X], T[FAR_Y]
     # how well the offset is known: 1 at a fresh detection's, falling as the prediction's grows
-    floor = 0.5 * tp[0] * tp[0]
+    floor = 0.5 * tp[_POINT_SD] * tp[_POINT_SD]
     T[CONFIDENCE] = min(1.0, math.sqrt(floor / max(T[P + 2], floor)))
     if seen_line or far_beyond:
         out[OUT_IN_VIEW] = 1.0
