@@ -413,6 +413,20 @@ def test_a_trial_takes_every_camera_and_sensor_the_environment_takes(tmp_path):
     tracked = run_trial(dataclasses.replace(t, camera="vision"), 3)
     np.testing.assert_array_equal(raw.weights, tracked.weights)  # training: the ideal camera's
     assert raw.evaluation["heuristic"] != tracked.evaluation["heuristic"]
+    # trained through the sensor too: other weights than the ideal camera's, and the weights of
+    # train_phases through that sensor itself (the trial adds nothing of its own)
+    through = dataclasses.replace(t, camera="vision", train_through_sensor=True)
+    res = run_trial(through, 3)
+    assert not np.allclose(res.weights, tracked.weights)
+    from pipefollow.experiments.trial import build_agent, training_camera
+    from pipefollow.training.phases import agent_rng, train_phases
+
+    agent = build_agent(through, agent_rng(3))
+    camera = training_camera(through)
+    assert camera == {"camera": "vision", "water": {"preset": "clear", "turbidity": 0.3}, "sensor": "camera"}
+    train_phases(agent, [("paper-left", 2)], seed=3, episode_seconds=through.episode_seconds, camera=camera)
+    np.testing.assert_array_equal(res.weights, agent.weights)
+    assert res.evaluation["learned"] == run_trial(through, 3).evaluation["learned"]
 
 
 @pytest.mark.parametrize(
@@ -422,6 +436,8 @@ def test_a_trial_takes_every_camera_and_sensor_the_environment_takes(tmp_path):
         ("sensor = 'radar'\n", r"key 'sensor' must be one of camera, sonar, fused, got 'radar'"),
         ("camera = 'vision'\nsensor = 'sonar'\n", r"key 'camera' must be 'ideal' with sensor = 'sonar'"),
         ("camera = 'laser'\n", r"key 'camera' must be one of ideal, vision, vision-raw, got 'laser'"),
+        ("train_through_sensor = true\n", r"key 'train_through_sensor' must be false with the ideal camera"),
+        ("train_through_sensor = 1\ncamera = 'vision'\n", r"key 'train_through_sensor' must be"),
         ("camera = 'vision'\nwater = 'murky'\n", r"key 'water': water preset 'murky': unknown"),
         ("camera = 'vision'\nwater = { turbidity = -1 }\n", r"'water': water setting turbidity must be in"),
         ("camera = 'vision'\nwater = { fog = 1 }\n", r"key 'water': unknown water setting\(s\) \['fog'\]"),

@@ -93,7 +93,7 @@ class TrialConfig:
         "ideal",
         "camera of the evaluation episode: ideal (the paper's), vision (rendered image, pipe detector and "
         "tracker; extra vision) or vision-raw (the detector alone, frame by frame); training stays on the "
-        "ideal camera's compiled loops",
+        "ideal camera's compiled loops unless train_through_sensor",
         choices=CAMERAS,
     )
     water: dict | str | None = _f(
@@ -107,6 +107,11 @@ class TrialConfig:
         "sensor of the evaluation episode: camera (the camera alone), sonar (the look-ahead multibeam "
         "alone, with camera ideal) or fused (the camera's detections, the sonar's where it finds none)",
         choices=SENSORS,
+    )
+    train_through_sensor: bool = _f(
+        False,
+        "train through the camera, sensor and water above too (in the environment, frame by frame), "
+        "not in the ideal camera's compiled loops",
     )
     evaluate_on: str = _f("", "after training, evaluate deterministically on this pipeline ('' = none)")
     evaluate_seconds: float = _f(60.0, "length of the evaluation episode (s) (paper §4.2)")
@@ -207,6 +212,9 @@ def validate(obj, where: str) -> None:
         check_readings(obj.readings, f"{where}: key 'readings'")
         if obj.sensor == "sonar" and obj.camera != "ideal":
             raise bad("camera", "'ideal' with sensor = 'sonar' (the sonar observes alone)", obj.camera)
+        if obj.train_through_sensor and obj.camera == "ideal" and obj.sensor == "camera":
+            what = "false with the ideal camera alone (the compiled loops are that camera)"
+            raise bad("train_through_sensor", what, obj.train_through_sensor)
         for key in ("episode_seconds", "evaluate_seconds"):
             if not 1.0 <= getattr(obj, key) <= MAX_SECONDS:
                 raise bad(key, f"from 1 to {MAX_SECONDS:g} (s)", getattr(obj, key))

@@ -82,8 +82,19 @@ class ActorOnly:
         return self.agent.actor(obs)
 
 
+def training_camera(config: TrialConfig) -> dict | None:
+    """The environment's camera arguments a trial trains through, or None: the compiled loops."""
+    if not config.train_through_sensor:
+        return None
+    return {"camera": config.camera, "water": config.water, "sensor": config.sensor}
+
+
 def run_trial(config: TrialConfig, seed: int) -> TrialResult:
-    """Train the learner of ``config`` with ``seed`` (compiled path) and evaluate it deterministically."""
+    """Train the learner of ``config`` with ``seed`` and evaluate it deterministically.
+
+    Training runs the learner's compiled loops, or through the trial's camera and sensor in the
+    environment with ``train_through_sensor`` (:func:`training_camera`).
+    """
     t0 = time.perf_counter()
     agent = build_agent(config, agent_rng(seed))
     disturbance = disturbance_from_dict(config.disturbance) if config.disturbance else NO_DISTURBANCE
@@ -99,6 +110,7 @@ def run_trial(config: TrialConfig, seed: int) -> TrialResult:
         sigma_start=config.sigma_start,
         sigma_end=config.sigma_end,
         phase_params=phase_params(config),
+        camera=training_camera(config),
     )
     phase = [np.full(ph.episodes, i) for i, ph in enumerate(config.phases)]
     schedule = (config.reading, config.sigma_start, config.sigma_end)
