@@ -7,7 +7,7 @@ Controllers: the heuristic, LOS (Δ = 1.5 m), CACLA and supervised CACLA (the RE
 5,000 episodes of 90 s on random:mixed) and PPO (100,000 steps on random:mixed, the extra
 ``deep``), all trained on the ideal camera, and PPO trained the same way through the sensor it
 meets in murky water (``--camera vision --sensor fused --water turbid``; the paper's learners
-train in the ideal camera's compiled loop only), the learned ones from ``--policies`` (trained
+trained so gain nothing: docs/decisions.md), the learned ones from ``--policies`` (trained
 there if missing, as ``examples/vision_table.py`` trains them). Sensors: ``ideal`` (the exact
 camera), ``raw`` (the rendered camera's detector alone, ``camera="vision-raw"``), ``tracker``
 (the detector and the pipe tracker, ``camera="vision"``), ``sonar`` (the look-ahead multibeam

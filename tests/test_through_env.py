@@ -15,9 +15,10 @@ from click.testing import CliRunner
 
 from pipefollow import readings as rd
 from pipefollow.cli import main
-from pipefollow.training.phases import agent_rng, train_phases
+from pipefollow.training import through_env
+from pipefollow.training.phases import train_phases
 from pipefollow.training.runs import new_agent
-from pipefollow.training.through_env import env_seed
+from pipefollow.training.through_env import env_seed, train_through_env
 
 VISION_FUSED = {"camera": "vision", "sensor": "fused", "water": {"preset": "turbid"}}
 
@@ -45,26 +46,61 @@ def test_through_a_sensor_the_learner_sees_the_sensor_and_a_seed_fixes_the_numbe
     np.testing.assert_array_equal(first.weights, again.weights)
     np.testing.assert_array_equal(s1, s2)
     assert not np.allclose(first.weights, ideal.weights)  # the fused sensor's view, not the exact one
-    other, _ = _trained("cacla", VISION_FUSED, seed=4, supervised=True)
+    # another environment stream alone (the agent's generator the same): other images, other weights
+    other = new_agent("cacla", 3, rd.DEFAULT, supervised=True)
+    sigma = (1.0, 0.01)
+    train_through_env(other, "paper-left", 4, camera=VISION_FUSED, seed=4, episode_seconds=8.0,
+                      sigma_start=sigma[0], sigma_end=sigma[1])  # fmt: skip
+    same = new_agent("cacla", 3, rd.DEFAULT, supervised=True)
+    train_through_env(same, "paper-left", 4, camera=VISION_FUSED, seed=3, episode_seconds=8.0,
+                      sigma_start=sigma[0], sigma_end=sigma[1])  # fmt: skip
+    np.testing.assert_array_equal(same.weights, first.weights)  # train_phases' single phase is this
     assert not np.allclose(other.weights, first.weights)
 
 
-def test_random_pipes_through_a_sensor_come_from_the_environments_stream():
-    # the environment draws a random phase's pipes: seeds give other pipes, the same seed the same
-    a, s_a = _trained("cacla", {"camera": "ideal", "sensor": "sonar"}, pipeline="random:mixed")
-    b, s_b = _trained("cacla", {"camera": "ideal", "sensor": "sonar"}, pipeline="random:mixed")
-    c, s_c = _trained("cacla", {"camera": "ideal", "sensor": "sonar"}, seed=4, pipeline="random:mixed")
+def test_random_pipes_through_a_sensor_come_from_the_environments_stream(monkeypatch):
+    # the environment draws a random phase's pipes from its own stream: the agent's generator alone
+    # (monkeypatched env_seed held fixed) gives the same pipes, so the same distance along them
+    sonar = {"camera": "ideal", "sensor": "sonar"}
+    _, s_a = _trained("cacla", sonar, pipeline="random:mixed")
+    _, s_b = _trained("cacla", sonar, pipeline="random:mixed")
     np.testing.assert_array_equal(s_a, s_b)
-    assert not np.array_equal(s_a, s_c)
+    lengths = []
+    import pipefollow.envs.env as env_module
+
+    made = env_module.PipelineFollowingEnv.reset
+
+    def reset(self, *args, **kwargs):  # the pipe of every episode
+        out = made(self, *args, **kwargs)
+        lengths.append(round(float(self.pipeline.length), 9))
+        return out
+
+    monkeypatch.setattr(env_module.PipelineFollowingEnv, "reset", reset)
+    for agent_seed in (3, 4):
+        monkeypatch.setattr(through_env, "env_seed", lambda seed, phase=0: 11)
+        _trained("cacla", sonar, seed=agent_seed, pipeline="random:mixed")
+    assert lengths[:4] == lengths[4:] and len(set(lengths[:4])) > 1
+    lengths.clear()
+    for stream in (11, 12):
+        monkeypatch.setattr(through_env, "env_seed", lambda seed, phase=0, s=stream: s)
+        _trained("cacla", sonar, pipeline="random:mixed")
+    assert lengths[:4] != lengths[4:]
 
 
-def test_each_phase_has_a_stream_of_its_own_apart_from_the_disturbances():
+def test_each_phase_has_a_stream_of_its_own_apart_from_the_compiled_loops():
     seeds = {env_seed(s, k) for s in range(3) for k in range(3)}
     assert len(seeds) == 9
-    # child 0 is the compiled loops' disturbance stream (phases.disturbance_rng): not reused
+    # child 0 is the compiled loops' stream (phases.disturbance_rng): not reused
     child0 = np.random.SeedSequence(0, spawn_key=(0,)).generate_state(1, dtype=np.uint32)[0]
     assert env_seed(0, 0) != int(child0)
-    assert agent_rng(0).integers(1 << 30) == np.random.default_rng(0).integers(1 << 30)
+
+
+def test_two_phases_train_through_two_streams():
+    agent = new_agent("cacla", 3, rd.DEFAULT)
+    stats = train_phases(agent, [("random:mixed", 3), ("random:mixed", 3)], seed=3, episode_seconds=8.0,
+                         camera={"camera": "ideal", "sensor": "sonar"})  # fmt: skip
+    assert [s.shape[0] for s in stats] == [3, 3]
+    assert not np.array_equal(stats[0], stats[1])
 
 
 FUSED_TURBID = ["--camera", "vision", "--sensor", "fused", "--water", "turbid"]
@@ -87,3 +123,7 @@ def test_train_takes_a_sensor_for_the_papers_learners_and_records_it(given, tmp_
     assert "camera" not in json.loads(ideal.output)
     with np.load(tmp_path / "a" / "policy.npz") as a, np.load(tmp_path / "ideal" / "policy.npz") as i:
         assert not np.allclose(a["weights"], i["weights"])
+        through = json.loads(json.loads(str(a["metadata"]))["trained_through"])
+        assert "trained_through" not in json.loads(str(i["metadata"]))
+    assert through["camera"] == out[0]["camera"] and through["sensor"] == out[0].get("sensor", "camera")
+    assert through["water"] == out[0]["water"]

@@ -100,14 +100,16 @@ def longest_first(work: Work) -> Work:
     """``work`` with the trials likely to take longest first (stable among equals).
 
     Handing the long trials out first keeps a worker from starting one while the others have
-    nothing left, so the last trials end together. The estimate: the episodes of all phases, then
-    an evaluation run after training, SARSA (its update of all actions), skew or supervision.
+    nothing left, so the last trials end together. The estimate: training through a sensor (frame by
+    frame, some ten times a compiled loop's episode), the episodes of all phases, then an evaluation
+    run after training, SARSA (its update of all actions), skew or supervision.
     """
 
     def cost(item: tuple[TrialConfig, int]) -> tuple:
         c = item[0]
         episodes = sum(p.episodes for p in c.phases)
-        return (episodes, bool(c.evaluate_on), c.algorithm == "sarsa", c.skew_deg > 0 or c.supervised)
+        slow = c.train_through_sensor
+        return (slow, episodes, bool(c.evaluate_on), c.algorithm == "sarsa", c.skew_deg > 0 or c.supervised)
 
     return sorted(work, key=cost, reverse=True)
 

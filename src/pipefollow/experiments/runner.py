@@ -119,7 +119,8 @@ def warm_up(configs: list[TrialConfig], parallel: bool = False) -> None:
     """
     kinds: dict[tuple, TrialConfig] = {}
     for c in configs:
-        kinds.setdefault((c.algorithm, c.skew_deg > 0, c.supervised), c)
+        # a trial trained through a sensor compiles no training loop: one that does warms the kind
+        kinds.setdefault((c.algorithm, c.skew_deg > 0, c.supervised, c.train_through_sensor), c)
     tiny = [
         dataclasses.replace(c, phases=(dataclasses.replace(c.phases[0], episodes=1),), evaluate_on="")
         for c in kinds.values()

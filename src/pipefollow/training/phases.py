@@ -1,10 +1,14 @@
 """Training in phases, the one way ``pipefollow train`` and experiment trials train a learner.
 
-A run with seed ``s`` draws from three streams: the agent's generator ``numpy.random.default_rng(s)``
-(exploration; made by the caller, see :func:`agent_rng`), its first child (the pipes of
-``random[:FAMILY]`` phases, spawned at the first such phase) and ``default_rng(SeedSequence(s).spawn(1)[0])``
-(the random disturbances, :func:`disturbance_rng`). σ is the paper's schedule in the ``sigma_unit``
-reading's units, scaled to normalized action units; the simulation takes the readings and the disturbances.
+A run with seed ``s`` draws from three streams in the compiled loops: the agent's generator
+``numpy.random.default_rng(s)`` (exploration; made by the caller, see :func:`agent_rng`), its first
+child (the pipes of ``random[:FAMILY]`` phases, spawned at the first such phase) and
+``default_rng(SeedSequence(s).spawn(1)[0])`` (the random disturbances, :func:`disturbance_rng`) —
+the same numbers as that first child (docs/decisions.md, "The paper's learners trained through
+the sensor"). Trained through a camera or sensor, a phase's environment draws its pipes and
+disturbances from a stream of its own instead (:func:`.through_env.env_seed`). σ is the paper's
+schedule in the ``sigma_unit`` reading's units, scaled to normalized action units; the simulation
+takes the readings and the disturbances.
 """
 
 from __future__ import annotations
@@ -74,7 +78,8 @@ def train_phases(
     σ runs from ``sigma_start`` to ``sigma_end`` (the paper's units, scaled by the ``sigma_unit``
     reading) over each phase. ``progress`` gets the episodes done over all phases. A
     ``randomization`` (:mod:`pipefollow.sim.randomization`; a preset name, table or record) draws
-    every episode's disturbances from the disturbances' stream instead of ``disturbance``.
+    every episode's disturbances from the disturbances' stream (through a camera or sensor: the
+    environment's) instead of ``disturbance``.
     ``phase_params`` gives each phase the learner's parameter record for its episodes (None: the
     agent's record at the start; :meth:`~pipefollow.learners.protocol.Agent.retune`); the agent
     ends with the last phase's. ``camera`` (the environment's camera arguments: ``camera``,

@@ -131,6 +131,17 @@ def option_differences(
     return out
 
 
+def trained_through(camera: dict) -> str:
+    """The camera, sensor and water a run trained through, as the JSON its policy file records."""
+    import json
+
+    water = camera.get("water")
+    water = water._asdict() if hasattr(water, "_asdict") else water
+    record = {"camera": camera.get("camera", "ideal"), "sensor": camera.get("sensor", "camera")}
+    record["water"] = water
+    return json.dumps(record, sort_keys=True)
+
+
 def write_tensorboard(folder, stats: np.ndarray, sigmas: np.ndarray) -> None:
     """Per-episode return, pipe in view, progress, time lost and σ (``sigmas``: the schedule trained with)."""
     from pipefollow.files.tensorboard import write_scalars
@@ -249,8 +260,9 @@ def train_into(
         name = resolve_training(pipeline).name
         sigmas = phase_sigmas(episodes, readings, sigma_start, sigma_end)  # the σ train_phases trained with
         values = run_options(agent, {**(options or {}), "sigma_start": sigma_start, "sigma_end": sigma_end})
+        through = {} if camera is None else {"trained_through": trained_through(camera)}
         policy, curve = write_training_outputs(
-            out, agent, stats, sigmas, options=values, pipeline=name, seed=seed
+            out, agent, stats, sigmas, options=values, pipeline=name, seed=seed, **through
         )
         if tensorboard:
             write_tensorboard(tensorboard, stats, sigmas)

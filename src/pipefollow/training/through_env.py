@@ -13,7 +13,9 @@ through the sensor", gives it).
 Randomness: the agent explores with its own generator; the environment draws the pipes of a
 ``random[:FAMILY]`` phase, the random disturbances, the images and the sonar's pings from its own,
 seeded at the phase's first reset by :func:`env_seed` (a stream of the run's seed of its own, one
-per phase).
+per phase). So through the ideal camera with random disturbances (``--camera-noise``, a current
+that varies) the numbers differ from the compiled loop's, which draws them from another stream;
+without random disturbances they are the compiled loop's.
 """
 
 from __future__ import annotations
@@ -29,7 +31,8 @@ from pipefollow.training.compiled import train
 def env_seed(seed: int, phase: int = 0) -> int:
     """The seed of a run's environment for its ``phase`` (0-based): child ``1 + phase`` of the run's seed.
 
-    Child 0 is the disturbances' stream of the compiled loops (:func:`.phases.disturbance_rng`).
+    Child 0 is the compiled loops' (:func:`.phases.disturbance_rng`, and the same numbers as their
+    random pipes' generator, the agent's generator's first child).
     """
     child = np.random.SeedSequence(seed, spawn_key=(1 + phase,))
     return int(child.generate_state(1, dtype=np.uint32)[0])
