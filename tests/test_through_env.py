@@ -127,3 +127,13 @@ def test_train_takes_a_sensor_for_the_papers_learners_and_records_it(given, tmp_
         assert "trained_through" not in json.loads(str(i["metadata"]))
     assert through["camera"] == out[0]["camera"] and through["sensor"] == out[0].get("sensor", "camera")
     assert through["water"] == out[0]["water"]
+
+
+def test_trains_text_names_the_sensor_trained_through(tmp_path):
+    args = ["train", "--algorithm", "sarsa", "--episodes", "2", "--seconds", "5"]
+    res = CliRunner().invoke(main, [*args, *FUSED_TURBID, "--burial", "0.3", "--out", str(tmp_path / "a")])
+    assert res.exit_code == 0, res.output
+    last = res.output.strip().splitlines()[-1]
+    assert last == "trained through: camera vision, sensor fused, water turbidity 0.25, burial 0.3"
+    ideal = CliRunner().invoke(main, [*args, "--out", str(tmp_path / "b")])
+    assert ideal.exit_code == 0 and "trained through" not in ideal.output

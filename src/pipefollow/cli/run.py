@@ -322,7 +322,17 @@ def _train_deep(
 
 
 def _echo_trained(result: dict, disturbance, randomization, as_json: bool, text) -> None:
-    """Print a training's ``result`` (with its disturbance and randomization, if any) or ``text()``."""
+    """Print a training's ``result`` (with its disturbance and randomization, if any) or ``text()``.
+
+    The text names the camera or sensor the run trained through, if not the ideal camera alone.
+    """
+    if "camera" in result:
+        lines, sensor = text, result.get("sensor", "camera")
+        water = ", ".join(f"{k} {v:g}" for k, v in result["water"].items() if k in ("turbidity", "burial"))
+
+        def text() -> str:
+            return f"{lines()}\ntrained through: camera {result['camera']}, sensor {sensor}, water {water}"
+
     if disturbance != _disturbance.NO_DISTURBANCE:
         result["disturbance"] = _disturbance.to_dict(disturbance)
     if randomization is not None:
