@@ -230,6 +230,24 @@ def bench_random_training(repeats):
     return median_time(one, max(3, repeats // 5))
 
 
+def _train_through(camera, repeats):
+    """CACLA trained through ``camera`` in the environment (training.through_env): time per decision.
+
+    200 episodes × 10 s on the mixed family (2,000 decisions) a repeat; ``camera`` None is the
+    compiled loop on the same pipes' family, for the ratio.
+    """
+    from pipefollow import readings as rd
+    from pipefollow.training.phases import train_phases
+    from pipefollow.training.runs import new_agent
+
+    def one(episodes=200):
+        agent = new_agent("cacla", 0, rd.DEFAULT)
+        train_phases(agent, [("random:mixed", episodes)], seed=0, episode_seconds=10.0, camera=camera)
+
+    one(2)  # compile, load the textures' bank
+    return median_time(one, max(3, repeats // 5)) / 2000
+
+
 def bench_vector_env(repeats):
     """One step of the batched vector env with 64 AUVs, timed in turns with 64 single ``env.step`` calls."""
     import gymnasium as gym
@@ -353,6 +371,14 @@ BENCHES = [
     ("SARSA trial, 500 episodes", lambda r: _trial_bench("sarsa", r), 0.1, 0.3),
     ("benchmark, 100 pipes × 60 s", bench_suite_benchmark, None, 1.0),
     ("random-pipe CACLA, 100k dec.", bench_random_training, None, 3.0),
+    ("CACLA training, compiled, per dec.", lambda r: _train_through(None, r), None, None),
+    ("…through the env, ideal, per dec.", lambda r: _train_through({"camera": "ideal"}, r), None, None),
+    (
+        "…through fused, turbid, per dec.",
+        lambda r: _train_through({"camera": "vision", "sensor": "fused", "water": "turbid"}, r),
+        None,
+        None,
+    ),
     ("render one frame (rgb_array)", bench_render_frame, None, 30e-3),
     ("vector env step, 64 AUVs", bench_vector_env, 64 * 20 * 0.09e-6, 64 * 3e-6),
     ("benchmark episodes, MLP 64×64", bench_mlp_benchmark, None, None),
