@@ -207,16 +207,13 @@ def disturbance_text(d, prefix: str = "; disturbances: ") -> str:
 def camera_record(camera) -> dict:
     """A result's entries for ``--camera``, ``--sensor`` and the water (what :func:`camera_options` gave).
 
-    ``camera`` and ``water`` (its fields), and ``sensor`` unless it is the camera alone; ``{}`` for
-    the ideal camera alone.
+    :func:`pipefollow.perception.camera.camera_record`; ``{}`` for the ideal camera alone.
     """
     if not camera:
         return {}
-    out = {"camera": camera["camera"]}
-    if camera.get("sensor", "camera") != "camera":
-        out["sensor"] = camera["sensor"]
-    out["water"] = camera["water"]._asdict()
-    return out
+    from pipefollow.perception.camera import camera_record as record  # loads numba: not at start-up
+
+    return record(camera)
 
 
 def command_line() -> str:

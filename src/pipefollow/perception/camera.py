@@ -131,6 +131,22 @@ def camera_settings(
     return settings
 
 
+def camera_record(camera: dict[str, Any] | None) -> dict[str, Any]:
+    """A result's record of the environment's camera arguments ``camera`` (``camera``, ``water``, ``sensor``).
+
+    ``camera`` and ``water`` (the resolved record's fields: a preset name or a mapping counts as the
+    water it names), and ``sensor`` unless it is the camera alone; ``{}`` for None or ``{}`` (the
+    ideal camera alone).
+    """
+    if not camera:
+        return {}
+    out: dict[str, Any] = {"camera": camera.get("camera", "ideal")}
+    if camera.get("sensor", "camera") != "camera":
+        out["sensor"] = camera["sensor"]
+    out["water"] = water_from(camera.get("water"))._asdict()
+    return out
+
+
 def _spawn(rng: np.random.Generator) -> np.random.Generator:
     """A child generator of ``rng``, leaving ``rng``'s stream as it is (one draw if it cannot spawn)."""
     try:

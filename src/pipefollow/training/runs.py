@@ -132,13 +132,16 @@ def option_differences(
 
 
 def trained_through(camera: dict) -> str:
-    """The camera, sensor and water a run trained through, as the JSON its policy file records."""
+    """The camera, sensor and water a run trained through, as the JSON its policy file records.
+
+    :func:`~pipefollow.perception.camera.camera_record`, with the sensor named also when it is the
+    camera alone.
+    """
     import json
 
-    water = camera.get("water")
-    water = water._asdict() if hasattr(water, "_asdict") else water
-    record = {"camera": camera.get("camera", "ideal"), "sensor": camera.get("sensor", "camera")}
-    record["water"] = water
+    from pipefollow.perception.camera import camera_record
+
+    record = {"sensor": camera.get("sensor", "camera"), **camera_record(camera)}
     return json.dumps(record, sort_keys=True)
 
 
