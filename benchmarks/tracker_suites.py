@@ -1,7 +1,7 @@
 """The heuristic through the vision camera's tracker against the ideal camera, suite by suite.
 
 Usage: ``python benchmarks/tracker_suites.py [--suites heldout heldout-hard heldout-sharp]
-[--pipes N] [--camera vision] [--water clear] [--noise-seed 0]``
+[--pipes N] [--camera vision] [--sensor camera] [--water clear] [--burial 0] [--noise-seed 0]``
 
 Each suite's pipes run one 60-s episode each with the heuristic on ``--camera`` (as
 ``pipefollow benchmark --controller heuristic --suite S --camera vision --water clear`` runs
@@ -18,7 +18,15 @@ from __future__ import annotations
 import argparse
 
 
-def judge(suite_name: str, n_pipes: int | None, camera: str, water: str, noise_seed: int) -> dict:
+def judge(
+    suite_name: str,
+    n_pipes: int | None,
+    camera: str,
+    water: str,
+    noise_seed: int,
+    sensor: str = "camera",
+    burial: float = 0.0,
+) -> dict:
     """One suite's line (module docstring) as a dict."""
     from pipefollow.evaluation.benchmark import LOST_IN_VIEW, benchmark
     from pipefollow.learners.heuristic import Heuristic
@@ -28,7 +36,7 @@ def judge(suite_name: str, n_pipes: int | None, camera: str, water: str, noise_s
         suite = Suite(suite_name, suite_name, TRAIN_STREAM, None, "the level's training-stream pipes")
     else:
         suite = get_suite(suite_name)
-    cam = {"camera": camera, "water": {"preset": water}}
+    cam = {"camera": camera, "sensor": sensor, "water": {"preset": water, "burial": burial}}
     kw = {"controller": "heuristic", "n_pipes": n_pipes, "noise_seed": noise_seed}
     run = benchmark(Heuristic(), suite, camera=cam, **kw)
     ideal = benchmark(Heuristic(), suite, **kw)
@@ -55,14 +63,16 @@ def main() -> None:
     ap.add_argument("--suites", nargs="+", default=["heldout", "heldout-hard", "heldout-sharp"])
     ap.add_argument("--pipes", type=int, default=None)
     ap.add_argument("--camera", default="vision")
+    ap.add_argument("--sensor", default="camera", choices=["camera", "sonar", "fused"])
     ap.add_argument("--water", default="clear")
+    ap.add_argument("--burial", type=float, default=0.0, help="the share of the pipe's width under sand")
     ap.add_argument("--noise-seed", type=int, default=0)
     ap.add_argument("--list", action="store_true", help="print the lost and turned-back pipes")
     args = ap.parse_args()
     print("| suite | loss vs ideal [95 % CI] | lost (ideal keeps) | turned back (ideal) | success (ideal) |")
     print("|---|---|---|---|---|")
     for name in args.suites:
-        r = judge(name, args.pipes, args.camera, args.water, args.noise_seed)
+        r = judge(name, args.pipes, args.camera, args.water, args.noise_seed, args.sensor, args.burial)
         lo, hi = r["loss_ci"]
         print(
             f"| {name} | {r['loss']:.1f} [{lo:.1f}, {hi:.1f}] | {len(r['lost'])} | "
