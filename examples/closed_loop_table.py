@@ -21,7 +21,9 @@ same pipe.
 
 Each row is compared, paired per pipe, with the heuristic through the same sensor in the same
 water (``vs_same``) and with the heuristic on the ideal camera (``vs_ideal``), with bootstrap 95 %
-intervals (``pipefollow benchmark --sensor S --camera C --water W`` prints both). ``lost_pipes``
+intervals (``pipefollow benchmark --sensor S --camera C --water W`` prints both); a row in another
+water than clear also with the same controller through the same sensor in clear water
+(``vs_clear``: what the water costs it; for ``half-buried``, what the sand does). ``lost_pipes``
 counts the episodes with the pipe in view at fewer than 80 % of the decisions; ``turned_back``
 those that followed the pipe backwards for ≥ 3 m; success is today's
 (``pipefollow.evaluation.success``).
@@ -91,8 +93,9 @@ ANY_WATER = "any"  # the ideal camera's one water
 COLUMNS = (
     "suite", "sensor", "water", "controller", "label", "n_pipes", "mean_return", "ci95_low", "ci95_high",
     "success_rate", "pipe_in_view", "turned_back", "lost_pipes", "vs_same", "vs_same_low", "vs_same_high",
-    "vs_ideal", "vs_ideal_low", "vs_ideal_high",
+    "vs_ideal", "vs_ideal_low", "vs_ideal_high", "vs_clear", "vs_clear_low", "vs_clear_high",
 )  # fmt: skip
+CLEAR_WATER = "clear"  # the water every other is compared with (``vs_clear``)
 
 
 def waters_of(sensor: str, waters) -> list[str]:
@@ -186,6 +189,10 @@ def row_of(cells: Path, suite, sensor, water, controller, specs, code, pipes) ->
         refs["vs_same"] = same[:, ep.STAT_RETURN]
     if (sensor, controller) != ("ideal", "heuristic"):
         refs["vs_ideal"] = ideal[:, ep.STAT_RETURN]
+    if water not in (CLEAR_WATER, ANY_WATER):
+        clear = load(sensor, CLEAR_WATER, controller)
+        if clear is not None:
+            refs["vs_clear"] = clear[:, ep.STAT_RETURN]
     s = summarize(res, pipes, controller=controller, suite=suite, seed=NOISE_SEED, references=refs)
     row = {
         "suite": suite, "sensor": sensor, "water": water, "controller": controller,
@@ -194,7 +201,7 @@ def row_of(cells: Path, suite, sensor, water, controller, specs, code, pipes) ->
         "pipe_in_view": s["mean_pipe_in_view"], "turned_back": s["turned_back"],
         "lost_pipes": s["lost_pipes"],
     }  # fmt: skip
-    for key in ("vs_same", "vs_ideal"):
+    for key in ("vs_same", "vs_ideal", "vs_clear"):
         d = s.get(key)
         row[key] = None if d is None else d["mean_diff"]
         row[key + "_low"] = None if d is None else d["ci95_diff"][0]

@@ -426,13 +426,13 @@ def _sensor_rows() -> list[dict]:
     """A small table as examples/closed_loop_table.py writes it: one suite, two sensors, one water."""
     from pipefollow.experiments.results_pages.closed_loop_sensors import NEED
 
-    def row(sensor, water, controller, label, mean, success, lost, same=None, ideal=None):
+    def row(sensor, water, controller, label, mean, success, lost, same=None, ideal=None, clear=None):
         r = dict.fromkeys(NEED, "")
         r |= {"suite": "heldout", "sensor": sensor, "water": water, "controller": controller, "label": label,
               "n_pipes": "100", "mean_return": mean, "ci95_low": "-1", "ci95_high": "1",
               "success_rate": success, "pipe_in_view": "0.9", "turned_back": "0",
               "lost_pipes": lost}  # fmt: skip
-        for key, v in (("vs_same", same), ("vs_ideal", ideal)):
+        for key, v in (("vs_same", same), ("vs_ideal", ideal), ("vs_clear", clear)):
             if v is not None:
                 r[key], r[key + "_low"], r[key + "_high"] = v
         return r
@@ -462,6 +462,27 @@ def _sensor_rows() -> list[dict]:
             ("2.0", "-3.5", "7.5"),
             ("-46.75", "-50", "-40"),
         ),
+    ]
+
+
+def _buried_rows() -> list[dict]:
+    """:func:`_sensor_rows` and the sonar's cells with the pipe half buried (``vs_clear`` filled)."""
+    from pipefollow.experiments.results_pages.closed_loop_sensors import NEED
+
+    def row(controller, label, mean, same, ideal, clear):
+        r = dict.fromkeys(NEED, "")
+        r |= {"suite": "heldout", "sensor": "sonar", "water": "half-buried", "controller": controller,
+              "label": label, "n_pipes": "100", "mean_return": mean, "ci95_low": "-1", "ci95_high": "1",
+              "success_rate": "0.5", "pipe_in_view": "0.9", "turned_back": "0",
+              "lost_pipes": "1"}  # fmt: skip
+        for key, v in (("vs_same", same), ("vs_ideal", ideal), ("vs_clear", clear)):
+            if v is not None:
+                r[key], r[key + "_low"], r[key + "_high"] = v
+        return r
+
+    return _sensor_rows() + [
+        row("heuristic", "heuristic", "-95.0", None, ("-53.75", "-60", "-45"), ("-5.0", "-9.0", "-1.5")),
+        row("ppo", "PPO", "-86.0", ("9.0", "4", "14"), ("-44.75", "-50", "-40"), ("2.0", "-1.0", "5.0")),
     ]
 
 
@@ -496,6 +517,30 @@ def test_the_sensor_section_tables_a_synthetic_csv(tmp_path):
     assert "of 2 learned or LOS cells:\n  1 better (interval above 0), 0 worse" in text
     assert f"`heldout`: sonar {MINUS}48.8" in text
     assert "ideal camera: PPO (6.5); sonar: PPO (" + MINUS + "88.0)" in text
+
+
+def test_the_sensor_section_sets_each_water_against_the_same_controller_in_clear_water(tmp_path):
+    from pipefollow.experiments.results_pages.closed_loop_sensors import SOURCE, section
+
+    _write_rows(tmp_path / SOURCE, _buried_rows())
+    text = section(tmp_path)
+    costs = markdown_tables(text)["`heldout`: against the same controller in clear water"][0]
+    # one row per controller in each water but clear; no column for the ideal camera (any water)
+    rows = [(r["water"], r["controller"]) for r in costs]
+    assert rows == [("half buried", "heuristic"), ("half buried", "PPO")]
+    assert list(costs[0]) == ["water", "controller", "sonar"]
+    assert costs[0]["sonar"] == f"**{MINUS}5.0 [{MINUS}9.0, {MINUS}1.5]**"  # below 0: worse half buried
+    assert costs[1]["sonar"] == f"+2.0 [{MINUS}1.0, +5.0]"  # undecided
+    assert "of 2 cells: 1 worse half buried (interval below 0),\n  0 better, the rest undecided" in text
+    # without a fused cell the fused count says so
+    assert "through the fused sensor —." in text
+
+
+def test_a_clear_water_table_has_no_third_table(tmp_path):
+    from pipefollow.experiments.results_pages.closed_loop_sensors import SOURCE, section
+
+    _write_rows(tmp_path / SOURCE, _sensor_rows())
+    assert "against the same controller in clear water" not in section(tmp_path)
 
 
 def test_the_sensor_section_refuses_a_table_of_another_script(tmp_path):

@@ -5,7 +5,8 @@ Source: ``docs/vision/closed_loop_sensors/table.csv`` (``examples/closed_loop_ta
 suite (water ``any``). Per suite two tables with a row per water and controller and a column per
 sensor: the mean return with the success rate and the lost pipes, and the paired difference to the
 heuristic through the same sensor in the same water (the heuristic's own row: to the heuristic on
-the ideal camera). A difference whose 95 % interval excludes 0 is bold.
+the ideal camera); and for every water but clear, the paired difference to the same controller
+through the same sensor in clear water. A difference whose 95 % interval excludes 0 is bold.
 """
 
 from __future__ import annotations
@@ -25,10 +26,11 @@ SENSORS = {  # the CSV's sensor → the column's head
 }
 WATERS = {"clear": "clear", "moderate": "moderate", "turbid": "turbid", "half-buried": "half buried"}
 ANY_WATER = "any"
+CLEAR = "clear"  # the water the others are compared with (``vs_clear``)
 NEED = (
     "suite", "sensor", "water", "controller", "label", "n_pipes", "mean_return", "ci95_low", "ci95_high",
     "success_rate", "pipe_in_view", "turned_back", "lost_pipes", "vs_same", "vs_same_low", "vs_same_high",
-    "vs_ideal", "vs_ideal_low", "vs_ideal_high",
+    "vs_ideal", "vs_ideal_low", "vs_ideal_high", "vs_clear", "vs_clear_low", "vs_clear_high",
 )  # fmt: skip
 
 TEXT = """\
@@ -49,12 +51,17 @@ water: its column repeats in every water.
 The first table of each suite: mean return (success, pipes lost: in view at < 80 % of the
 decisions). The second: each controller against **the heuristic through the same sensor in the
 same water** (paired per pipe, 95 % bootstrap interval; **bold**: the interval excludes 0); the
-heuristic's own rows against the heuristic on the ideal camera (the second reference).
+heuristic's own rows against the heuristic on the ideal camera (the second reference). The third:
+each controller in murky water or with the pipe half buried against **the same controller through
+the same sensor in clear water** (paired per pipe): what the water, or the sand, costs it.
 `pipefollow benchmark --sensor S --camera C --water W` prints both references for one cell.
 
 * **Against the heuristic through the same sensor**, of {n_cells} learned or LOS cells:
   {n_better} better (interval above 0), {n_worse} worse (below 0), the rest undecided.
 * **The heuristic's loss to the ideal camera** (mean, over the waters; per suite): {heuristic_loss}.
+* **With the pipe half buried against clear water** (the same controller through the same sensor,
+  paired per pipe), of {n_buried} cells: {buried_worse} worse half buried (interval below 0),
+  {buried_better} better, the rest undecided; through the fused sensor {fused_buried}.
 * **The best controller per sensor** (the highest mean return over the suites and waters):
   {best}.
 
@@ -114,10 +121,19 @@ def suite_tables(rows: Sequence[dict], suite: str) -> str:
          *(diff(get(s, w, c)) for s in sensors))
         for w in waters for c in controllers
     ]  # fmt: skip
-    return (
+    others = [s for s in sensors if s != "ideal"]  # the ideal camera sees through any water
+    costs = [
+        (WATERS[w], labels[c], *(_diff(r, "vs_clear") if (r := get(s, w, c)) else "·" for s in others))
+        for w in waters if w != CLEAR for c in controllers
+    ]  # fmt: skip
+    text = (
         f"### `{suite}`: mean return (success, pipes lost)\n\n{table(head, returns)}\n\n"
         f"### `{suite}`: against the heuristic through the same sensor\n\n{table(head, diffs)}"
     )
+    if costs and others:
+        head3 = ("water", "controller", *(SENSORS[s] for s in others))
+        text += f"\n\n### `{suite}`: against the same controller in clear water\n\n{table(head3, costs)}"
+    return text
 
 
 def section(docs: Path) -> str:
@@ -140,6 +156,13 @@ def section(docs: Path) -> str:
             if v:
                 parts.append(f"{SENSORS[sensor]} {num(sum(v) / len(v), 1, True)}")
         loss.append(f"`{s}`: " + ", ".join(parts))
+    buried = [r for r in rows if r["water"] == "half-buried" and r["vs_clear"] != ""]
+    fused = []
+    for s in suites:
+        cells = [r for r in buried if (r["suite"], r["sensor"]) == (s, "fused")]
+        if cells:
+            n_worse = sum(1 for r in cells if float(r["vs_clear_high"]) < 0.0)
+            fused.append(f"`{s}` {n_worse} of {len(cells)} worse")
     best = []
     labels = {r["controller"]: r["label"] for r in rows}
     for sensor in SENSORS:
@@ -159,6 +182,10 @@ def section(docs: Path) -> str:
         n_better=better,
         n_worse=worse,
         heuristic_loss="; ".join(loss) or "—",
+        n_buried=len(buried),
+        buried_worse=sum(1 for r in buried if float(r["vs_clear_high"]) < 0.0),
+        buried_better=sum(1 for r in buried if float(r["vs_clear_low"]) > 0.0),
+        fused_buried="; ".join(fused) or "—",
         best="; ".join(best),
         tables="\n\n".join(suite_tables(rows, s) for s in suites),
     )
