@@ -422,21 +422,23 @@ def test_a_stored_provenance_file_is_cited_on_the_page(tmp_path):
 # The closed-loop table of every sensor (examples/closed_loop_table.py's CSV)
 
 
-def _sensor_rows() -> list[dict]:
-    """A small table as examples/closed_loop_table.py writes it: one suite, two sensors, one water."""
+def _sensor_row(sensor, water, controller, label, mean, success, lost, same=None, ideal=None, clear=None):
+    """One row of ``heldout`` as examples/closed_loop_table.py writes it; differences (mean, low, high)."""
     from pipefollow.experiments.results_pages.closed_loop_sensors import NEED
 
-    def row(sensor, water, controller, label, mean, success, lost, same=None, ideal=None, clear=None):
-        r = dict.fromkeys(NEED, "")
-        r |= {"suite": "heldout", "sensor": sensor, "water": water, "controller": controller, "label": label,
-              "n_pipes": "100", "mean_return": mean, "ci95_low": "-1", "ci95_high": "1",
-              "success_rate": success, "pipe_in_view": "0.9", "turned_back": "0",
-              "lost_pipes": lost}  # fmt: skip
-        for key, v in (("vs_same", same), ("vs_ideal", ideal), ("vs_clear", clear)):
-            if v is not None:
-                r[key], r[key + "_low"], r[key + "_high"] = v
-        return r
+    r = dict.fromkeys(NEED, "")
+    r |= {"suite": "heldout", "sensor": sensor, "water": water, "controller": controller, "label": label,
+          "n_pipes": "100", "mean_return": mean, "ci95_low": "-1", "ci95_high": "1",
+          "success_rate": success, "pipe_in_view": "0.9", "turned_back": "0", "lost_pipes": lost}  # fmt: skip
+    for key, v in (("vs_same", same), ("vs_ideal", ideal), ("vs_clear", clear)):
+        if v is not None:
+            r[key], r[key + "_low"], r[key + "_high"] = v
+    return r
 
+
+def _sensor_rows() -> list[dict]:
+    """A small table as examples/closed_loop_table.py writes it: one suite, two sensors, one water."""
+    row = _sensor_row
     return [
         row("ideal", "any", "heuristic", "heuristic", "-41.25", "0.82", "0"),
         row(
@@ -467,18 +469,9 @@ def _sensor_rows() -> list[dict]:
 
 def _buried_rows() -> list[dict]:
     """:func:`_sensor_rows` and the sonar's cells with the pipe half buried (``vs_clear`` filled)."""
-    from pipefollow.experiments.results_pages.closed_loop_sensors import NEED
 
     def row(controller, label, mean, same, ideal, clear):
-        r = dict.fromkeys(NEED, "")
-        r |= {"suite": "heldout", "sensor": "sonar", "water": "half-buried", "controller": controller,
-              "label": label, "n_pipes": "100", "mean_return": mean, "ci95_low": "-1", "ci95_high": "1",
-              "success_rate": "0.5", "pipe_in_view": "0.9", "turned_back": "0",
-              "lost_pipes": "1"}  # fmt: skip
-        for key, v in (("vs_same", same), ("vs_ideal", ideal), ("vs_clear", clear)):
-            if v is not None:
-                r[key], r[key + "_low"], r[key + "_high"] = v
-        return r
+        return _sensor_row("sonar", "half-buried", controller, label, mean, "0.5", "1", same, ideal, clear)
 
     return _sensor_rows() + [
         row("heuristic", "heuristic", "-95.0", None, ("-53.75", "-60", "-45"), ("-5.0", "-9.0", "-1.5")),
