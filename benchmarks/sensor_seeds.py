@@ -7,18 +7,19 @@ Usage: ``python benchmarks/sensor_seeds.py --controllers heuristic los cacla=FIL
 The closed-loop table (``examples/closed_loop_table.py``) measures every cell at noise seed 0 with
 one policy a learner. This runs a controller (a built-in name or a policy file, as ``pipefollow
 benchmark --controller`` takes it; ``NAME=FILE`` labels a file, and files given the same NAME are
-one learner's training seeds) on each suite's pipes, 60 s each, through ``--sensor`` in
-``--water`` and on the ideal camera, with the same noise (the benchmark's generator of pipe
-``k``: ``SeedSequence([seed, k])``), at every noise seed of ``--seeds``. One line per controller
-and suite: the loss of mean return against its own ideal camera in each run (each policy at each
-noise seed: the mean of the per-pipe differences), their mean and range, the pipes lost (in view
-< 0.8 where its ideal camera keeps them) summed over the runs, and in how many runs the loss is at
-most ``--goal`` (issue 23's 25 a pipe in turbid water).
+one learner's training seeds) on each suite's pipes, 60 s each, through ``--sensor`` in ``--water``
+(``--sensor sonar``: with the ideal camera) and on the ideal camera, with the same noise (the
+benchmark's generator of pipe ``k``: ``SeedSequence([seed, k])``), at every noise seed of
+``--seeds``. One line per controller and suite: the loss of mean return against its own ideal camera
+in each run (each policy at each noise seed: the mean of the per-pipe differences), their mean and
+range, the pipes lost (in view < 0.8 where its ideal camera keeps them) summed over the runs, and in
+how many runs the loss is at most ``--goal`` (issue 23's 25 a pipe in turbid water).
 """
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 
 def losses(spec: str, suite_name: str, camera: dict, seeds, n_pipes: int | None) -> tuple[list, int]:
@@ -52,7 +53,7 @@ def main() -> None:
     ap.add_argument("--goal", type=float, default=25.0, help="the loss a pipe a run must not exceed")
     args = ap.parse_args()
     camera = {
-        "camera": args.camera,
+        "camera": "ideal" if args.sensor == "sonar" else args.camera,  # the sonar alone: no camera image
         "sensor": args.sensor,
         "water": {"preset": args.water, "burial": args.burial},
     }
@@ -61,7 +62,7 @@ def main() -> None:
     print("|---|---|---|---|---|---|")
     groups: dict[str, list[str]] = {}  # label → its policies (a learner's training seeds)
     for item in args.controllers:
-        label, _, spec = item.rpartition("=")
+        label, _, spec = ("", "", item) if Path(item).exists() else item.rpartition("=")
         groups.setdefault(label or spec, []).append(spec)
     for label, specs in groups.items():
         for suite in args.suites:

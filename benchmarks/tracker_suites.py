@@ -1,11 +1,12 @@
-"""The heuristic through the vision camera's tracker against the ideal camera, suite by suite.
+"""The heuristic through the tracked camera (or another sensor) against the ideal camera, suite by suite.
 
 Usage: ``python benchmarks/tracker_suites.py [--suites heldout heldout-hard heldout-sharp]
 [--pipes N] [--camera vision] [--sensor camera] [--water clear] [--burial 0] [--noise-seed 0]``
 
-Each suite's pipes run one 60-s episode each with the heuristic on ``--camera`` (as
-``pipefollow benchmark --controller heuristic --suite S --camera vision --water clear`` runs
-them) and on the ideal camera, with the same noise. One line per suite: the loss of return
+Each suite's pipes run one 60-s episode each with the heuristic on ``--camera`` through
+``--sensor`` (as ``pipefollow benchmark --controller heuristic --suite S --camera vision --sensor
+camera --water clear --burial 0`` runs them; ``--sensor sonar`` takes the ideal camera, as the
+environment requires) and on the ideal camera, with the same noise. One line per suite: the loss of return
 against the ideal camera (mean of the per-pipe differences, bootstrap CI), the pipes lost
 (pipe in view < 0.8) that the ideal camera keeps, the episodes that turned back, and the success
 rates. A training family's first ``--pipes`` (100) pipes serve to choose settings (the held-out
@@ -36,6 +37,7 @@ def judge(
         suite = Suite(suite_name, suite_name, TRAIN_STREAM, None, "the level's training-stream pipes")
     else:
         suite = get_suite(suite_name)
+    camera = "ideal" if sensor == "sonar" else camera  # the sonar alone: no camera image
     cam = {"camera": camera, "sensor": sensor, "water": {"preset": water, "burial": burial}}
     kw = {"controller": "heuristic", "n_pipes": n_pipes, "noise_seed": noise_seed}
     run = benchmark(Heuristic(), suite, camera=cam, **kw)

@@ -33,7 +33,8 @@ Resumable: every cell (suite, sensor, water, controller) is stored in ``--cells`
 benchmark's imports) and of its policy file; a run skips
 the cells stored by the same code and policy and recomputes the others, so after a code change it
 recomputes everything without being told. ``--suites``, ``--sensors``, ``--waters`` and
-``--controllers`` restrict what is computed (the heuristic's reference cells are added); the CSV
+``--controllers`` restrict what is computed (the reference cells are added: the heuristic's, and
+each controller's in clear water); the CSV
 always holds every row whose cells the store has for today's code. ``--jobs N`` runs N cells at a
 time in separate processes.
 
@@ -261,6 +262,8 @@ def main() -> None:
             for water in waters_of(sensor, waters):
                 for c in dict.fromkeys(["heuristic", *controllers]):  # the reference first
                     wanted.append((suite, sensor, water, c))
+                    if water not in (CLEAR_WATER, ANY_WATER):  # vs_clear's reference
+                        wanted.append((suite, sensor, CLEAR_WATER, c))
             wanted += [(suite, "ideal", ANY_WATER, "heuristic")]  # the second reference
     wanted = list(dict.fromkeys(wanted))
     jobs = []

@@ -21,12 +21,12 @@ def table():
     return module
 
 
-def _store(table, cells: Path, suite, sensor, water, returns: np.ndarray, code: str) -> None:
+def _store(table, cells: Path, suite, sensor, water, returns: np.ndarray, code: str, c="heuristic") -> None:
     stats = np.zeros((len(returns), len(table.ep.STAT_NAMES)))
     stats[:, table.ep.STAT_RETURN] = returns
     stats[:, table.ep.STAT_IN_VIEW] = 1.0
-    cell = {"stamp": table.stamp_of("heuristic", code), "stats": stats.tolist()}
-    path = table.cell_path(cells, suite, sensor, water, "heuristic")
+    cell = {"stamp": table.stamp_of(c, code), "stats": stats.tolist()}
+    path = table.cell_path(cells, suite, sensor, water, c)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(cell), encoding="utf-8")
 
@@ -44,6 +44,15 @@ def test_a_half_buried_row_is_paired_with_the_same_controller_in_clear_water(tab
     assert row["vs_clear"] == pytest.approx(np.mean(buried - clear))
     assert row["vs_clear_low"] <= row["vs_clear"] <= row["vs_clear_high"] < 0.0  # worse at every pipe
     assert row["vs_ideal"] == pytest.approx(np.mean(buried - clear - 5.0))
+    # another controller is paired with its own clear-water cell, not the heuristic's
+    los_clear = clear + rng.normal(0.0, 5.0, len(pipes))
+    _store(table, tmp_path, "heldout", "fused", "clear", los_clear, code, "los")
+    _store(table, tmp_path, "heldout", "fused", "half-buried", los_clear - 1.0, code, "los")
+    los = table.row_of(
+        tmp_path, "heldout", "fused", "half-buried", "los", specs | {"los": "los"}, code, pipes
+    )
+    assert los["vs_clear"] == pytest.approx(-1.0)
+    assert los["vs_same"] == pytest.approx(np.mean(los_clear - 1.0 - buried))
     clear_row = table.row_of(tmp_path, "heldout", "fused", "clear", "heuristic", specs, code, pipes)
     assert clear_row["vs_clear"] is None and clear_row["vs_clear_low"] is None
     # a cell of other code is not read: the clear-water reference is missing, the row has none

@@ -527,6 +527,15 @@ def test_the_sensor_section_sets_each_water_against_the_same_controller_in_clear
     assert "of 2 cells: 1 worse half buried (interval below 0),\n  0 better, the rest undecided" in text
     # without a fused cell the fused count says so
     assert "through the fused sensor —." in text
+    fused = _sensor_row(
+        "fused", "half-buried", "ppo", "PPO", "-80.0", "0.6", "2", None, None, ("-3.0", "-6.0", "-0.5")
+    )
+    _write_rows(tmp_path / SOURCE, [*_buried_rows(), fused])
+    text = section(tmp_path)
+    assert (
+        "of 3 cells: 2 worse half buried" in text
+        and "through the fused sensor `heldout` 1 of 1 worse." in text
+    )
 
 
 def test_a_clear_water_table_has_no_third_table(tmp_path):

@@ -2,7 +2,7 @@
 
 Source: ``docs/vision/closed_loop_sensors/table.csv`` (``examples/closed_loop_table.py``, with its
 ``provenance.json``): one row per suite × sensor × water × controller, the ideal camera once per
-suite (water ``any``). Per suite two tables with a row per water and controller and a column per
+suite (water ``any``). Per suite three tables with a row per water and controller and a column per
 sensor: the mean return with the success rate and the lost pipes, and the paired difference to the
 heuristic through the same sensor in the same water (the heuristic's own row: to the heuristic on
 the ideal camera); and for every water but clear, the paired difference to the same controller
@@ -54,7 +54,8 @@ same water** (paired per pipe, 95 % bootstrap interval; **bold**: the interval e
 heuristic's own rows against the heuristic on the ideal camera (the second reference). The third:
 each controller in murky water or with the pipe half buried against **the same controller through
 the same sensor in clear water** (paired per pipe): what the water, or the sand, costs it.
-`pipefollow benchmark --sensor S --camera C --water W` prints both references for one cell.
+`pipefollow benchmark --sensor S --camera C --water W` prints the second table's two references for one
+cell. In the third table the sonar's column in moderate and turbid water is 0: turbidity does not reach it.
 
 * **Against the heuristic through the same sensor**, of {n_cells} learned or LOS cells:
   {n_better} better (interval above 0), {n_worse} worse (below 0), the rest undecided.
@@ -97,7 +98,7 @@ def _cell(r: dict | None) -> str:
 
 
 def suite_tables(rows: Sequence[dict], suite: str) -> str:
-    """The two tables of one suite (module docstring)."""
+    """The tables of one suite (module docstring): the third only with a water other than clear."""
     at = {(r["sensor"], r["water"], r["controller"]): r for r in rows if r["suite"] == suite}
     controllers = list(dict.fromkeys(r["controller"] for r in rows if r["suite"] == suite))
     labels = {r["controller"]: r["label"] for r in rows}
