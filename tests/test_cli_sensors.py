@@ -138,3 +138,8 @@ def test_train_ppo_observes_through_the_camera(tmp_path, options, camera, sensor
     seen = record["observed_through"]
     assert (seen["camera"], seen.get("sensor", "camera")) == (camera, sensor)
     assert seen["water"]["turbidity"] == turbidity
+    # the policy file records it too, as the paper's learners' files do (training.policy_files)
+    with np.load(tmp_path / "o" / "policy.npz") as f:
+        through = json.loads(json.loads(str(f["metadata"]))["trained_through"])
+    assert (through["camera"], through["sensor"]) == (camera, sensor)
+    assert through["water"]["turbidity"] == turbidity

@@ -349,11 +349,12 @@ def train_to_folder(
 
     Returns the summary: ``algorithm``, ``policy``, ``hyperparameters`` (its file),
     ``learning_curve``, ``returns`` (of the finished training episodes), ``steps``, ``wall_s``.
-    ``camera`` (:func:`train_deep`) is recorded in ``hyperparameters.json`` (the water as its fields).
+    ``camera`` (:func:`train_deep`) is recorded in ``hyperparameters.json`` (the water as its fields) and
+    in the policy file's metadata (``trained_through``, as the paper's learners record it).
     """
     from pipefollow.files.atomic import write_text_atomic
     from pipefollow.training.outputs import csv_text
-    from pipefollow.training.policy_files import save_policy
+    from pipefollow.training.policy_files import save_policy, trained_through
 
     out = Path(out)
     run = train_deep(
@@ -378,7 +379,9 @@ def train_to_folder(
         torch_version=torch.__version__,
         **({"observed_through": seen} if seen else {}),
     )
-    policy_path = save_policy(run.policy, out / "policy.npz", hyperparameters=run.hyperparameters, **record)
+    through = {"trained_through": trained_through(camera)} if camera else {}  # as the paper's learners' files
+    hyper = run.hyperparameters
+    policy_path = save_policy(run.policy, out / "policy.npz", hyperparameters=hyper, **record, **through)
     curve = out / "learning_curve.csv"
     write_text_atomic(curve, csv_text(["episode", "return"], enumerate(run.returns)))
     return {

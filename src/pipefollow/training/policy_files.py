@@ -72,6 +72,18 @@ def save_policy(
     return path
 
 
+def trained_through(camera: dict) -> str:
+    """The camera, sensor and water a run trained through, as the JSON its policy file records.
+
+    :func:`~pipefollow.perception.camera.camera_record`, with the sensor named also when it is the
+    camera alone.
+    """
+    from pipefollow.perception.camera import camera_record
+
+    record = {"sensor": camera.get("sensor", "camera"), **camera_record(camera)}
+    return json.dumps(record, sort_keys=True)
+
+
 def _header(algorithm: str, metadata: dict) -> dict[str, np.ndarray]:
     return {
         "format": np.array(FORMAT),

@@ -131,20 +131,6 @@ def option_differences(
     return out
 
 
-def trained_through(camera: dict) -> str:
-    """The camera, sensor and water a run trained through, as the JSON its policy file records.
-
-    :func:`~pipefollow.perception.camera.camera_record`, with the sensor named also when it is the
-    camera alone.
-    """
-    import json
-
-    from pipefollow.perception.camera import camera_record
-
-    record = {"sensor": camera.get("sensor", "camera"), **camera_record(camera)}
-    return json.dumps(record, sort_keys=True)
-
-
 def write_tensorboard(folder, stats: np.ndarray, sigmas: np.ndarray) -> None:
     """Per-episode return, pipe in view, progress, time lost and σ (``sigmas``: the schedule trained with)."""
     from pipefollow.files.tensorboard import write_scalars
@@ -245,6 +231,7 @@ def train_into(
     from pipefollow.files.output_paths import remove_empty_folders
     from pipefollow.sim.pipe_names import resolve_training
     from pipefollow.training.outputs import write_training_outputs
+    from pipefollow.training.policy_files import trained_through
 
     try:
         (stats,) = train_phases(
