@@ -22,7 +22,14 @@ the frame's detection did:
   shown (ordered by the tracker's near end) instead of the tracked line (the line's smoothing);
 * ``truth-geometry``: the exact camera's piece shown whenever both see the pipe (isolates the
   geometry; what is left is "in view");
-* ``truth-in-view``: the exact camera's in-view flag (isolates the in-view decisions).
+* ``truth-in-view``: the exact camera's in-view flag (isolates the in-view decisions);
+* ``no-memory``: the tracker without its memory of the pieces it showed (``PipeTracker(memory=None)``);
+* ``map-of-detections``: a memory of the pipe the detector has found, exactly placed: each frame
+  whose detection is the exact camera's piece (its ends within 0.3 m, either way) marks that
+  piece's stretch of the pipe as seen, and where the tracker shows no pipe, the exact camera's
+  piece of the stretches seen so far (``acoustic_ceiling.SeenMap``) is shown, ordered the
+  tracked line's way (an oracle of a map the vehicle would keep of its detections; navigation's
+  errors over the few seconds of memory are millimetres: docs/decisions.md, "the navigation").
 
 It replaces ``VisionCamera._track`` in this process only (the package is not changed).
 """
@@ -34,7 +41,10 @@ import math
 
 import numpy as np
 
-MODES = ("base", "truth-detections", "truth-order", "detection-verbatim", "truth-geometry", "truth-in-view")
+MODES = (
+    "base", "truth-detections", "truth-order", "detection-verbatim", "truth-geometry", "truth-in-view",
+    "map-of-detections", "no-memory",
+)  # fmt: skip
 SAME_PIECE = 0.3  # m: a shown piece whose ends (summed) lie this near the exact camera's is the same piece
 EVENTS = ("none", "accepted", "bend", "rejected", "started", "replaced")
 
@@ -44,6 +54,32 @@ def patch(mode: str, log: list) -> None:
     from pipefollow.learners.heuristic import heuristic_action
     from pipefollow.perception import camera as cam
     from pipefollow.perception import track_step as ts
+    from pipefollow.sim import decision as sim
+    from pipefollow.sim.camera import observe
+
+    look = cam.VisionCamera.__dict__.get("_unpatched_look", cam.VisionCamera._look)
+    cam.VisionCamera._unpatched_look = look
+
+    def _look(self, s, points, cum, *args):  # each frame's: the pipe, for the map's mode
+        self._pipe = (points, cum)
+        return look(self, s, points, cum, *args)
+
+    def _map_piece(self, s, det):
+        """The map's piece in view (far, near ends) after marking a right detection's stretch, or None."""
+        from acoustic_ceiling import SeenMap
+
+        points, cum = self._pipe
+        seen = getattr(self, "_seen_map", None)
+        if seen is None or seen.points is not points:
+            seen = self._seen_map = SeenMap(points, cum, (0.0, 0.0), 0.0, 0.6)
+        pose = s[sim.X], s[sim.Y], s[sim.PSI], s[sim.PROGRESS]
+        tv = observe(points, cum, *pose, self.camera)
+        d = (det.x1, det.y1, det.x2, det.y_near)
+        near = (tv.x2, tv.y_near, tv.x1, tv.y1)
+        if det.found and tv.in_view and min(_ends_apart(d, tv[1:5]), _ends_apart(d, near)) <= SAME_PIECE:
+            seen.mark(tv.s_near, tv.s_far)
+        v = observe(points, cum, *pose, self.camera, *seen.hidden())
+        return (v.x1, v.y1, v.x2, v.y_near) if v.in_view else None
 
     def _track(self, s, pose, det, frame=ts.CLEAR_FRAME):
         tv = self.truth
@@ -53,6 +89,8 @@ def patch(mode: str, log: list) -> None:
         elif mode == "truth-order" and found and tv.in_view:
             if _ends_apart(d, (tv.x2, tv.y_near, tv.x1, tv.y1)) < _ends_apart(d, tv[1:5]):
                 d = (d[2], d[3], d[0], d[1])
+        if mode == "no-memory":
+            self.tracker.memory = None
         out = self.tracker.step(pose, found, d, frame).copy()
         T, event = self.tracker.state, int(self.tracker.event)
         if mode == "detection-verbatim" and found and event != int(ts.REJECTED) and event != 0:
@@ -67,6 +105,11 @@ def patch(mode: str, log: list) -> None:
             out[0] = 1.0 if tv.in_view else 0.0
             if tv.in_view and not T[ts.ACTIVE]:
                 out[1:5] = (tv.x1, tv.y1, tv.x2, tv.y_near)
+        elif mode == "map-of-detections":
+            piece = _map_piece(self, s, det)
+            if not out[0] and piece is not None:
+                out[0], out[1:5] = 1.0, self.tracker.ordered(*piece)
+                out[ts.OUT_SIDE] = 1.0 if out[1] >= 0.0 else -1.0
         self._show(s, out)
         seen = out[0] != 0.0
         err, reversed_ends = math.nan, 0.0
@@ -79,6 +122,7 @@ def patch(mode: str, log: list) -> None:
         log.append((event, float(tv.in_view), float(seen), err, reversed_ends, inside))
 
     cam.VisionCamera._track = _track
+    cam.VisionCamera._look = _look if mode == "map-of-detections" else look
 
 
 def _ends_apart(a, b) -> float:

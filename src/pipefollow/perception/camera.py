@@ -266,7 +266,8 @@ class VisionCamera:
 
     def _track(self, s: np.ndarray, pose: tuple[float, float, float], det: Detection, frame: int) -> None:
         """The observation slots from the tracker fed with this frame's detection (or the fallback's)."""
-        out = self.tracker.step(pose, det.found, (det.x1, det.y1, det.x2, det.y_near), frame)
+        own = det is self.detection  # not the fallback's (a second sensor's)
+        out = self.tracker.step(pose, det.found, (det.x1, det.y1, det.x2, det.y_near), frame, own)
         if self.aid is not None:
             out = self.aid(self.tracker)
         self._show(s, out)

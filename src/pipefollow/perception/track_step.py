@@ -110,6 +110,16 @@ def pack_params(p: TrackParams) -> np.ndarray:
 
 
 @njit(cache=True)
+def moved(x, y, dl, df, c, s):
+    """A world-fixed point ``(x, y)`` of the camera frame seen from the frame after the motion.
+
+    The motion is the navigation's ``(Δl, Δf, Δψ)`` with ``c, s = cos Δψ, sin Δψ``.
+    """
+    ex, ey = x - dl, y - df
+    return c * ex - s * ey, s * ex + c * ey
+
+
+@njit(cache=True)
 def _start(T, o, th, d, r_tt, r_td, r_dd):
     T[o], T[o + 1] = th, d
     T[o + 2], T[o + 3], T[o + 4] = r_tt, r_td, r_dd
@@ -241,12 +251,10 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, frame=CLEAR_F
         predict(T, C_TH, dl, df, dpsi, nav_var, q_theta, q_d)
     c, s = math.cos(dpsi), math.sin(dpsi)
     if T[HAS_FAR] != 0.0:  # the ends seen are points fixed in the world
-        ex, ey = T[FAR_X] - dl, T[FAR_Y] - df
-        T[FAR_X], T[FAR_Y] = c * ex - s * ey, s * ex + c * ey
+        T[FAR_X], T[FAR_Y] = moved(T[FAR_X], T[FAR_Y], dl, df, c, s)
         T[FAR_AGE] += 1.0
     if T[HAS_END] != 0.0:
-        ex, ey = T[END_X] - dl, T[END_Y] - df
-        T[END_X], T[END_Y] = c * ex - s * ey, s * ex + c * ey
+        T[END_X], T[END_Y] = moved(T[END_X], T[END_Y], dl, df, c, s)
     T[MISS] += 1.0
     T[EVENT] = NO_DETECTION
     T[HAS_NEAR] = 0.0

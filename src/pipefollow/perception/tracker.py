@@ -51,7 +51,9 @@ is lost.
 the accepted detection's (else where the line enters the view), the far end the far end beyond a
 bend while that is in view (also in frames where the detector stops at the corner), else where
 the line leaves the view or was seen to end; the in-view flag; the side to search on when it is
-out of view (towards the far end beyond a bend).
+out of view (towards the far end beyond a bend). Where the track shows no pipe, the memory of
+the pieces it showed (:mod:`pipefollow.perception.piece_memory`, moved by the same navigation)
+shows the newest one still in the footprint (``memory=None`` leaves it out).
 
 All of it is compiled (:func:`~pipefollow.perception.track_step.track_step`, one call per frame; no
 ``fastmath``); the filter and the line's geometry are :mod:`pipefollow.perception.line_ekf`'s, the
@@ -66,6 +68,7 @@ from numba import njit
 
 from pipefollow.perception.line_ekf import CHI2_1DOF_99, along, point_correct, point_innovation
 from pipefollow.perception.navigation import NAV, Navigation, NavParams
+from pipefollow.perception.piece_memory import MEMORY, MemoryParams, PieceMemory
 from pipefollow.perception.track_step import (
     ACTIVE,
     CLEAR_FRAME,
@@ -119,6 +122,7 @@ class PipeTracker:
         params: TrackParams = TRACK,
         nav: NavParams = NAV,
         dt: float = 1.0,
+        memory: MemoryParams | None = MEMORY,
     ) -> None:
         self.half_width, self.depth = float(half_width), float(depth)
         self.params = params
@@ -129,6 +133,7 @@ class PipeTracker:
         self._det = np.zeros(4)
         self._still = np.zeros(3)
         self._pose: tuple[float, float, float] | None = None
+        self.memory = None if memory is None else PieceMemory(memory, self.half_width, self.depth)
 
     def reset(self, rng: np.random.Generator, pose: tuple[float, float, float]) -> None:
         """A new episode at the true ``pose``: an empty track; the navigation's errors from ``rng``."""
@@ -140,6 +145,8 @@ class PipeTracker:
         """An empty track; the next frame is the first (no motion before it), the navigation as it is."""
         self.state[:] = new_track()
         self._pose = None
+        if self.memory is not None:
+            self.memory.reset()
 
     def step(
         self,
@@ -147,13 +154,16 @@ class PipeTracker:
         found: bool,
         det: tuple[float, float, float, float],
         frame: int = CLEAR_FRAME,
+        own: bool = True,
     ) -> np.ndarray:
         """A frame from the true ``pose`` with the detection ``det`` = (x1, y1, x2, y_near): the observation.
 
         ``frame``: what the frame was to the detector (``track_step.CLEAR_FRAME``, ``MURKY_FRAME``:
         no short piece carried longer, ``UNSEARCHED_FRAME``: ``det`` is a second sensor's and the
         line is carried :attr:`TrackParams.unsearched_misses` frames without a sighting).
-        Returns the output array (in view, x1, y1, x2, y_near, side), reused frame after frame.
+        ``own``: ``det`` is the camera's own detection (not a second sensor's): the memory keeps
+        only such pieces. Returns the output array (in view, x1, y1, x2, y_near, side), reused
+        frame after frame.
         """
         if self._pose is None:
             motion = self._still
@@ -166,6 +176,8 @@ class PipeTracker:
             self.state, found, d, motion, self.navigation.variances, self._tp,
             self.half_width, self.depth, self.out, frame,
         )  # fmt: skip
+        if self.memory is not None:
+            self.memory.step(motion, self.state[EVENT], self.out, own)
         return self.out
 
     def point(self, x: float, y: float, point_sd: float, gate: float = CHI2_1DOF_99) -> np.ndarray:
