@@ -130,7 +130,7 @@ def straight_detections(tracker, frames, offset=0.1, step=0.5):
 
 def quiet_tracker():
     nav = NavParams(dvl_sd=0.0, dvl_scale_sd=0.0, gyro_arw=0.0, gyro_bias_sd=0.0, gyro_bias_walk=0.0)
-    t = PipeTracker(nav=nav)
+    t = PipeTracker(nav=nav, memory=None)  # the line alone (its memory: tests/test_piece_memory.py)
     t.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
     t.start()
     return t
@@ -209,7 +209,7 @@ def test_a_bend_ends_the_line_at_its_corner_and_the_search_turns_towards_the_far
 @pytest.mark.parametrize("edge_misses", [2, 5])
 def test_a_short_piece_at_the_views_corner_is_carried_through_edge_misses_frames(edge_misses):
     nav = NavParams(dvl_sd=0.0, dvl_scale_sd=0.0, gyro_arw=0.0, gyro_bias_sd=0.0, gyro_bias_walk=0.0)
-    t = PipeTracker(nav=nav, params=ts.TRACK._replace(edge_misses=edge_misses))
+    t = PipeTracker(nav=nav, params=ts.TRACK._replace(edge_misses=edge_misses), memory=None)
     t.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
     pose = (0.0, 0.0, 0.0)  # the vehicle holds still: the piece stays where it is
     # the pipe crosses the footprint's lower right corner: 0.5 m of it in view, from (0.6, 0) to (1, 0.3)
@@ -218,8 +218,15 @@ def test_a_short_piece_at_the_views_corner_is_carried_through_edge_misses_frames
     assert out[ts.OUT_IN_VIEW] == 1.0
     seen = [t.step(pose, False, (0.0, 0.0, 0.0, 0.0))[ts.OUT_IN_VIEW] for _ in range(7)]
     assert seen == [1.0] * edge_misses + [0.0] * (7 - edge_misses)
-    # a long piece (the pipe straight ahead, 3 m in view) is lost after max_misses frames whatever edge_misses
+    # with its memory the tracker goes on showing the piece it took, still in view, once the line is lost
     t = PipeTracker(nav=nav, params=ts.TRACK._replace(edge_misses=edge_misses))
+    t.reset(np.random.default_rng(0), pose)
+    for _ in range(3):
+        t.step(pose, True, (1.0, 0.3, 0.6, 0.0))
+    shown = [t.step(pose, False, (0.0, 0.0, 0.0, 0.0))[:5].copy() for _ in range(7)]
+    np.testing.assert_allclose(shown[-1], [1.0, 1.0, 0.3, 0.6, 0.0], atol=0.02)
+    # a long piece (the pipe straight ahead, 3 m in view) is lost after max_misses frames whatever edge_misses
+    t = PipeTracker(nav=nav, params=ts.TRACK._replace(edge_misses=edge_misses), memory=None)
     t.reset(np.random.default_rng(0), pose)
     for _ in range(3):
         t.step(pose, True, (0.0, 3.0, 0.0, 0.0))
