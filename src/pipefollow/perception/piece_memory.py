@@ -43,7 +43,9 @@ class MemoryParams(NamedTuple):
 
     size: int = 20  # pieces kept, the newest first
     seconds: float = 20.0  # frames (1 s each) after which a piece is forgotten
-    min_piece: float = 0.05  # m: a remembered piece crossing the footprint along less than this is not shown
+    # m: a remembered piece crossing the footprint along less than this is not shown; 0: any crossing, as
+    # the exact camera counts a piece in view
+    min_piece: float = 0.0
 
 
 MEMORY = MemoryParams()
