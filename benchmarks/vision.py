@@ -71,12 +71,13 @@ def reset_rows(gym, pipe, ideal_step, repeats: int) -> list[tuple[str, float, st
 
 
 def tracker_rows(repeats: int) -> list[tuple[str, float, str]]:
-    """The tracker per decision: the compiled step alone and with the navigation's draws (Python)."""
+    """The tracker per decision: the compiled step; with the navigation and the memory; without the memory."""
     from pipefollow.perception.track_step import track_step
     from pipefollow.perception.tracker import PipeTracker
 
-    t = PipeTracker()
+    t, line = PipeTracker(), PipeTracker(memory=None)
     t.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
+    line.reset(np.random.default_rng(0), (0.0, 0.0, 0.0))
     k = iter(range(10**9))
     motion, det = np.array([0.0, 0.5, 0.01]), np.array([0.1, 3.0, 0.05, 0.0])
 
@@ -88,14 +89,20 @@ def tracker_rows(repeats: int) -> list[tuple[str, float, str]]:
         i = next(k)
         t.step((0.5 * i, 0.0, 0.01 * i), i % 7 != 0, (0.1, 3.0, 0.05, 0.0))
 
-    compiled(), whole()
-    tc, tw = [], []
+    def alone():
+        i = next(k)
+        line.step((0.5 * i, 0.0, 0.01 * i), i % 7 != 0, (0.1, 3.0, 0.05, 0.0))
+
+    compiled(), whole(), alone()
+    tc, tw, ta = [], [], []
     for _ in range(repeats):
         tc += blocks(compiled, 1, 2000)
         tw += blocks(whole, 1, 2000)
+        ta += blocks(alone, 1, 2000)
     return [
         ("tracker, compiled step (track_step)", statistics.median(tc), "≤ 0.02 ms"),
-        ("tracker, one decision (navigation + track_step)", statistics.median(tw), "≤ 0.02 ms"),
+        ("tracker, one decision (navigation + track_step + memory)", statistics.median(tw), "≤ 0.02 ms"),
+        ("tracker, one decision without its memory", statistics.median(ta), "—"),
     ]
 
 
