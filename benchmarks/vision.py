@@ -102,7 +102,7 @@ def tracker_rows(repeats: int) -> list[tuple[str, float, str]]:
     return [
         ("tracker, compiled step (track_step)", statistics.median(tc), "≤ 0.02 ms"),
         ("tracker, one decision (navigation + track_step + memory)", statistics.median(tw), "≤ 0.02 ms"),
-        ("tracker, one decision without its memory", statistics.median(ta), "—"),
+        ("tracker, one decision without its memory", statistics.median(ta), ""),
     ]
 
 
