@@ -8,8 +8,8 @@ stages in ``detector_edges``, its legs in ``detector_legs``, its second look at 
 walks along the pipe's edges to the ends of the visible piece (and holds the least-squares edge
 fit both use), and ``camera`` joins them to the simulation's observation slots. ``tracker``
 follows the pipe over the frames (its compiled step in ``track_step``, its filter in ``line_ekf``,
-its memory of the pieces shown in ``piece_memory``, the vehicle's motion from ``navigation``). ``sonar`` renders
-a multibeam profiler's ping, ``sonar_detect`` finds the pipe in it and ``sonar_track`` turns
+its memory of the pieces shown in ``piece_memory``, the vehicle's motion from ``navigation``).
+``sonar`` renders a multibeam profiler's ping, ``sonar_detect`` finds the pipe in it and ``sonar_track`` turns
 successive detections into the camera's observation; ``sensor`` gives the environments camera, sonar or both.
 """
 
