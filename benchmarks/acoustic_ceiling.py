@@ -167,11 +167,7 @@ def patch(
         return view
 
     def _as_output_own(self, view, tracker):
-        shown = self._shown
-        shown[OUT_IN_VIEW], shown[S.OUT_X1], shown[S.OUT_Y1] = 1.0, view.x1, view.y1
-        shown[S.OUT_X2], shown[S.OUT_Y_NEAR] = view.x2, view.y_near
-        shown[S.OUT_SIDE] = 1.0 if view.x1 >= 0.0 else -1.0
-        return shown
+        return self._shown_piece(view.x1, view.y1, view.x2, view.y_near)
 
     def _as_output_tracker(self, view, tracker):
         return tracker.out if tracker.out[OUT_IN_VIEW] != 0.0 else as_output(self, view, tracker)

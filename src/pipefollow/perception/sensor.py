@@ -191,7 +191,10 @@ class SonarSensors:
         the pipe's way; the view's own far end is the one further forward, which after a bend
         that leaves the pipe across the track is as likely the way back.
         """
-        x1, y1, x2, y_near = tracker.ordered(view.x1, view.y1, view.x2, view.y_near)
+        return self._shown_piece(*tracker.ordered(view.x1, view.y1, view.x2, view.y_near))
+
+    def _shown_piece(self, x1: float, y1: float, x2: float, y_near: float) -> np.ndarray:
+        """A piece in view (far ``x1, y1``, near ``x2, y_near``) as a tracker's output, its side ``x1``'s."""
         shown = self._shown
         shown[OUT_IN_VIEW], shown[OUT_X1], shown[OUT_Y1] = 1.0, x1, y1
         shown[OUT_X2], shown[OUT_Y_NEAR] = x2, y_near
