@@ -75,7 +75,7 @@ class ImagingSonar(NamedTuple):
     n_beams: int = 128  # beams over the horizontal aperture, [8, 1024]
     fov_deg: float = 130.0  # horizontal aperture (°), (0, 170]
     vertical_deg: float = 20.0  # vertical aperture, −3 dB full width (°), (0, 60]
-    tilt_deg: float = 45.0  # the vertical beam's axis below the horizontal (°), (0, 90)
+    tilt_deg: float = 45.0  # the vertical beam's axis below the horizontal (°), (0, 89]
     altitude: float = 2.0  # transducer height above the seabed (m), (0.2, 50]
     along: float = 0.0  # forward position of the transducer in camera metres, [-5, 5]
     range_min: float = 2.2  # the image's nearest slant range (m), (0, 100)
@@ -90,7 +90,7 @@ _RANGES = {  # field: (low, high, low end closed)
     "n_beams": (8, 1024, True),
     "fov_deg": (0.0, 170.0, False),
     "vertical_deg": (0.0, 60.0, False),
-    "tilt_deg": (0.0, 90.0, False),
+    "tilt_deg": (0.0, 89.0, False),
     "altitude": (0.2, 50.0, False),
     "along": (-5.0, 5.0, True),
     "range_min": (0.0, 100.0, False),
@@ -338,7 +338,7 @@ def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, b
             if jb < 0 or jb >= nb:
                 continue
             slope = slopes[q]
-            # the surface's normal (-slope, 1)/√(1+slope²) against the direction to the transducer (-ρ, drop)/r
+            # the surface's normal (-slope, 1)/√(1+slope²) against the way to the transducer (-ρ, drop)/r
             norm = math.sqrt(1.0 + slope * slope)
             cos_i = (slope * rho + drop) / (norm * r)
             if cos_i <= 0.0:

@@ -41,24 +41,16 @@ from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, clip_segment
 from pipefollow.sim.disturbance import NO_BURIAL
 
 MEMORY = 8  # pings whose pieces the map keeps
-RULES = ("ordered", "chain")  # how the map shows the pipe in the footprint (module docstring)
-RULE = "ordered"
-SAME_LINE_DEG = 30.0  # "ordered": a piece within this of the one before ...
+SAME_LINE_DEG = 30.0  # a piece within this of the one before ...
 SAME_LINE_M = 0.25  # ... and its middle this near its line keeps its direction
-LINK = 0.3  # m: a piece continues the chain if it passes this near its far end ...
-MIN_STEP = 0.1  # m: ... and takes it at least this much further ...
-BACK = math.cos(math.radians(160.0))  # ... not turning back by more than 160°
 
 
 class ImagingTrack:
     """The map of the pieces found (module docstring); :meth:`update` adds one, :meth:`view` shows it."""
 
-    def __init__(self, memory: int = MEMORY, camera: CameraParams = PAPER_CAMERA, rule: str = RULE) -> None:
+    def __init__(self, memory: int = MEMORY, camera: CameraParams = PAPER_CAMERA) -> None:
         if isinstance(memory, bool) or not isinstance(memory, int) or memory < 1:
             raise ValueError(f"memory must be a whole number of pings ≥ 1, got {memory!r}")
-        if rule not in RULES:
-            raise ValueError(f"rule must be one of {', '.join(RULES)}; got {rule!r}")
-        self.rule = rule
         self.memory, self.camera = memory, camera
         # earth x, y of one end and of the other, the ping's index; the newest at (count − 1) % len
         self._pieces = np.zeros((memory * MAX_PIECES, 5))
@@ -81,7 +73,7 @@ class ImagingTrack:
             # camera (lateral l, forward f) to earth: x + f cos ψ - l sin ψ, y + f sin ψ + l cos ψ
             far = x + cs * y1 - sn * x1, y + sn * y1 + cs * x1
             near = x + cs * y2 - sn * x2, y + sn * y2 + cs * x2
-            if self.rule == "ordered" and self._count > 0:
+            if self._count > 0:
                 far, near = _oriented(self._pieces[(self._count - 1) % self._pieces.shape[0]], far, near)
             k = self._count % self._pieces.shape[0]
             self._pieces[k] = (*far, *near, self._ping)
@@ -93,12 +85,8 @@ class ImagingTrack:
         """The remembered pipe in the camera's footprint from ``pose`` (module docstring)."""
         x, y, psi = pose
         cam = self.camera
-        if self.rule == "ordered":
-            r = _span(self._pieces, self._count, self._ping - self.memory, float(x), float(y), float(psi),
+        r = _span(self._pieces, self._count, self._ping - self.memory, float(x), float(y), float(psi),
                       cam.half_width, cam.depth)  # fmt: skip
-        else:
-            r = _chain(self._pieces, self._count, self._ping - self.memory, float(x), float(y), float(psi),
-                       cam.half_width, cam.depth, LINK)  # fmt: skip
         n, x1, y1, x2, yn, lateral, angle = r
         if n == 0:
             return SonarView(False, 0.0, 0.0, 0.0, 0.0, lateral, angle, detected, 0)
@@ -106,7 +94,7 @@ class ImagingTrack:
 
 
 def _oriented(prev, far, near):
-    """ "ordered": the new piece's ends, far first, its way following the previous piece's."""
+    """The new piece's ends, far first, its way following the previous piece's."""
     (fx, fy), (nx, ny) = far, near
     pfx, pfy, pnx, pny = prev[0], prev[1], prev[2], prev[3]
     px, py = pfx - pnx, pfy - pny
@@ -126,7 +114,7 @@ def _oriented(prev, far, near):
 
 @njit(cache=True)
 def _span(P, count, oldest_ping, x, y, psi, half_width, depth):
-    """ "ordered": ``(pieces crossing, x1, y1, x2, y_near, lateral, angle)`` (module docstring)."""
+    """``(pieces crossing, x1, y1, x2, y_near, lateral, angle)`` (module docstring)."""
     m = P.shape[0]
     cs, sn = math.cos(psi), math.sin(psi)
     n = 0
@@ -144,7 +132,7 @@ def _span(P, count, oldest_ping, x, y, psi, half_width, depth):
         if not have_line:  # the newest piece's line: its lateral offset at the AUV, its angle to the track
             have_line = True
             angle = math.atan2(fl - nl, ff - nf)
-            if ff != nf:
+            if abs(ff - nf) > 1e-9:
                 lateral = nl - nf * (fl - nl) / (ff - nf)
         t0, t1 = clip_segment(nl, nf, fl, ff, -half_width, half_width, 0.0, depth)
         if t0 > t1:
@@ -154,75 +142,6 @@ def _span(P, count, oldest_ping, x, y, psi, half_width, depth):
         x2, yn = nl + t0 * (fl - nl), nf + t0 * (ff - nf)  # the oldest so far: its near end
         n += 1
     return n, x1, y1, x2, yn, lateral, angle
-
-
-@njit(cache=True)
-def _chain(P, count, oldest_ping, x, y, psi, half_width, depth, link):
-    """``(pieces chained, x1, y1, x2, y_near, lateral, angle)``: see :meth:`ImagingTrack.view`."""
-    m = P.shape[0]
-    cs, sn = math.cos(psi), math.sin(psi)
-    C = np.empty((m, 4))  # the pieces' parts in the footprint: one end, the other
-    c = 0
-    for i in range(min(count, m)):
-        k = (count - 1 - i) % m  # newest first
-        if P[k, 4] <= oldest_ping:
-            continue
-        dx, dy = P[k, 0] - x, P[k, 1] - y
-        fl, ff = -sn * dx + cs * dy, cs * dx + sn * dy
-        dx, dy = P[k, 2] - x, P[k, 3] - y
-        nl, nf = -sn * dx + cs * dy, cs * dx + sn * dy
-        t0, t1 = clip_segment(nl, nf, fl, ff, -half_width, half_width, 0.0, depth)
-        if t0 > t1:
-            continue
-        C[c, 0], C[c, 1] = nl + t0 * (fl - nl), nf + t0 * (ff - nf)
-        C[c, 2], C[c, 3] = nl + t1 * (fl - nl), nf + t1 * (ff - nf)
-        c += 1
-    if c == 0:
-        return 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    # the start: the piece with the end nearest the AUV's centre; that end is the near one
-    start, near = 0, math.inf
-    flip = False
-    for i in range(c):
-        da, db = math.hypot(C[i, 0], C[i, 1]), math.hypot(C[i, 2], C[i, 3])
-        if min(da, db) < near:
-            start, near, flip = i, min(da, db), db < da
-    used = np.zeros(c, dtype=np.bool_)
-    used[start] = True
-    nx, ny, fx, fy = C[start, 0], C[start, 1], C[start, 2], C[start, 3]
-    if flip:
-        nx, ny, fx, fy = fx, fy, nx, ny
-    dxp, dyp = fx - nx, fy - ny
-    chained = 1
-    for _ in range(c):  # extend from the far end by the piece reaching furthest on
-        best, bi, bx, by = MIN_STEP, -1, 0.0, 0.0
-        for i in range(c):
-            if used[i]:
-                continue
-            ax, ay, ex, ey = C[i, 0], C[i, 1], C[i, 2], C[i, 3]
-            lx, ly = ex - ax, ey - ay
-            ll = lx * lx + ly * ly
-            t = 0.0 if ll == 0.0 else min(max(((fx - ax) * lx + (fy - ay) * ly) / ll, 0.0), 1.0)
-            if math.hypot(ax + t * lx - fx, ay + t * ly - fy) > link:
-                continue
-            for j in range(2):
-                qx, qy = (ax, ay) if j == 0 else (ex, ey)
-                vx, vy = qx - fx, qy - fy
-                step = math.hypot(vx, vy)
-                if step <= best:
-                    continue
-                dp = math.hypot(dxp, dyp)
-                if dp > 0.0 and (vx * dxp + vy * dyp) / (step * dp) < BACK:
-                    continue  # back along the chain
-                best, bi, bx, by = step, i, qx, qy
-        if bi < 0:
-            break
-        used[bi] = True
-        dxp, dyp = bx - fx, by - fy
-        fx, fy = bx, by
-        chained += 1
-    angle = math.atan2(fx - nx, fy - ny)
-    lateral = nx - ny * math.tan(angle) if abs(math.cos(angle)) > 1e-9 else nx
-    return chained, fx, fy, nx, ny, lateral, angle
 
 
 class ImagingSensor:
@@ -242,12 +161,11 @@ class ImagingSensor:
         burial: float = 0.0,
         camera: CameraParams = PAPER_CAMERA,
         memory: int = MEMORY,
-        rule: str = RULE,
         detect: dict | None = None,
     ) -> None:
         self.sonar = check_imaging_sonar(sonar)
         self.diameter, self.burial = float(diameter), float(burial)
-        self.track = ImagingTrack(memory, camera, rule)
+        self.track = ImagingTrack(memory, camera)
         self.detect = dict(detect or {})  # detect_image's settings
         self._angles, self._ranges = bearings(self.sonar), bin_ranges(self.sonar)
         self._mean = np.empty((self.sonar.n_beams, self._ranges.size))

@@ -1,0 +1,191 @@
+"""The forward-looking imaging sonar: its image against analytic answers, its detector and its map."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate, stats
+
+from pipefollow.perception.imaging_detect import ImageFix, detect_image
+from pipefollow.perception.imaging_sonar import (
+    FLS,
+    ImagingSonar,
+    ImagingSonarError,
+    bin_ranges,
+    check_imaging_sonar,
+    render_image,
+)
+from pipefollow.perception.imaging_track import ImagingSensor, ImagingTrack
+
+FAR = np.array([[0.0, 100.0], [50.0, 100.0]])  # a pipe 100 m to port: an empty seabed
+FAR_CUM = np.array([0.0, 50.0])
+
+
+def straight(angle_deg: float, forward: float = 2.0, lateral: float = 0.0):
+    """A straight pipe through (forward, lateral) at ``angle_deg`` to the track, from pose (0, 0, 0)."""
+    a = math.radians(angle_deg)
+    d = np.array([math.cos(a), math.sin(a)])  # earth x is forward, earth y lateral at ψ = 0
+    p0 = np.array([forward, lateral])
+    return np.array([p0 - 10.0 * d, p0 + 10.0 * d]), np.array([0.0, 20.0])
+
+
+def test_flat_seabed_energy_matches_the_integral():
+    """A beam's energy over a span of ranges is ∫ cos²i · G(δ)² dρ over the seabed it covers (scipy)."""
+    s = FLS
+    img = render_image(FAR, FAR_CUM, (0.0, 0.0, 0.0), np.random.default_rng(0))
+    r = bin_ranges(s)
+    tilt, k = math.radians(s.tilt_deg), 4.0 * math.log(2.0) / math.radians(s.vertical_deg) ** 2
+    h = s.altitude
+    j0, j1 = 10, 70
+    r0, r1 = r[j0] - s.range_resolution / 2, r[j1] + s.range_resolution / 2
+    energy = (img.mean[64, j0 : j1 + 1] - s.floor * math.sin(tilt) ** 2).sum() * s.range_resolution
+
+    def f(rho):
+        rr = math.hypot(rho, h)
+        return (h / rr) ** 2 * math.exp(-k * (math.atan2(h, rho) - tilt) ** 2)
+
+    exact, _ = integrate.quad(f, math.sqrt(r0 * r0 - h * h), math.sqrt(r1 * r1 - h * h))
+    assert energy == pytest.approx(exact, rel=0.02)
+    # every beam sees the same flat seabed
+    assert np.allclose(img.mean, img.mean[0])
+
+
+def test_speckle_is_a_standard_exponential():
+    img = render_image(FAR, FAR_CUM, (0.0, 0.0, 0.0), np.random.default_rng(3))
+    ratio = (img.intensity / img.mean).ravel()
+    assert stats.kstest(ratio, "expon").pvalue > 0.01
+
+
+def test_the_shadow_behind_a_pipe_across_the_track():
+    """The central beam's shadow ends where the ray grazing the pipe's top meets the seabed."""
+    s, radius, forward = FLS, 0.125, 2.0
+    points, cum = straight(90.0, forward)
+    img = render_image(points, cum, (0.0, 0.0, 0.0), np.random.default_rng(0), diameter=2 * radius)
+    beam = img.mean[s.n_beams // 2]
+    floor = s.floor * math.sin(math.radians(s.tilt_deg)) ** 2
+    shadow = np.flatnonzero(np.isclose(beam, floor))
+    # the tangent from the transducer (0, h) to the circle of centre (F, R): where it meets the seabed
+    h = s.altitude
+    dx, dz = forward, radius - h
+    dist = math.hypot(dx, dz)
+    below = math.atan2(-dz, dx) - math.asin(radius / dist)  # the tangent's depression (upper tangent)
+    rho_end = h / math.tan(below)
+    r_end = math.hypot(rho_end, h)
+    last = bin_ranges(s)[shadow[-1]] + s.range_resolution / 2
+    assert abs(last - r_end) <= 2 * s.range_resolution
+    # the pipe's highlight lies just before the shadow and outshines the seabed
+    assert beam[: shadow[0]].max() > 3 * np.median(beam)
+
+
+@pytest.mark.parametrize("angle", [0.0, 30.0, 60.0, 90.0])
+@pytest.mark.parametrize("burial", [0.0, 0.5])
+def test_detector_finds_straight_pipes(angle, burial):
+    points, cum = straight(angle, 2.0, 0.3)
+    rng = np.random.default_rng(int(angle) + int(10 * burial))
+    a = math.radians(angle)
+    normal = np.array([math.cos(a), -math.sin(a)])  # (lateral, forward) normal of the pipe's line
+    found = 0
+    for _ in range(20):
+        fix = detect_image(render_image(points, cum, (0.0, 0.0, 0.0), rng, burial=burial))
+        if not fix.found:
+            continue
+        found += 1
+        for x, y in ((fix.x1, fix.y1), (fix.x2, fix.y2)):
+            assert abs((x - 0.3) * normal[0] + (y - 2.0) * normal[1]) < 0.15
+        assert fix.y1 >= fix.y2  # the far end is the one further forward
+    assert found >= 19
+
+
+def test_no_piece_on_an_empty_seabed():
+    rng = np.random.default_rng(7)
+    assert not any(detect_image(render_image(FAR, FAR_CUM, (0.0, 0.0, 0.0), rng)).found for _ in range(300))
+
+
+def test_same_seed_same_image():
+    points, cum = straight(40.0)
+    a = render_image(points, cum, (0.1, 0.2, 0.3), np.random.default_rng(5))
+    b = render_image(points, cum, (0.1, 0.2, 0.3), np.random.default_rng(5))
+    assert np.array_equal(a.intensity, b.intensity)
+
+
+def test_a_buried_stretch_hides_the_pipe():
+    points, cum = straight(90.0)
+    rng = np.random.default_rng(0)
+    open_ = render_image(points, cum, (0.0, 0.0, 0.0), rng)
+    hidden = render_image(
+        points, cum, (0.0, 0.0, 0.0), rng, buried_from=np.array([0.0]), buried_to=np.array([20.0])
+    )
+    empty = render_image(FAR, FAR_CUM, (0.0, 0.0, 0.0), rng)
+    assert np.allclose(hidden.mean, empty.mean)
+    assert not np.allclose(open_.mean, empty.mean)
+
+
+def piece(x1, y1, x2, y2):
+    return ImageFix(True, x1, y1, x2, y2, 20, 20, 1.0, np.array([[x1, y1, x2, y2, 20.0]]))
+
+
+def test_map_moves_a_piece_into_the_footprint():
+    """A piece seen 2–3 m ahead lies 1–2 m ahead after a metre forward; a quarter turn moves it aside."""
+    track = ImagingTrack()
+    v = track.update((0.0, 0.0, 0.0), piece(0.2, 3.0, 0.2, 2.0))
+    assert v.in_view and (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.2, 3.0, 0.2, 2.0))
+    v = track.update((1.0, 0.0, 0.0), ImageFix(False))
+    assert v.in_view and (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.2, 2.0, 0.2, 1.0))
+    # heading to port (ψ = -π/2) from (2.5, 0): the earth points (3, 0.2), (2, 0.2) lie 0.2 m behind
+    v = track.view((2.5, 0.0, -math.pi / 2))
+    assert not v.in_view
+
+
+def test_map_keeps_the_way_of_the_pipe():
+    track = ImagingTrack()
+    track.update((0.0, 0.0, 0.0), piece(0.0, 3.0, 0.0, 2.0))
+    # the same line seen reversed: it keeps the first piece's way (far end further forward)
+    v = track.update((0.5, 0.0, 0.0), piece(0.0, 1.6, 0.0, 2.4))
+    assert v.y1 > v.y_near
+    # a new leg from the old far end (0, 3) to starboard: it starts at the corner
+    track = ImagingTrack()
+    track.update((0.0, 0.0, 0.0), piece(0.0, 3.0, 0.0, 2.0))
+    v = track.update((0.0, 0.0, 0.0), piece(0.0, 3.0, 0.9, 2.9))
+    assert (v.x1, v.y1) == pytest.approx((0.9, 2.9))
+
+
+def test_map_forgets_old_pieces():
+    track = ImagingTrack(memory=2)
+    track.update((0.0, 0.0, 0.0), piece(0.0, 2.5, 0.0, 1.5))
+    track.update((0.0, 0.0, 0.0), ImageFix(False))
+    assert track.update((0.0, 0.0, 0.0), ImageFix(False)).in_view is False
+
+
+def test_sensor_sees_a_straight_pipe_ahead():
+    points, cum = straight(0.0, 2.0, -0.4)
+    sensor = ImagingSensor()
+    rng = np.random.default_rng(1)
+    view = sensor.step(points, cum, (0.0, 0.0, 0.0), rng)
+    assert view.in_view and sensor.fix.found
+    assert view.x1 == pytest.approx(-0.4, abs=0.08) and view.x2 == pytest.approx(-0.4, abs=0.08)
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("n_beams", 4),
+        ("fov_deg", 0.0),
+        ("range_resolution", -1.0),
+        ("tilt_deg", 90.0),
+        ("altitude", float("nan")),
+    ],
+)
+def test_bad_settings_name_the_field(field, value):
+    with pytest.raises(ImagingSonarError, match=field):
+        check_imaging_sonar(ImagingSonar(**{field: value}))
+
+
+def test_ranges_that_never_reach_the_seabed():
+    with pytest.raises(ImagingSonarError, match="never reach"):
+        check_imaging_sonar(ImagingSonar(range_min=0.5, range_max=1.5))
+    with pytest.raises(ImagingSonarError, match="range_max"):
+        check_imaging_sonar(ImagingSonar(range_min=3.0, range_max=2.5))
+    with pytest.raises(ValueError, match="memory"):
+        ImagingTrack(memory=0)
