@@ -45,7 +45,7 @@ def main() -> None:
     ap.add_argument("--controllers", nargs="+", default=["heuristic"], help="names, files or NAME=FILE")
     ap.add_argument("--suites", nargs="+", default=["heldout", "heldout-hard", "heldout-sharp"])
     ap.add_argument("--camera", default="vision")
-    ap.add_argument("--sensor", default="fused", choices=["camera", "sonar", "fused"])
+    ap.add_argument("--sensor", default="fused", choices=["camera", "sonar", "fused", "fls", "fused-fls"])
     ap.add_argument("--water", default="turbid")
     ap.add_argument("--burial", type=float, default=0.0, help="the share of the pipe's width under sand")
     ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2, 3, 4])
@@ -53,7 +53,9 @@ def main() -> None:
     ap.add_argument("--goal", type=float, default=25.0, help="the loss a pipe a run must not exceed")
     args = ap.parse_args()
     camera = {
-        "camera": "ideal" if args.sensor == "sonar" else args.camera,  # the sonar alone: no camera image
+        "camera": "ideal"
+        if args.sensor in ("sonar", "fls")
+        else args.camera,  # a sonar alone: no camera image
         "sensor": args.sensor,
         "water": {"preset": args.water, "burial": args.burial},
     }

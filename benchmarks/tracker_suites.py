@@ -37,7 +37,7 @@ def judge(
         suite = Suite(suite_name, suite_name, TRAIN_STREAM, None, "the level's training-stream pipes")
     else:
         suite = get_suite(suite_name)
-    camera = "ideal" if sensor == "sonar" else camera  # the sonar alone: no camera image
+    camera = "ideal" if sensor in ("sonar", "fls") else camera  # a sonar alone: no camera image
     cam = {"camera": camera, "sensor": sensor, "water": {"preset": water, "burial": burial}}
     kw = {"controller": "heuristic", "n_pipes": n_pipes, "noise_seed": noise_seed}
     run = benchmark(Heuristic(), suite, camera=cam, **kw)
@@ -65,7 +65,7 @@ def main() -> None:
     ap.add_argument("--suites", nargs="+", default=["heldout", "heldout-hard", "heldout-sharp"])
     ap.add_argument("--pipes", type=int, default=None)
     ap.add_argument("--camera", default="vision")
-    ap.add_argument("--sensor", default="camera", choices=["camera", "sonar", "fused"])
+    ap.add_argument("--sensor", default="camera", choices=["camera", "sonar", "fused", "fls", "fused-fls"])
     ap.add_argument("--water", default="clear")
     ap.add_argument("--burial", type=float, default=0.0, help="the share of the pipe's width under sand")
     ap.add_argument("--noise-seed", type=int, default=0)

@@ -17,7 +17,7 @@ from pipefollow.perception.imaging_sonar import (
     check_imaging_sonar,
     render_image,
 )
-from pipefollow.perception.imaging_track import ImagingSensor, ImagingTrack
+from pipefollow.perception.imaging_track import ImagingMap, ImagingSensor
 
 FAR = np.array([[0.0, 100.0], [50.0, 100.0]])  # a pipe 100 m to port: an empty seabed
 FAR_CUM = np.array([0.0, 50.0])
@@ -122,40 +122,64 @@ def test_a_buried_stretch_hides_the_pipe():
     assert not np.allclose(open_.mean, empty.mean)
 
 
-def piece(x1, y1, x2, y2):
-    return ImageFix(True, x1, y1, x2, y2, 20, 20, 1.0, np.array([[x1, y1, x2, y2, 20.0]]))
+def highlights(*segments, step=0.02):
+    """An ImageFix whose highlights lie along the segments ((x0, y0), (x1, y1)), camera frame."""
+    pts = []
+    for (x0, y0), (x1, y1) in segments:
+        n = int(math.hypot(x1 - x0, y1 - y0) / step) + 1
+        t = np.linspace(0.0, 1.0, n)
+        pts.append(np.column_stack((x0 + t * (x1 - x0), y0 + t * (y1 - y0))))
+    pts = np.concatenate(pts)
+    return ImageFix(True, highlights=len(pts), points=pts)
 
 
-def test_map_moves_a_piece_into_the_footprint():
-    """A piece seen 2–3 m ahead lies 1–2 m ahead after a metre forward; a quarter turn moves it aside."""
-    track = ImagingTrack()
-    v = track.update((0.0, 0.0, 0.0), piece(0.2, 3.0, 0.2, 2.0))
-    assert v.in_view and (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.2, 3.0, 0.2, 2.0))
-    v = track.update((1.0, 0.0, 0.0), ImageFix(False))
-    assert v.in_view and (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.2, 2.0, 0.2, 1.0))
-    # heading to port (ψ = -π/2) from (2.5, 0): the earth points (3, 0.2), (2, 0.2) lie 0.2 m behind
-    v = track.view((2.5, 0.0, -math.pi / 2))
-    assert not v.in_view
+def axis_map(**kw):
+    """A map whose lines are the highlights' own (no move from the pipe's face to its axis)."""
+    m = ImagingMap(**kw)
+    m._settings[6] = 0.0
+    return m
 
 
-def test_map_keeps_the_way_of_the_pipe():
-    track = ImagingTrack()
-    track.update((0.0, 0.0, 0.0), piece(0.0, 3.0, 0.0, 2.0))
-    # the same line seen reversed: it keeps the first piece's way (far end further forward)
-    v = track.update((0.5, 0.0, 0.0), piece(0.0, 1.6, 0.0, 2.4))
-    assert v.y1 > v.y_near
-    # a new leg from the old far end (0, 3) to starboard: it starts at the corner
-    track = ImagingTrack()
-    track.update((0.0, 0.0, 0.0), piece(0.0, 3.0, 0.0, 2.0))
-    v = track.update((0.0, 0.0, 0.0), piece(0.0, 3.0, 0.9, 2.9))
-    assert (v.x1, v.y1) == pytest.approx((0.9, 2.9))
+def test_map_moves_what_it_saw_into_the_footprint():
+    """A line seen 1.5-3 m ahead lies 0.5-2 m ahead after a metre forward; a turn to port moves it behind."""
+    m = axis_map()
+    v = m.update((0.0, 0.0, 0.0), highlights(((0.2, 1.5), (0.2, 3.0))))
+    assert v.in_view and (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.2, 3.0, 0.2, 1.5), abs=0.02)
+    v = m.update((1.0, 0.0, 0.0), ImageFix(False))
+    assert v.in_view and (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.2, 2.0, 0.2, 0.5), abs=0.02)
+    # heading to port (ψ = -π/2) from (2.5, 0): the earth points (1.5..3, 0.2) lie 0.2 m behind
+    assert not m.view((2.5, 0.0, -math.pi / 2)).in_view
 
 
-def test_map_forgets_old_pieces():
-    track = ImagingTrack(memory=2)
-    track.update((0.0, 0.0, 0.0), piece(0.0, 2.5, 0.0, 1.5))
-    track.update((0.0, 0.0, 0.0), ImageFix(False))
-    assert track.update((0.0, 0.0, 0.0), ImageFix(False)).in_view is False
+def test_map_joins_two_legs_at_a_bend():
+    """Along the track to 2.5 m, then to starboard: near end on the first leg, far end at the second's end."""
+    m = axis_map()
+    v = m.update((0.0, 0.0, 0.0), highlights(((0.0, 0.3), (0.0, 2.5)), ((0.0, 2.5), (0.9, 2.0))))
+    assert v.in_view
+    assert (v.x2, v.y_near) == pytest.approx((0.0, 0.3), abs=0.03)
+    assert (v.x1, v.y1) == pytest.approx((0.9, 2.0), abs=0.03)
+
+
+def test_map_keeps_the_last_way():
+    """A line across the track keeps the way it was first shown in, whichever end is nearer the AUV."""
+    m = axis_map()
+    v = m.update((0.0, 0.0, 0.0), highlights(((0.3, 1.0), (-0.8, 2.4))))
+    assert (v.x2, v.y_near) == pytest.approx((0.3, 1.0), abs=0.03)  # the end nearer the AUV: near
+    # turned round at (3, 0): the far end, earth (2.4, -0.8), is now the nearer (0.8, 0.6); the way is kept
+    v = m.update((3.0, 0.0, math.pi), ImageFix(False))
+    assert (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.8, 0.6, -0.3, 2.0), abs=0.03)
+    m.reset()  # without a last way the end nearer the AUV is the near one
+    m.update((0.0, 0.0, 0.0), highlights(((0.3, 1.0), (-0.8, 2.4))))
+    m._last[:2] = math.nan
+    v = m.view((3.0, 0.0, math.pi))
+    assert (v.x2, v.y_near) == pytest.approx((0.8, 0.6), abs=0.03)
+
+
+def test_map_forgets_old_pings():
+    m = axis_map(memory=2)
+    m.update((0.0, 0.0, 0.0), highlights(((0.0, 1.0), (0.0, 2.5))))
+    m.update((0.0, 0.0, 0.0), ImageFix(False))
+    assert m.update((0.0, 0.0, 0.0), ImageFix(False)).in_view is False
 
 
 def test_sensor_sees_a_straight_pipe_ahead():
@@ -188,4 +212,4 @@ def test_ranges_that_never_reach_the_seabed():
     with pytest.raises(ImagingSonarError, match="range_max"):
         check_imaging_sonar(ImagingSonar(range_min=3.0, range_max=2.5))
     with pytest.raises(ValueError, match="memory"):
-        ImagingTrack(memory=0)
+        ImagingMap(memory=0)

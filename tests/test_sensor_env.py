@@ -1,4 +1,4 @@
-"""The environments with ``sensor="sonar"`` and ``sensor="fused"`` (pipefollow.perception.sensor)."""
+"""The environments with a sonar: ``sensor="sonar"``, ``"fused"``, ``"fls"``, ``"fused-fls"``."""
 
 from __future__ import annotations
 
@@ -73,6 +73,27 @@ def test_sonar_and_fusion_follow_in_turbid_water_where_the_vision_camera_fails()
     assert runs["fused"][0] >= runs["vision"][0] + 10.0
 
 
+def test_the_imaging_sonar_follows_where_the_camera_is_murky():
+    """The forward-looking sonar alone and fused with the camera, turbid water, three held-out pipes.
+
+    Measured: the imaging sonar alone −33.0 a pipe (0.3 decisions lost), fused with the tracked
+    camera −44.7 (1.3), the profiler fused −66.4 (5.3), the ideal camera −34.3 (2.0).
+    """
+    pipes = get_suite("heldout").pipes(3, min_length_for(60.0))
+    runs = {}
+    for name, kwargs in (
+        ("ideal", {}),
+        ("fls", {"sensor": "fls", "water": "turbid"}),
+        ("fused-fls", {"camera": "vision", "sensor": "fused-fls", "water": "turbid"}),
+        ("fused", {"camera": "vision", "sensor": "fused", "water": "turbid"}),
+    ):
+        envs = [PipelineFollowingEnv(p, 60.0, **kwargs) for p in pipes]
+        runs[name] = np.array([episode(env, k) for k, env in enumerate(envs)]).mean(axis=0)
+    assert runs["fls"][0] >= runs["ideal"][0] - 10.0 and runs["fls"][1] >= 0.95
+    assert runs["fused-fls"][0] >= runs["fused"][0] + 10.0
+    assert runs["fused-fls"][2] <= runs["fused"][2] - 2
+
+
 def test_the_sonar_draws_from_a_generator_of_its_own():
     # camera noise draws normals from np_random every decision: with or without the sonar the same count
     kwargs = {"disturbance": {"camera_noise": 0.05}}
@@ -96,7 +117,7 @@ def test_the_sonar_draws_from_a_generator_of_its_own():
     np.testing.assert_array_equal(vision._vision.image, fused._vision.vision.image)
 
 
-@pytest.mark.parametrize("kwargs", [{"sensor": "sonar"}, {"sensor": "fused"}])
+@pytest.mark.parametrize("kwargs", [{"sensor": s} for s in ("sonar", "fused", "fls", "fused-fls")])
 def test_the_sonar_is_deterministic_with_the_seed(kwargs):
     def observations(seed):
         env = PipelineFollowingEnv("paper-validation", 15.0, start_lateral_noise=0.3, **kwargs)
@@ -111,7 +132,7 @@ def test_the_sonar_is_deterministic_with_the_seed(kwargs):
     assert not np.array_equal(observations(4), observations(5))
 
 
-@pytest.mark.parametrize("sensor", ["sonar", "fused"])
+@pytest.mark.parametrize("sensor", ["sonar", "fused", "fls"])
 def test_vector_env_with_the_sonar_equals_single_environments(sensor):
     kwargs = {"episode_seconds": 5.0, "sensor": sensor, "start_lateral_noise": 0.4}
     vec = PipelineFollowingVectorEnv(3, "random:medium", **kwargs)
@@ -175,8 +196,9 @@ def test_buried_stretches_hide_the_pipe_from_the_sonar():
 @pytest.mark.parametrize(
     "kwargs, message",
     [
-        ({"sensor": "radar"}, "sensor must be one of camera, sonar, fused; got 'radar'"),
+        ({"sensor": "radar"}, "sensor must be one of camera, sonar, fused, fls, fused-fls; got 'radar'"),
         ({"sensor": "sonar", "camera": "vision"}, "camera must be 'ideal'"),
+        ({"sensor": "fls", "camera": "vision"}, "sensor='fls' observes with the sonar alone"),
     ],
 )
 def test_bad_sensor_arguments_are_one_line_errors(kwargs, message):

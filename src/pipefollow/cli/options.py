@@ -243,7 +243,7 @@ def camera_options(fn):
             if settings or water is not None:
                 raise UserError(
                     "--water, --turbidity, --burial and --growth need --camera vision (or vision-raw) "
-                    "or --sensor sonar (or fused)"
+                    "or --sensor sonar (fused, fls or fused-fls)"
                 )
             return fn(*args, camera=None, **kwargs)
         from pipefollow.perception.camera import camera_settings
@@ -271,12 +271,13 @@ def camera_options(fn):
         ),
         click.option(
             "--sensor",
-            type=click.Choice(["camera", "sonar", "fused"]),
+            type=click.Choice(["camera", "sonar", "fused", "fls", "fused-fls"]),
             default="camera",
             show_default=True,
             help="camera: the --camera alone; sonar: a forward-tilted multibeam sonar alone (with --camera "
             "ideal; turbidity does not reach it); fused: the camera's detections, the sonar's where the "
-            "camera finds no pipe, in one track.",
+            "camera finds no pipe, in one track; fls, fused-fls: the same with a forward-looking imaging "
+            "sonar and its map instead of the multibeam sonar.",
         ),
         click.option(
             "--water",

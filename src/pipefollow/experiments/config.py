@@ -148,7 +148,7 @@ def _check_water(value, where: str, camera, sensor="camera") -> dict | str:
 
     if camera not in VISION_CAMERAS and sensor == "camera":
         raise ConfigError(
-            f"{where}: water settings need camera = 'vision' or 'vision-raw' or sensor = 'sonar' or 'fused', "
+            f"{where}: water settings need camera = 'vision' or 'vision-raw' or a sonar sensor, "
             f"got camera = {camera!r}"
         )
     if not isinstance(value, (str, dict)):

@@ -19,7 +19,7 @@ from pipefollow.files.paper_training import EPISODE_SECONDS, TRAINING_EPISODES
 from pipefollow.learners.options import LEARNER_OPTIONS, OPTION, PHASE_OPTIONS, check_schedule
 from pipefollow.learners.registry import NAMES as ALGORITHMS
 from pipefollow.learners.registry import agent_options, learner, takes, taking
-from pipefollow.perception.camera import CAMERAS, SENSORS
+from pipefollow.perception.camera import CAMERAS, SENSORS, SONAR_ALONE
 
 # Figure and table keys of the report a trial can belong to (``figures = [...]`` in a trial).
 FIGURE_KEYS = ("fig5", "fig6", "fig7", "table1")
@@ -210,8 +210,10 @@ def validate(obj, where: str) -> None:
                     raise ConfigError(f"{where}.phases[{i}]: key 'learner.{key}' applies to algorithm "
                                       f"{' and '.join(taking(key))} only")  # fmt: skip
         check_readings(obj.readings, f"{where}: key 'readings'")
-        if obj.sensor == "sonar" and obj.camera != "ideal":
-            raise bad("camera", "'ideal' with sensor = 'sonar' (the sonar observes alone)", obj.camera)
+        if obj.sensor in SONAR_ALONE and obj.camera != "ideal":
+            raise bad(
+                "camera", f"'ideal' with sensor = {obj.sensor!r} (the sonar observes alone)", obj.camera
+            )
         if obj.train_through_sensor and obj.camera == "ideal" and obj.sensor == "camera":
             what = "false with the ideal camera alone (the compiled loops are that camera)"
             raise bad("train_through_sensor", what, obj.train_through_sensor)

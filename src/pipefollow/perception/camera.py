@@ -47,7 +47,12 @@ from pipefollow.sim.camera import CameraParams
 from pipefollow.sim.reward import reward
 
 CAMERAS = ("ideal", "vision", "vision-raw")
-SENSORS = ("camera", "sonar", "fused")  # what writes the observation: the camera, the sonar or both
+# what writes the observation: the camera, a sonar alone or the camera and a sonar in one track; the
+# sonar the look-ahead profiler ("sonar", "fused") or the forward-looking imaging sonar ("fls", "fused-fls")
+SENSORS = ("camera", "sonar", "fused", "fls", "fused-fls")
+SONAR_ALONE = ("sonar", "fls")
+FUSED = ("fused", "fused-fls")
+IMAGING = ("fls", "fused-fls")
 VISION_CAMERAS = ("vision", "vision-raw")  # the cameras that detect the pipe in the image
 OBSERVATIONS = ("state", "image")
 REWARD_FROM = ("truth", "detected")
@@ -61,7 +66,9 @@ class CameraSettings:
     observation: str = "state"  # "state" (x1, y1, x2, v_x) or "image" (the camera image, (H, W, 1))
     reward_from: str = "truth"  # eq. 19 from the true geometry, or from the detection
     water: Water = Water()  # water and camera settings of the image
-    sensor: str = "camera"  # "camera", "sonar" (the multibeam sonar alone) or "fused" (both, one track)
+    sensor: str = (
+        "camera"  # "camera", "sonar" / "fls" (a sonar alone) or "fused" / "fused-fls" (both, one track)
+    )
 
     @property
     def renders(self) -> bool:
@@ -98,8 +105,8 @@ def camera_settings(
 ) -> CameraSettings:
     """Checked settings; a one-line ``ValueError`` naming the argument otherwise.
 
-    ``sensor="sonar"`` observes with the sonar alone, so it takes the ideal camera only (whose
-    exact view then serves the reward and the info's ``true_*``).
+    ``sensor="sonar"`` or ``"fls"`` observes with a sonar alone, so it takes the ideal camera only
+    (whose exact view then serves the reward and the info's ``true_*``).
 
     The vision camera needs OpenCV (the extra ``vision``); without it this raises the one-line
     ``ImportError`` of :func:`~pipefollow.perception.detector.require_cv2`.
@@ -116,15 +123,15 @@ def camera_settings(
         raise ValueError(
             "reward_from='detected' needs camera='vision' or 'vision-raw' (the ideal camera detects nothing)"
         )
-    if sensor == "sonar" and camera != "ideal":
+    if sensor in SONAR_ALONE and camera != "ideal":
         raise ValueError(
-            f"sensor='sonar' observes with the sonar alone: camera must be 'ideal', got {camera!r}"
+            f"sensor={sensor!r} observes with the sonar alone: camera must be 'ideal', got {camera!r}"
         )
     settings = CameraSettings(camera, observation, reward_from, water_from(water), sensor)
     if water is not None and not settings.renders and sensor == "camera":
         raise ValueError(
             f"water={water!r} has no effect on the ideal camera's state observation: it needs "
-            "camera='vision' or 'vision-raw', observation='image', or sensor='sonar' or 'fused'"
+            "camera='vision' or 'vision-raw', observation='image', or a sonar sensor"
         )
     if camera in VISION_CAMERAS:
         require_cv2()

@@ -63,9 +63,9 @@ class ImageFix(NamedTuple):
     cells: int = 0  # inliers
     highlights: int = 0  # highlights in the image (also when not found)
     confidence: float = 0.0  # the first piece's
-    pieces: np.ndarray = np.zeros(
-        (0, 5)
-    )  # every piece found, the strongest (the above) first: x1, y1, x2, y2, cells
+    # every piece found, the strongest (the above) first: x1, y1, x2, y2, cells
+    pieces: np.ndarray = np.zeros((0, 5))
+    points: np.ndarray = np.zeros((0, 2))  # the highlights' seabed positions (lateral, forward)
 
 
 def detect_image(
@@ -93,12 +93,14 @@ def detect_image(
     st = np.array([threshold, smooth, min_cells, min_length, inlier, math.radians(HOUGH_STEP_DEG), HOUGH_BIN,
                    smooth_beams, face * 0.5 * diameter], dtype=np.float64)  # fmt: skip
     pieces = np.zeros((max_pieces, 5))
-    count, highlights = _detect(image.intensity, angles, rho, s.along, st, pieces)
+    px, py = np.empty(MAX_CELLS), np.empty(MAX_CELLS)
+    count, n = _detect(image.intensity, angles, rho, s.along, st, pieces, px, py)
+    points = np.column_stack((px[:n], py[:n]))
     if count == 0:
-        return ImageFix(False, highlights=int(highlights))
+        return ImageFix(False, highlights=int(n), points=points)
     x1, y1, x2, y2, cells = pieces[0]
     conf = min(1.0, cells / (4.0 * min_cells))
-    return ImageFix(True, x1, y1, x2, y2, int(cells), int(highlights), conf, pieces[:count])
+    return ImageFix(True, x1, y1, x2, y2, int(cells), int(n), conf, pieces[:count], points)
 
 
 @njit(cache=True)
@@ -201,12 +203,10 @@ def _line(px, py, used, n, min_cells, min_length, inlier, d_theta, d_bin, along,
 
 
 @njit(cache=True)
-def _detect(intensity, angles, rho, along, st, pieces):
+def _detect(intensity, angles, rho, along, st, pieces, px, py):
     """Every piece (at most ``len(pieces)``), the strongest first, into ``pieces``: (count, highlights)."""
     threshold, smooth, min_cells, min_length = st[0], int(st[1]), int(st[2]), st[3]
     inlier, d_theta, d_bin, smooth_beams, shift = st[4], st[5], st[6], int(st[7]), st[8]
-    px = np.empty(MAX_CELLS)
-    py = np.empty(MAX_CELLS)
     n = _highlights(intensity, angles, rho, along, threshold, smooth, smooth_beams, px, py)
     used = np.zeros(n, dtype=np.bool_)
     count = 0

@@ -1,18 +1,26 @@
-"""A map of the pipe pieces a forward-looking sonar found, and the piece of it in the camera's footprint.
+"""A map of what a forward-looking sonar saw, and the pipe it shows in the camera's footprint.
 
-The imaging sonar (:mod:`pipefollow.perception.imaging_sonar`) sees a strip of seabed 1.4–2.9 m
-ahead; the camera's footprint reaches from under the AUV's nose to 3 m ahead. What the sonar found
-a few pings ago lies in the footprint now: :class:`ImagingTrack` keeps the pieces of the last
-``memory`` pings that found one (:func:`~pipefollow.perception.imaging_detect.detect_image`) in the
-earth frame, placed by the pose of their ping, and shows from a pose the pipe in the footprint as
-the camera would (:mod:`pipefollow.sim.camera`): the near end where the oldest remembered piece
-that crosses the footprint enters it, the far end where the newest one leaves it.
+The imaging sonar (:mod:`pipefollow.perception.imaging_sonar`) sees a strip of seabed about
+1.2–3.9 m ahead; the camera's footprint reaches from under the AUV's nose to 3 m ahead. What the
+sonar saw a few pings ago lies in the footprint now. :class:`ImagingMap` keeps the highlights
+(:attr:`~pipefollow.perception.imaging_detect.ImageFix.points`) of the last ``memory`` pings in
+the earth frame, placed by the pose of their ping, and at each decision runs the detector's line
+search (:func:`~pipefollow.perception.imaging_detect._line`) on those that now lie in the
+footprint (within :data:`MARGIN`): the strongest line, and a second one among the others that
+meets it at more than :data:`BEND_DEG` within :data:`LINK_M` of both pieces (a bend: two legs).
 
-Each piece's way (which end is further along the pipe) follows the piece before it: a piece along
-the same line (directions within :data:`SAME_LINE_DEG`, the new piece's middle within
-:data:`SAME_LINE_M` of the old piece's line) keeps its direction; another (a new leg after a bend)
-starts at the end nearer the old piece's far end; the first piece of an episode runs away from
-the AUV (its far end the one further forward).
+Which end is which (the pipe's way), as the camera's near end is where the pipe enters the
+footprint and its far end where it leaves:
+
+* two legs: the near leg is the one nearer the last view's near end (remembered in the earth
+  frame; the AUV's centre in the first view), the near end its end away from the corner, the far
+  end the other leg's end away from it;
+* one line: the way of the last view (remembered as a direction in the earth frame) if there was
+  one; else its end nearer the AUV's centre is the near end.
+
+The ends are clamped to the footprint. docs/decisions.md ("A forward-looking imaging sonar") has
+the readings measured beside this one (a map of each ping's straight piece; the newer highlights'
+end as the far one; no memory of the last near end).
 
 :class:`ImagingSensor` is one decision's work for an environment, with the profiler's
 :class:`~pipefollow.perception.sonar_track.SonarSensor`'s interface (``reset``, ``step``,
@@ -26,7 +34,18 @@ import math
 import numpy as np
 from numba import njit
 
-from pipefollow.perception.imaging_detect import MAX_PIECES, ImageFix, detect_image
+from pipefollow.perception.imaging_detect import (
+    FACE,
+    HOUGH_BIN,
+    HOUGH_STEP_DEG,
+    INLIER,
+    MAX_CELLS,
+    MIN_CELLS,
+    MIN_LENGTH,
+    ImageFix,
+    _line,
+    detect_image,
+)
 from pipefollow.perception.imaging_sonar import (
     FLS,
     ImagingSonar,
@@ -37,111 +56,166 @@ from pipefollow.perception.imaging_sonar import (
 )
 from pipefollow.perception.sonar_detect import SonarFix
 from pipefollow.perception.sonar_track import NO_VIEW, SonarView
-from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, clip_segment
+from pipefollow.sim.camera import PAPER_CAMERA, CameraParams
 from pipefollow.sim.disturbance import NO_BURIAL
 
 MEMORY = 8  # pings whose pieces the map keeps
+FOLLOW = True
 SAME_LINE_DEG = 30.0  # a piece within this of the one before ...
 SAME_LINE_M = 0.25  # ... and its middle this near its line keeps its direction
 
 
-class ImagingTrack:
-    """The map of the pieces found (module docstring); :meth:`update` adds one, :meth:`view` shows it."""
+# the map's settings, chosen on the training suites (docs/decisions.md, "A forward-looking imaging sonar")
+MEMORY = 8  # pings whose highlights the map keeps
+MARGIN = 0.1  # m: highlights this far outside the footprint still count in it
+BEND_DEG = 25.0  # two lines closer in direction than this are one leg
+LINK_M = 1.0  # m: two legs whose pieces come this near their lines' crossing meet at a bend
 
-    def __init__(self, memory: int = MEMORY, camera: CameraParams = PAPER_CAMERA) -> None:
+
+class ImagingMap:
+    """The last ``memory`` pings' highlights and the pipe they show in the footprint (module docstring)."""
+
+    def __init__(self, memory: int = MEMORY, camera: CameraParams = PAPER_CAMERA, diameter: float = 0.25,
+                 along: float = 0.0) -> None:  # fmt: skip
         if isinstance(memory, bool) or not isinstance(memory, int) or memory < 1:
             raise ValueError(f"memory must be a whole number of pings ≥ 1, got {memory!r}")
         self.memory, self.camera = memory, camera
-        # earth x, y of one end and of the other, the ping's index; the newest at (count − 1) % len
-        self._pieces = np.zeros((memory * MAX_PIECES, 5))
+        self._points = np.zeros((memory * MAX_CELLS, 3))  # earth x, y, ping; the newest at (count-1) % len
         self._count = 0
         self._ping = 0
+        self._last = np.full(4, math.nan)  # the last view's way and near end (earth), NaN for none
+        st = (MIN_CELLS, MIN_LENGTH, INLIER, math.radians(HOUGH_STEP_DEG), HOUGH_BIN, along,
+              FACE * 0.5 * diameter, math.radians(BEND_DEG), LINK_M, MARGIN)  # fmt: skip
+        self._settings = np.array(st, dtype=np.float64)
         self.last = NO_VIEW
 
     def reset(self) -> None:
-        """Forget every piece (a new episode)."""
+        """Forget every highlight (a new episode)."""
         self._count = 0
         self._ping = 0
+        self._last[:] = math.nan
         self.last = NO_VIEW
 
     def update(self, pose: tuple[float, float, float], fix: ImageFix) -> SonarView:
-        """Add the ping's pieces (if any) seen from ``pose``; returns :meth:`view` from ``pose``."""
+        """Add the ping's highlights seen from ``pose``; returns :meth:`view` from ``pose``."""
         x, y, psi = pose
         self._ping += 1
-        cs, sn = math.cos(psi), math.sin(psi)
-        for x1, y1, x2, y2, _ in fix.pieces if fix.found else ():
-            # camera (lateral l, forward f) to earth: x + f cos ψ - l sin ψ, y + f sin ψ + l cos ψ
-            far = x + cs * y1 - sn * x1, y + sn * y1 + cs * x1
-            near = x + cs * y2 - sn * x2, y + sn * y2 + cs * x2
-            if self._count > 0:
-                far, near = _oriented(self._pieces[(self._count - 1) % self._pieces.shape[0]], far, near)
-            k = self._count % self._pieces.shape[0]
-            self._pieces[k] = (*far, *near, self._ping)
-            self._count += 1
+        self._count = _add_points(
+            self._points, self._count, fix.points, float(x), float(y), float(psi), self._ping
+        )
         self.last = self.view(pose, fix.found)
         return self.last
 
     def view(self, pose: tuple[float, float, float], detected: bool = True) -> SonarView:
-        """The remembered pipe in the camera's footprint from ``pose`` (module docstring)."""
+        """The pipe the highlights show in the camera's footprint from ``pose`` (class docstring)."""
         x, y, psi = pose
         cam = self.camera
-        r = _span(self._pieces, self._count, self._ping - self.memory, float(x), float(y), float(psi),
-                      cam.half_width, cam.depth)  # fmt: skip
+        r = _map_view(self._points, self._count, self._ping - self.memory, float(x), float(y), float(psi),
+                        cam.half_width, cam.depth, self._settings, self._last)  # fmt: skip
         n, x1, y1, x2, yn, lateral, angle = r
         if n == 0:
             return SonarView(False, 0.0, 0.0, 0.0, 0.0, lateral, angle, detected, 0)
         return SonarView(True, x1, y1, x2, yn, lateral, angle, detected, n)
 
 
-def _oriented(prev, far, near):
-    """The new piece's ends, far first, its way following the previous piece's."""
-    (fx, fy), (nx, ny) = far, near
-    pfx, pfy, pnx, pny = prev[0], prev[1], prev[2], prev[3]
-    px, py = pfx - pnx, pfy - pny
-    qx, qy = fx - nx, fy - ny
-    lp, lq = math.hypot(px, py), math.hypot(qx, qy)
-    if lp > 0.0 and lq > 0.0:
-        cos_a = (px * qx + py * qy) / (lp * lq)
-        mx, my = 0.5 * (fx + nx), 0.5 * (fy + ny)
-        off = abs((mx - pnx) * py - (my - pny) * px) / lp  # the new middle's distance from the old line
-        if abs(cos_a) >= math.cos(math.radians(SAME_LINE_DEG)) and off <= SAME_LINE_M:
-            return (far, near) if cos_a >= 0.0 else (near, far)
-    # a new leg: it starts at the end nearer the previous piece's far end
-    if math.hypot(fx - pfx, fy - pfy) < math.hypot(nx - pfx, ny - pfy):
-        return near, far
-    return far, near
+@njit(cache=True)
+def _add_points(E, count, points, x, y, psi, ping):
+    cs, sn = math.cos(psi), math.sin(psi)
+    m = E.shape[0]
+    for i in range(points.shape[0]):
+        k = count % m
+        l, f = points[i, 0], points[i, 1]
+        E[k, 0], E[k, 1], E[k, 2] = x + cs * f - sn * l, y + sn * f + cs * l, ping
+        count += 1
+    return count
 
 
 @njit(cache=True)
-def _span(P, count, oldest_ping, x, y, psi, half_width, depth):
-    """``(pieces crossing, x1, y1, x2, y_near, lateral, angle)`` (module docstring)."""
-    m = P.shape[0]
+def _map_view(E, count, oldest, x, y, psi, half_width, depth, st, last):
+    """:meth:`ImagingMap.view`'s arithmetic: ``(highlights used, x1, y1, x2, y_near, lateral, angle)``.
+
+    ``last`` holds the last view's way (earth frame, 0–1) and near end (2–3), NaN for none; updated.
+    """
+    min_cells, min_length, inlier, d_theta, d_bin = int(st[0]), st[1], st[2], st[3], st[4]
+    along, shift, bend, link, margin = st[5], st[6], st[7], st[8], st[9]
+    m = E.shape[0]
     cs, sn = math.cos(psi), math.sin(psi)
+    live = min(count, m)
+    px, py, pa = np.empty(live), np.empty(live), np.empty(live)
     n = 0
-    x1 = y1 = x2 = yn = 0.0
-    lateral = angle = 0.0
-    have_line = False
-    for i in range(min(count, m)):
-        k = (count - 1 - i) % m  # newest first
-        if P[k, 4] <= oldest_ping:
+    for i in range(live):
+        k = (count - 1 - i) % m
+        if E[k, 2] <= oldest:
             break
-        dx, dy = P[k, 0] - x, P[k, 1] - y
-        fl, ff = -sn * dx + cs * dy, cs * dx + sn * dy
-        dx, dy = P[k, 2] - x, P[k, 3] - y
-        nl, nf = -sn * dx + cs * dy, cs * dx + sn * dy
-        if not have_line:  # the newest piece's line: its lateral offset at the AUV, its angle to the track
-            have_line = True
-            angle = math.atan2(fl - nl, ff - nf)
-            if abs(ff - nf) > 1e-9:
-                lateral = nl - nf * (fl - nl) / (ff - nf)
-        t0, t1 = clip_segment(nl, nf, fl, ff, -half_width, half_width, 0.0, depth)
-        if t0 > t1:
-            continue
-        if n == 0:  # the newest crossing piece: its far end in the footprint
-            x1, y1 = nl + t1 * (fl - nl), nf + t1 * (ff - nf)
-        x2, yn = nl + t0 * (fl - nl), nf + t0 * (ff - nf)  # the oldest so far: its near end
-        n += 1
-    return n, x1, y1, x2, yn, lateral, angle
+        dx, dy = E[k, 0] - x, E[k, 1] - y
+        l, f = -sn * dx + cs * dy, cs * dx + sn * dy
+        if abs(l) <= half_width + margin and -margin <= f <= depth + margin:
+            px[n], py[n], pa[n] = l, f, E[k, 2]
+            n += 1
+    used = np.zeros(n, dtype=np.bool_)
+    fa, ax1, ay1, ax2, ay2, ma = _line(
+        px, py, used, n, min_cells, min_length, inlier, d_theta, d_bin, along, shift
+    )
+    if not fa:
+        last[:] = math.nan
+        return 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    fb, bx1, by1, bx2, by2, mb = _line(
+        px, py, used, n, min_cells, min_length, inlier, d_theta, d_bin, along, shift
+    )
+    ux, uy = ax1 - ax2, ay1 - ay2
+    vx, vy = bx1 - bx2, by1 - by2
+    la, lb = math.hypot(ux, uy), math.hypot(vx, vy)
+    two = False
+    if fb and la > 0.0 and lb > 0.0:
+        cross = (ux * vy - uy * vx) / (la * lb)
+        if abs(cross) >= math.sin(bend):
+            # the lines' crossing: a + s u = b + t v
+            s_ = ((bx2 - ax2) * vy - (by2 - ay2) * vx) / (ux * vy - uy * vx)
+            cx, cy = ax2 + s_ * ux, ay2 + s_ * uy
+            da = _to_segment(cx, cy, ax1, ay1, ax2, ay2)
+            db = _to_segment(cx, cy, bx1, by1, bx2, by2)
+            two = da <= link and db <= link
+    if two:
+        # the leg nearer the AUV's centre is the near one; each leg's end away from the corner
+        ox, oy = 0.0, 0.0  # the leg nearer the last near end (else the AUV's centre) is the near one
+        if last[2] == last[2]:
+            dx, dy = last[2] - x, last[3] - y
+            ox, oy = -sn * dx + cs * dy, cs * dx + sn * dy
+        if _to_segment(ox, oy, bx1, by1, bx2, by2) < _to_segment(ox, oy, ax1, ay1, ax2, ay2):
+            ax1, ay1, ax2, ay2, bx1, by1, bx2, by2 = bx1, by1, bx2, by2, ax1, ay1, ax2, ay2
+        if math.hypot(ax1 - cx, ay1 - cy) > math.hypot(ax2 - cx, ay2 - cy):
+            nx, ny = ax1, ay1
+        else:
+            nx, ny = ax2, ay2
+        if math.hypot(bx1 - cx, by1 - cy) > math.hypot(bx2 - cx, by2 - cy):
+            fx, fy = bx1, by1
+        else:
+            fx, fy = bx2, by2
+    else:
+        nx, ny, fx, fy = ax2, ay2, ax1, ay1
+        if math.hypot(ax2, ay2) > math.hypot(ax1, ay1):  # the end nearer the AUV's centre is the near end ...
+            nx, ny, fx, fy = ax1, ay1, ax2, ay2
+        if last[0] == last[0]:  # ... unless that turns the last view's way round
+            gl, gf = -sn * last[0] + cs * last[1], cs * last[0] + sn * last[1]  # the last way in this frame
+            if (fx - nx) * gl + (fy - ny) * gf < 0.0:
+                nx, ny, fx, fy = fx, fy, nx, ny
+    nx, ny = min(max(nx, -half_width), half_width), min(max(ny, 0.0), depth)
+    fx, fy = min(max(fx, -half_width), half_width), min(max(fy, 0.0), depth)
+    el, ef = fx - nx, fy - ny  # the way near → far, and the near end, in the earth frame
+    last[0], last[1] = cs * ef - sn * el, sn * ef + cs * el
+    last[2], last[3] = x + cs * ny - sn * nx, y + sn * ny + cs * nx
+    angle = math.atan2(fx - nx, fy - ny)
+    lateral = nx - ny * (fx - nx) / (fy - ny) if abs(fy - ny) > 1e-9 else nx
+    return n, fx, fy, nx, ny, lateral, angle
+
+
+@njit(cache=True)
+def _to_segment(px, py, ax, ay, bx, by):
+    """The distance from point p to the segment a–b."""
+    ux, uy = bx - ax, by - ay
+    uu = ux * ux + uy * uy
+    t = 0.0 if uu == 0.0 else min(max(((px - ax) * ux + (py - ay) * uy) / uu, 0.0), 1.0)
+    return math.hypot(ax + t * ux - px, ay + t * uy - py)
 
 
 class ImagingSensor:
@@ -165,7 +239,7 @@ class ImagingSensor:
     ) -> None:
         self.sonar = check_imaging_sonar(sonar)
         self.diameter, self.burial = float(diameter), float(burial)
-        self.track = ImagingTrack(memory, camera)
+        self.track = ImagingMap(memory, camera, diameter, self.sonar.along)
         self.detect = dict(detect or {})  # detect_image's settings
         self._angles, self._ranges = bearings(self.sonar), bin_ranges(self.sonar)
         self._mean = np.empty((self.sonar.n_beams, self._ranges.size))
@@ -199,4 +273,4 @@ class ImagingSensor:
         return v
 
 
-__all__ = ["ImagingSensor", "ImagingTrack"]
+__all__ = ["ImagingMap", "ImagingSensor"]

@@ -47,8 +47,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipefollow.perception.camera import CameraSettings, TrueView, VisionCamera, _spawn
+from pipefollow.perception.camera import FUSED, IMAGING, CameraSettings, TrueView, VisionCamera, _spawn
 from pipefollow.perception.detector import Detection
+from pipefollow.perception.imaging_track import ImagingSensor
 from pipefollow.perception.slots import Sighting, observed, sighting_of, write_sighting
 from pipefollow.perception.sonar_track import CARRY, SonarSensor
 from pipefollow.perception.track_step import (
@@ -94,20 +95,23 @@ def start_sensor(sensor, state, points, cum, rng, disturbance) -> None:
 
 
 class SonarSensors:
-    """``sensor="sonar"`` or ``"fused"`` of one environment (see the module docstring)."""
+    """``sensor="sonar"``, ``"fused"``, ``"fls"`` or ``"fused-fls"`` of one environment (module docstring)."""
 
     def __init__(self, settings: CameraSettings, camera: CameraParams, lost_reward: float) -> None:
         self.settings = settings
         self.camera = camera
         self.lost_reward = lost_reward
-        self.fused = settings.sensor == "fused"
+        self.fused = settings.sensor in FUSED
         # the camera: its image (observation="image"), and with "fused" its detections too
         self.vision = VisionCamera(settings, camera, lost_reward) if settings.renders else None
         # the sonar's line shown CARRY pings past a miss, but not as the measurement of a rendered
         # camera (fused): its tracker carries its line itself
         carry = 0 if self.fused and settings.detects else CARRY
-        self.sonar = SonarSensor(diameter=settings.water.pipe_diameter, burial=sonar_burial(settings.water),
-                                 camera=camera, carry=carry)  # fmt: skip
+        diameter, burial = settings.water.pipe_diameter, sonar_burial(settings.water)
+        if settings.sensor in IMAGING:  # the forward-looking imaging sonar and its map
+            self.sonar = ImagingSensor(diameter=diameter, burial=burial, camera=camera)
+        else:
+            self.sonar = SonarSensor(diameter=diameter, burial=burial, camera=camera, carry=carry)
         self.buried = (NO_BURIAL, NO_BURIAL)
         self.truth = TrueView(False, 0.0, 0.0, 0.0, 0.0)
         self._true_errors = (0.0, 0.0)

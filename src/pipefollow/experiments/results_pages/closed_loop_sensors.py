@@ -23,6 +23,8 @@ SENSORS = {  # the CSV's sensor → the column's head
     "tracker": "camera + tracker",
     "sonar": "sonar",
     "fused": "camera + tracker + sonar",
+    "fls": "imaging sonar",
+    "fused-fls": "camera + tracker + imaging sonar",
 }
 WATERS = {"clear": "clear", "moderate": "moderate", "turbid": "turbid", "half-buried": "half buried"}
 ANY_WATER = "any"
