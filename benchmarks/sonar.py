@@ -1,11 +1,13 @@
-"""Benchmarks of the multibeam profiler: render a ping, detect the pipe; env.step with and without it.
+"""Benchmarks of the sonars: render a ping, detect the pipe, track it; env.step with and without them.
 
 Usage: ``python benchmarks/sonar.py [--repeats N] [--cpu] [--json FILE]`` (``--json``: the record of
 ``stored.py``, with the load and the machine; ``docs/speed/sonar.json``)
 
 Poses are taken along a heuristic episode on a held-out pipe (ideal camera); the sonar is
 ``LOOK_AHEAD_SONAR`` (128 beams over ±60°, 3 rays a beam, 1 cm noise and quantisation, the fan
-tilted 45° forward), the sensor's default. Each line is the median
+tilted 45° forward), the sensor's default; the forward-looking imaging sonar is ``FLS`` (128 beams
+over 130°, 88 range bins of 2.5 cm, speckle) with its detector and map (``sensor="fls"``). Each line
+is the median
 of N blocks of 200 calls; all lines are timed in turns in the same run, so they meet the same load
 (the machine is shared: compare within one run).
 """
@@ -39,6 +41,9 @@ def main() -> None:
     import numba
 
     import pipefollow.envs  # noqa: F401 (registers the environment)
+    from pipefollow.perception.imaging_detect import detect_image
+    from pipefollow.perception.imaging_sonar import FLS, bearings, bin_ranges, render_image
+    from pipefollow.perception.imaging_track import ImagingMap, ImagingSensor
     from pipefollow.perception.sonar import LOOK_AHEAD_SONAR, beam_angles, fan_line, render_ping
     from pipefollow.perception.sonar_detect import detect_profile
     from pipefollow.perception.sonar_track import SonarSensor, SonarTrack
@@ -75,6 +80,27 @@ def main() -> None:
     def decision():
         sensor.step(pipe.points, pipe.cumulative, poses[next(it) % 200], rng)
 
+    fls_angles, fls_ranges = bearings(FLS), bin_ranges(FLS)
+    fls_out = np.empty((FLS.n_beams, fls_ranges.size))
+    images = [render_image(pipe.points, pipe.cumulative, p, rng) for p in poses]
+    pieces = [detect_image(im, angles=fls_angles, ranges=fls_ranges) for im in images]
+    fls_map = ImagingMap()
+    fls_sensor = ImagingSensor()
+
+    def fls_render():
+        p = poses[next(it) % 200]
+        render_image(pipe.points, pipe.cumulative, p, rng, angles=fls_angles, out=fls_out)
+
+    def fls_detect():
+        detect_image(images[next(it) % 200], angles=fls_angles, ranges=fls_ranges)
+
+    def fls_map_update():
+        k = next(it) % 200
+        fls_map.update(poses[k], pieces[k])
+
+    def fls_decision():
+        fls_sensor.step(pipe.points, pipe.cumulative, poses[next(it) % 200], rng)
+
     def stepper(**kwargs):
         """One decision of the heuristic following the pipe (as in a real run) with the given sensor."""
         e = gym.make("pipefollow/PipelineFollowing-v0", pipeline=pipe, episode_seconds=600.0, **kwargs)
@@ -96,6 +122,11 @@ def main() -> None:
         ("env.step, ideal camera", stepper(), ""),
         ('env.step, sensor="sonar"', stepper(sensor="sonar"), ""),
         ('env.step, sensor="fused" (ideal camera)', stepper(sensor="fused"), ""),
+        ("render_image (imaging sonar, 128 × 88 cells)", fls_render, ""),
+        ("detect_image", fls_detect, ""),
+        ("ImagingMap.update (the map's view)", fls_map_update, ""),
+        ("ImagingSensor.step: render + detect + map, one decision", fls_decision, ""),
+        ('env.step, sensor="fls"', stepper(sensor="fls"), ""),
     )
     times: dict[str, list[float]] = {name: [] for name, _, _ in stages}
     for _, fn, _ in stages:
