@@ -153,7 +153,9 @@ class PipelineFollowingEnv(gym.Env):
       lost pipe is −10 and the search, as with the vision camera; only with ``camera="ideal"``) or
       ``"fused"`` (each decision the camera's detection when it finds the pipe, else the sonar's
       view, fed to the vision camera's pipe tracker — or, with the ideal camera, the sonar's view
-      while the exact camera sees no pipe). The sonar draws from a generator spawned from
+      while the exact camera sees no pipe); ``"fls"`` and ``"fused-fls"`` the same with a
+      forward-looking imaging sonar and the map of its highlights instead of the multibeam sonar
+      (:mod:`pipefollow.perception.imaging_track`). The sonar draws from a generator spawned from
       ``np_random`` at each reset, so the camera's draws stay what they are. With
       ``observation="image"`` the agent observes the camera's image (the frames of
       ``observation="image"`` alone) while the sensor decides the pipe in view, the search and the

@@ -42,8 +42,9 @@ single environment draws them.
   same numbers.
 * **Vision camera** (``camera="vision"``, ``observation="image"``): supported; after the batched
   decision each sub-environment renders and detects with its own generator, as the single one does.
-* **Sonar** (``sensor="sonar"`` or ``"fused"``): supported the same way; each sub-environment's
-  sonar draws from a generator spawned from its own, as in the single environment.
+* **Sonar** (``sensor="sonar"``, ``"fused"``, ``"fls"`` or ``"fused-fls"``): supported the same
+  way; each sub-environment's sonar draws from a generator spawned from its own, as in the single
+  environment.
 """
 
 from __future__ import annotations

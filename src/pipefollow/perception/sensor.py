@@ -30,8 +30,14 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
   track, fed all the same, is shown when the ping misses), and a fix outside the footprint turns
   the search towards it.
 
-The sonar draws its noise (128 normals a ping) from a generator of its own, spawned from the
-environment's at each reset (:func:`spawn`, which draws nothing from it): after the camera's reset
+``"fls"`` and ``"fused-fls"`` are ``"sonar"`` and ``"fused"`` with the forward-looking imaging sonar
+(:class:`~pipefollow.perception.imaging_track.ImagingSensor`: a sector image ahead, its highlights
+kept in a map of the last pings) in the profiler's place, everything else as above; its view is
+shown the way of the tracked line in a murky frame as the profiler's is (docs/decisions.md, "A
+forward-looking imaging sonar").
+
+The sonar draws its noise (128 normals a ping; the imaging sonar an exponential a cell) from a
+generator of its own, spawned from the environment's at each reset (:func:`spawn`, which draws nothing from it): after the camera's reset
 with ``"sonar"`` and the ideal camera's ``"fused"``, before it with a vision camera's ``"fused"``
 (whose first frame the first ping feeds; the tracker's navigation is then the second child). The
 camera's frames and every other draw stay what they are without the sonar.
