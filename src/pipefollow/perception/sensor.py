@@ -37,10 +37,11 @@ shown the way of the tracked line in a murky frame as the profiler's is (docs/de
 forward-looking imaging sonar").
 
 The sonar draws its noise (128 normals a ping; the imaging sonar an exponential a cell) from a
-generator of its own, spawned from the environment's at each reset (:func:`spawn`, which draws nothing from it): after the camera's reset
-with ``"sonar"`` and the ideal camera's ``"fused"``, before it with a vision camera's ``"fused"``
-(whose first frame the first ping feeds; the tracker's navigation is then the second child). The
-camera's frames and every other draw stay what they are without the sonar.
+generator of its own, spawned from the environment's at each reset (:func:`spawn`, which draws
+nothing from it): after the camera's reset with ``"sonar"`` and the ideal camera's ``"fused"``,
+before it with a vision camera's ``"fused"`` (whose first frame the first ping feeds; the tracker's
+navigation is then the second child). The camera's frames and every other draw stay what they are
+without the sonar.
 
 Burial: the image's ``Water.burial`` (the share of the pipe's width covered by sand, from its
 starboard edge: pixels more than ``R(1 − 2b)`` across from the axis) and the sonar's (the share
