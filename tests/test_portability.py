@@ -138,6 +138,34 @@ def test_sonar_pings_and_detections_are_the_same_under_the_generic_cpu_target(tm
     assert a == b and len(a.split()) == 2
 
 
+IMAGES = """
+import hashlib
+import numpy as np
+from pipefollow.perception.imaging_track import ImagingSensor
+from pipefollow.sim.suites import get_suite, min_length_for
+
+pipe = get_suite("heldout-sharp").pipes(1, min_length_for(200.0))[0]
+rng = np.random.default_rng(0)
+sensor = ImagingSensor(burial=0.3)
+images, views = hashlib.sha256(), hashlib.sha256()
+x0, y0 = pipe.points[0]
+for k in range(40):
+    view = sensor.step(pipe.points, pipe.cumulative, (x0 + 0.3 * k, y0 + 0.01 * k, 0.02 * k), rng)
+    images.update(sensor.image.intensity.tobytes())
+    views.update(repr((sensor.piece.pieces.tolist(), sensor.fix, view)).encode())
+print(images.hexdigest(), views.hexdigest())
+"""
+
+
+@pytest.mark.slow  # compiles the imaging sonar for another target
+def test_imaging_sonar_images_and_views_are_the_same_under_an_old_cpu(tmp_path):
+    host = {k: v for k, v in os.environ.items() if k != "NUMBA_CPU_NAME"}
+    run = [sys.executable, "-c", IMAGES]
+    a = subprocess.run(run, env=host, check=True, capture_output=True, text=True).stdout
+    b = subprocess.run(run, env=old_cpu(tmp_path), check=True, capture_output=True, text=True).stdout
+    assert a == b and len(a.split()) == 2
+
+
 EPISODES = """
 import hashlib
 import gymnasium as gym
@@ -153,6 +181,8 @@ for kw in (
     dict(sensor="sonar", water={"burial": 0.5}),
     dict(sensor="fused", camera="vision", water="turbid"),  # the sonar's fixes on the camera's track
     dict(sensor="fused"),
+    dict(sensor="fused-fls", camera="vision", water="turbid"),  # the imaging sonar on the camera's track
+    dict(sensor="fls", water={"burial": 0.5}),
 ):
     returns, seen = [], hashlib.sha256()
     for k, pipe in enumerate(pipes):
@@ -186,7 +216,7 @@ def test_the_environments_through_every_camera_and_sensor_are_the_same_under_an_
     run = [sys.executable, "-c", EPISODES]
     a = subprocess.run(run, env=host, check=True, capture_output=True, text=True).stdout
     b = subprocess.run(run, env=old_cpu(tmp_path), check=True, capture_output=True, text=True).stdout
-    assert a == b and len(a.splitlines()) == 6
+    assert a == b and len(a.splitlines()) == 8
 
 
 NO_FMA_LIBM = "glibc.cpu.hwcaps=-FMA,-FMA4"  # glibc's math functions as on an x86-64 CPU without FMA
