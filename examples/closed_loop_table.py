@@ -11,7 +11,8 @@ trained so gain nothing: docs/decisions.md), the learned ones from ``--policies`
 there if missing, as ``examples/vision_table.py`` trains them). Sensors: ``ideal`` (the exact
 camera), ``raw`` (the rendered camera's detector alone, ``camera="vision-raw"``), ``tracker``
 (the detector and the pipe tracker, ``camera="vision"``), ``sonar`` (the look-ahead multibeam
-alone) and ``fused`` (the tracked camera, the sonar's detections where it finds none). Waters:
+alone), ``fused`` (the tracked camera, the sonar's detections where it finds none), and ``fls`` and
+``fused-fls`` (the same two with the forward-looking imaging sonar). Waters:
 the presets ``clear``, ``moderate`` and ``turbid``, and ``half-buried`` (clear water, ``burial``
 0.5: half the pipe's width under sand for the camera, half its diameter for the sonar,
 ``perception.sensor``). The ideal camera sees through any water: one cell per suite (water
@@ -83,6 +84,8 @@ SENSORS = {  # key → (label, camera, sensor)
     "tracker": ("camera + tracker", "vision", "camera"),
     "sonar": ("sonar", "ideal", "sonar"),
     "fused": ("camera + tracker + sonar", "vision", "fused"),
+    "fls": ("imaging sonar", "ideal", "fls"),
+    "fused-fls": ("camera + tracker + imaging sonar", "vision", "fused-fls"),
 }
 WATERS = {  # key → the environment's water
     "clear": {"preset": "clear"},

@@ -62,6 +62,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from pipefollow.perception.sonar import check_ranges
 from pipefollow.sim.disturbance import NO_BURIAL
 
 
@@ -105,20 +106,10 @@ FLS = ImagingSonar()
 
 
 def check_imaging_sonar(s: ImagingSonar) -> ImagingSonar:
-    """``s`` if every field is in range; else a one-line :class:`ImagingSonarError` naming it."""
+    """``s`` (``n_beams`` an int) if every field is in range; else a one-line :class:`ImagingSonarError`."""
     if not isinstance(s, ImagingSonar):
         raise ImagingSonarError(f"imaging sonar must be an ImagingSonar record, got {type(s).__name__}")
-    for name, (lo, hi, closed) in _RANGES.items():
-        value = getattr(s, name)
-        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-            raise ImagingSonarError(f"imaging sonar setting {name} must be a finite number, got {value!r}")
-        if name == "n_beams" and not isinstance(value, int):
-            raise ImagingSonarError(f"imaging sonar setting n_beams must be a whole number, got {value!r}")
-        if not ((lo <= value if closed else lo < value) and value <= hi):
-            bracket = "[" if closed else "("
-            raise ImagingSonarError(
-                f"imaging sonar setting {name} must be in {bracket}{lo}, {hi}], got {value!r}"
-            )
+    check_ranges(s, _RANGES, ("n_beams",), ImagingSonarError, "imaging sonar")
     if s.range_max <= s.range_min:
         raise ImagingSonarError(
             f"imaging sonar setting range_max must exceed range_min ({s.range_min}), got {s.range_max!r}"
@@ -127,7 +118,7 @@ def check_imaging_sonar(s: ImagingSonar) -> ImagingSonar:
         raise ImagingSonarError(
             f"imaging sonar ranges {s.range_min}-{s.range_max} m never reach the seabed {s.altitude} m below"
         )
-    return s
+    return s._replace(n_beams=int(s.n_beams))
 
 
 def n_bins(s: ImagingSonar) -> int:

@@ -134,17 +134,26 @@ def check_sonar(s: Sonar) -> Sonar:
     """``s`` (whole-number fields as ints) if every field is in range; else a one-line :class:`SonarError`."""
     if not isinstance(s, Sonar):
         raise SonarError(f"sonar must be a Sonar record, got {type(s).__name__}")
-    for name, (lo, hi, closed) in _RANGES.items():
+    check_ranges(s, _RANGES, _WHOLE, SonarError, "sonar")
+    return s._replace(n_beams=int(s.n_beams), sub_rays=int(s.sub_rays))
+
+
+def check_ranges(s, ranges: dict, whole: tuple, error: type[ValueError], what: str) -> None:
+    """A one-line ``error`` naming the first field of record ``s`` outside ``ranges`` (a sonar's settings).
+
+    ``ranges`` maps a field to ``(low, high, low end closed)``; the fields in ``whole`` must be whole
+    numbers; every field a finite number.
+    """
+    for name, (lo, hi, closed) in ranges.items():
         value = getattr(s, name)
         if isinstance(value, bool) or not isinstance(value, int | float):
-            raise SonarError(f"sonar setting {name} must be a number, got {value!r}")
-        if name in _WHOLE and value != int(value):
-            raise SonarError(f"sonar setting {name} must be a whole number, got {value}")
+            raise error(f"{what} setting {name} must be a number, got {value!r}")
+        if name in whole and value != int(value):
+            raise error(f"{what} setting {name} must be a whole number, got {value}")
         low_ok = value >= lo if closed else value > lo
         if not (math.isfinite(value) and low_ok and value <= hi):
             bracket = "[" if closed else "("
-            raise SonarError(f"sonar setting {name} must be in {bracket}{lo}, {hi}], got {value}")
-    return s._replace(n_beams=int(s.n_beams), sub_rays=int(s.sub_rays))
+            raise error(f"{what} setting {name} must be in {bracket}{lo}, {hi}], got {value}")
 
 
 def make_sonar(**fields) -> Sonar:
