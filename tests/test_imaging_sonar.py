@@ -213,3 +213,5 @@ def test_ranges_that_never_reach_the_seabed():
         check_imaging_sonar(ImagingSonar(range_min=3.0, range_max=2.5))
     with pytest.raises(ValueError, match="memory"):
         ImagingMap(memory=0)
+    with pytest.raises(ValueError, match="burial"):
+        ImagingSensor(burial=1.5)

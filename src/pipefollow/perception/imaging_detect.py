@@ -131,7 +131,7 @@ def _highlights(intensity, angles, rho, along, threshold, smooth, smooth_beams, 
 
 
 @njit(cache=True)
-def _line(px, py, used, n, min_cells, min_length, inlier, d_theta, d_bin, along, shift):
+def line_piece(px, py, used, n, min_cells, min_length, inlier, d_theta, d_bin, along, shift):
     """Steps 3–4 on the highlights not ``used``: ``(found, x1, y1, x2, y2, inliers)``; marks its own used."""
     n_theta = int(math.pi / d_theta)
     reach = 0.0
@@ -213,7 +213,7 @@ def _detect(intensity, angles, rho, along, st, pieces, px, py):
     for _ in range(pieces.shape[0]):
         if count >= pieces.shape[0]:
             break
-        found, x1, y1, x2, y2, m = _line(
+        found, x1, y1, x2, y2, m = line_piece(
             px, py, used, n, min_cells, min_length, inlier, d_theta, d_bin, along, shift
         )
         if m < min_cells:
@@ -225,4 +225,4 @@ def _detect(intensity, angles, rho, along, st, pieces, px, py):
     return count, n
 
 
-__all__ = ["ImageFix", "detect_image"]
+__all__ = ["ImageFix", "detect_image", "line_piece"]

@@ -5,7 +5,7 @@ The imaging sonar (:mod:`pipefollow.perception.imaging_sonar`) sees a strip of s
 sonar saw a few pings ago lies in the footprint now. :class:`ImagingMap` keeps the highlights
 (:attr:`~pipefollow.perception.imaging_detect.ImageFix.points`) of the last ``memory`` pings in
 the earth frame, placed by the pose of their ping, and at each decision runs the detector's line
-search (:func:`~pipefollow.perception.imaging_detect._line`) on those that now lie in the
+search (:func:`~pipefollow.perception.imaging_detect.line_piece`) on those that now lie in the
 footprint (within :data:`MARGIN`): the strongest line, and a second one among the others that
 meets it at more than :data:`BEND_DEG` within :data:`LINK_M` of both pieces (a bend: two legs).
 
@@ -43,8 +43,8 @@ from pipefollow.perception.imaging_detect import (
     MIN_CELLS,
     MIN_LENGTH,
     ImageFix,
-    _line,
     detect_image,
+    line_piece,
 )
 from pipefollow.perception.imaging_sonar import (
     FLS,
@@ -54,16 +54,11 @@ from pipefollow.perception.imaging_sonar import (
     check_imaging_sonar,
     render_image,
 )
+from pipefollow.perception.sonar import check_pipe
 from pipefollow.perception.sonar_detect import SonarFix
 from pipefollow.perception.sonar_track import NO_VIEW, SonarView
 from pipefollow.sim.camera import PAPER_CAMERA, CameraParams
 from pipefollow.sim.disturbance import NO_BURIAL
-
-MEMORY = 8  # pings whose pieces the map keeps
-FOLLOW = True
-SAME_LINE_DEG = 30.0  # a piece within this of the one before ...
-SAME_LINE_M = 0.25  # ... and its middle this near its line keeps its direction
-
 
 # the map's settings, chosen on the training suites (docs/decisions.md, "A forward-looking imaging sonar")
 MEMORY = 8  # pings whose highlights the map keeps
@@ -153,13 +148,13 @@ def _map_view(E, count, oldest, x, y, psi, half_width, depth, st, last):
             px[n], py[n], pa[n] = l, f, E[k, 2]
             n += 1
     used = np.zeros(n, dtype=np.bool_)
-    fa, ax1, ay1, ax2, ay2, ma = _line(
+    fa, ax1, ay1, ax2, ay2, ma = line_piece(
         px, py, used, n, min_cells, min_length, inlier, d_theta, d_bin, along, shift
     )
     if not fa:
         last[:] = math.nan
         return 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    fb, bx1, by1, bx2, by2, mb = _line(
+    fb, bx1, by1, bx2, by2, mb = line_piece(
         px, py, used, n, min_cells, min_length, inlier, d_theta, d_bin, along, shift
     )
     ux, uy = ax1 - ax2, ay1 - ay2
@@ -238,6 +233,7 @@ class ImagingSensor:
         detect: dict | None = None,
     ) -> None:
         self.sonar = check_imaging_sonar(sonar)
+        check_pipe(diameter, burial)
         self.diameter, self.burial = float(diameter), float(burial)
         self.track = ImagingMap(memory, camera, diameter, self.sonar.along)
         self.detect = dict(detect or {})  # detect_image's settings
