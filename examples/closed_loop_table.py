@@ -41,7 +41,8 @@ time in separate processes.
 
 Run time (2 cores): all 255 cells in 328 s with ``--jobs 2`` and nothing else running, 11 minutes
 with ``--jobs 1`` beside other work; the 306 cells with the sensor-trained PPO in 442–688 s with
-``--jobs 2`` beside other processes; the 450 with the imaging sonar's two sensors in 828 s with ``--jobs 2`` (docs/decisions.md, "Every controller through every sensor");
+``--jobs 2`` beside other processes; the 450 with the imaging sonar's two sensors in 828 s with
+``--jobs 2`` (docs/decisions.md, "Every controller through every sensor");
 plus about 6 minutes to train the four policies when ``--policies`` lacks them.
 """
 

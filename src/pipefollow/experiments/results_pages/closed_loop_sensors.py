@@ -47,7 +47,8 @@ noise seed 0, through each sensor: the ideal camera, the rendered camera's detec
 (`--camera vision-raw`), the detector and the tracker (`--camera vision`), the look-ahead sonar
 alone (`--sensor sonar`) and both fused (`--sensor fused --camera vision`), and the same two with
 the forward-looking imaging sonar and its map (`--sensor fls`, `--sensor fused-fls --camera
-vision`); in clear, moderate and turbid water and with the pipe half buried in clear water (`--burial 0.5`: half the pipe's width
+vision`); in clear, moderate and turbid water and with the pipe half buried in clear water
+(`--burial 0.5`: half the pipe's width
 under sand for the camera, half its diameter for the sonar). The ideal camera sees through any
 water: its column repeats in every water.
 
@@ -58,7 +59,8 @@ heuristic's own rows against the heuristic on the ideal camera (the second refer
 each controller in murky water or with the pipe half buried against **the same controller through
 the same sensor in clear water** (paired per pipe): what the water, or the sand, costs it.
 `pipefollow benchmark --sensor S --camera C --water W` prints the second table's two references for one
-cell. In the third table the sonars' columns in moderate and turbid water are 0: turbidity does not reach them.
+cell. In the third table the sonars' columns in moderate and turbid water are 0: turbidity does not
+reach them.
 
 * **Against the heuristic through the same sensor**, of {n_cells} learned or LOS cells:
   {n_better} better (interval above 0), {n_worse} worse (below 0), the rest undecided.
