@@ -8,7 +8,7 @@ The closed-loop table (``examples/closed_loop_table.py``) measures every cell at
 one policy a learner. This runs a controller (a built-in name or a policy file, as ``pipefollow
 benchmark --controller`` takes it; ``NAME=FILE`` labels a file, and files given the same NAME are
 one learner's training seeds) on each suite's pipes, 60 s each, through ``--sensor`` in ``--water``
-(``--sensor sonar``: with the ideal camera) and on the ideal camera, with the same noise (the
+(``--sensor sonar`` or ``fls``: with the ideal camera) and on the ideal camera, with the same noise (the
 benchmark's generator of pipe ``k``: ``SeedSequence([seed, k])``), at every noise seed of
 ``--seeds``. One line per controller and suite: the loss of mean return against its own ideal camera
 in each run (each policy at each noise seed: the mean of the per-pipe differences), their mean and

@@ -5,7 +5,7 @@ Usage: ``python benchmarks/tracker_suites.py [--suites heldout heldout-hard held
 
 Each suite's pipes run one 60-s episode each with the heuristic on ``--camera`` through
 ``--sensor`` (as ``pipefollow benchmark --controller heuristic --suite S --camera vision --sensor
-camera --water clear --burial 0`` runs them; ``--sensor sonar`` takes the ideal camera, as the
+camera --water clear --burial 0`` runs them; ``--sensor sonar`` or ``fls`` takes the ideal camera, as the
 environment requires) and on the ideal camera, with the same noise. One line per suite: the loss of return
 against the ideal camera (mean of the per-pipe differences, bootstrap CI), the pipes lost
 (pipe in view < 0.8) that the ideal camera keeps, the episodes that turned back, and the success

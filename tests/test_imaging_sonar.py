@@ -178,8 +178,16 @@ def test_map_keeps_the_last_way():
 def test_map_forgets_old_pings():
     m = axis_map(memory=2)
     m.update((0.0, 0.0, 0.0), highlights(((0.0, 1.0), (0.0, 2.5))))
-    m.update((0.0, 0.0, 0.0), ImageFix(False))
-    assert m.update((0.0, 0.0, 0.0), ImageFix(False)).in_view is False
+    assert m.update((0.0, 0.0, 0.0), ImageFix(False)).in_view  # one ping old: kept
+    assert m.update((0.0, 0.0, 0.0), ImageFix(False)).in_view is False  # two: forgotten
+
+
+def test_a_look_from_another_pose_leaves_the_map_as_it_was():
+    m = axis_map()
+    m.update((0.0, 0.0, 0.0), highlights(((0.3, 1.0), (-0.8, 2.4))))
+    kept = m._last.copy()
+    m.view((3.0, 0.0, math.pi))
+    np.testing.assert_array_equal(m._last, kept)
 
 
 def test_sensor_sees_a_straight_pipe_ahead():
@@ -211,7 +219,16 @@ def test_ranges_that_never_reach_the_seabed():
         check_imaging_sonar(ImagingSonar(range_min=0.5, range_max=1.5))
     with pytest.raises(ImagingSonarError, match="range_max"):
         check_imaging_sonar(ImagingSonar(range_min=3.0, range_max=2.5))
+    with pytest.raises(ImagingSonarError, match="n_beams must be a finite number"):
+        check_imaging_sonar(ImagingSonar(n_beams=float("inf")))
+
+
+def test_bad_map_sensor_and_render_arguments_are_one_line_errors():
     with pytest.raises(ValueError, match="memory"):
         ImagingMap(memory=0)
     with pytest.raises(ValueError, match="burial"):
         ImagingSensor(burial=1.5)
+    with pytest.raises(ValueError, match=r"unknown detect setting\(s\) \['thresh'\]"):
+        ImagingSensor(detect={"thresh": 4.0})
+    with pytest.raises(ImagingSonarError, match="out"):
+        render_image(FAR, FAR_CUM, (0.0, 0.0, 0.0), np.random.default_rng(0), out=np.empty((3, 3)))

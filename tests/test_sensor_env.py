@@ -94,6 +94,18 @@ def test_the_imaging_sonar_follows_where_the_camera_is_murky():
     assert runs["fused-fls"][2] <= runs["fused"][2] - 2
 
 
+def test_a_reset_forgets_the_imaging_sonar_s_map():
+    env = PipelineFollowingEnv("paper-validation", 20.0, sensor="fls")
+    first = [env.reset(seed=2)[0]]
+    for _ in range(10):
+        first.append(env.step([0.1])[0])
+    assert env._vision.sonar.track._count > 0
+    again = [env.reset(seed=2)[0]]  # the same episode again, nothing remembered from the first
+    for _ in range(10):
+        again.append(env.step([0.1])[0])
+    np.testing.assert_array_equal(np.array(first), np.array(again))
+
+
 def test_the_sonar_draws_from_a_generator_of_its_own():
     # camera noise draws normals from np_random every decision: with or without the sonar the same count
     kwargs = {"disturbance": {"camera_noise": 0.05}}
@@ -132,7 +144,7 @@ def test_the_sonar_is_deterministic_with_the_seed(kwargs):
     assert not np.array_equal(observations(4), observations(5))
 
 
-@pytest.mark.parametrize("sensor", ["sonar", "fused", "fls"])
+@pytest.mark.parametrize("sensor", ["sonar", "fused", "fls", "fused-fls"])
 def test_vector_env_with_the_sonar_equals_single_environments(sensor):
     kwargs = {"episode_seconds": 5.0, "sensor": sensor, "start_lateral_noise": 0.4}
     vec = PipelineFollowingVectorEnv(3, "random:medium", **kwargs)

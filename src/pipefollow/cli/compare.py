@@ -69,7 +69,7 @@ def compare(policies, labels, suite_specs, seconds, pipes, reps, seed, plot_path
     under the readings it was trained with. Policies of one learner (same training options, or
     same --label) are its runs; the intervals are rliable's stratified bootstrap over runs, kept
     per pipe, so they need several training seeds per learner. With --camera vision (or --sensor
-    sonar, fused) every policy observes through that camera or sensor and water.
+    sonar, fused, fls, fused-fls) every policy observes through that camera or sensor and water.
     """
     import numpy as np
 

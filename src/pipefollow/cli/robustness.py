@@ -98,7 +98,7 @@ def robustness(controllers, suite_specs, pipes, seconds, speeds, sets, seed, out
     (pipe k's current always flows towards the same seeded direction) and on each scenario set
     (currents, camera noise, missed detections, buried stretches, all at once; seeded per pipe), beside
     the heuristic. Policies that share a label are pooled as training seeds.
-    With --camera vision (or --sensor sonar, fused) every controller, the heuristic beside them too,
+    With --camera vision (or a --sensor sonar) every controller, the heuristic beside them too,
     observes through that camera or sensor and water; success and in view are the exact camera's.
     """
     from pipefollow.evaluation import robustness as rb

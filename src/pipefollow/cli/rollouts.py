@@ -63,7 +63,7 @@ def rollouts(controller, lookahead, suite_specs, pipes, seconds, sigma, seed, ou
 
     Observations, actions, rewards and the infos of every step, one episode per pipe; needs the
     optional extra 'rollouts'. Read it back with minari.load_dataset(ID) and MINARI_DATASETS_PATH=OUT.
-    With --camera vision (or --sensor sonar, fused) the controller observes through that camera or
+    With --camera vision (or a --sensor sonar) the controller observes through that camera or
     sensor and water, and the dataset's environment is that one.
     """
     from pathlib import Path

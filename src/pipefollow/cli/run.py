@@ -118,7 +118,7 @@ def train(
     Every learner option of experiment files is an option here too (--critic-lambda, --alpha-v,
     --sigma-start, --state, ...): the same values give the same policy. An --out folder that already
     holds them is refused unless --force is given. Ctrl-C stops without writing anything (exit status 130).
-    With --camera vision (or --sensor sonar, fused) and its water every learner trains through that
+    With --camera vision (or a --sensor sonar) and its water every learner trains through that
     camera or sensor: the paper's learners then run in the environment, frame by frame, instead of
     their compiled loop of the ideal camera.
     """

@@ -124,7 +124,7 @@ def benchmark(
     the success rate (pipe in view at ≥ 95 % of the decisions and followed forward), the episodes
     that turned back and, for a controller other than the heuristic, the paired per-pipe difference
     to the heuristic with its confidence interval.
-    With --camera vision (or --sensor sonar, fused) the controller sees through the pipe detector
+    With --camera vision (or a --sensor sonar) the controller sees through the pipe detector
     (the pipe in view is still the exact camera's) and is compared with the heuristic through the
     same camera, sensor and water, and with the heuristic on the ideal camera as a second reference.
     """

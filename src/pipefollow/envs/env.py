@@ -187,8 +187,9 @@ class PipelineFollowingEnv(gym.Env):
     read there; steps past the end repeat them. With the vision camera also ``detected``,
     ``detection_confidence``, ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl`` (the
     exact camera's; with the tracker also ``track_confidence``); the episode's summary is then the
-    exact camera's too. With ``sensor="sonar"`` or ``"fused"`` also ``sonar_detected`` (the ping
-    found the pipe anywhere in its swath), ``sonar_in_view`` (its line crosses the footprint) and
+    exact camera's too. With a sonar (``sensor="sonar"``, ``"fused"``, ``"fls"``, ``"fused-fls"``) also
+    ``sonar_detected`` (the ping found the pipe anywhere in its swath or image), ``sonar_in_view``
+    (its line, or its map's piece, crosses the footprint) and
     the exact camera's ``true_pipe_in_view``, ``true_e_dist`` and ``true_e_angl``.
     ``reached_pipe_end`` (a 0-d bool) is in every info too: True once the
     episode has ended at the pipe's far end.

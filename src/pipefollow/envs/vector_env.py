@@ -197,7 +197,7 @@ class PipelineFollowingVectorEnv(VectorEnv):
         self._no_skip = np.zeros(n, dtype=bool)
         self._ends = np.zeros(n, dtype=np.int64)
         # the vision camera renders and detects per sub-environment after the batched decision
-        # (and the sonar with sensor="sonar" or "fused": pipefollow.perception.sensor)
+        # (and the sonar with sensor="sonar", "fused", "fls" or "fused-fls": pipefollow.perception.sensor)
         cam, lost = self.params.camera, self.params.lost_reward
         cams = [make_sensor(self.camera_settings, cam, lost) for _ in range(n)]
         self._cams = cams if cams[0] is not None else None

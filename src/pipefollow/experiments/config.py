@@ -148,7 +148,8 @@ def _check_water(value, where: str, camera, sensor="camera") -> dict | str:
 
     if camera not in VISION_CAMERAS and sensor == "camera":
         raise ConfigError(
-            f"{where}: water settings need camera = 'vision' or 'vision-raw' or a sonar sensor, "
+            f"{where}: water settings need camera = 'vision' or 'vision-raw' or sensor = 'sonar', 'fused', "
+            "'fls' or 'fused-fls', "
             f"got camera = {camera!r}"
         )
     if not isinstance(value, (str, dict)):

@@ -192,7 +192,7 @@ def line_piece(px, py, used, n, min_cells, min_length, inlier, d_theta, d_bin, a
             used[k] = True
     if m < min_cells or hi - lo < min_length:
         return False, 0.0, 0.0, 0.0, 0.0, m
-    if (mx * ct + my * st) - along * st < 0.0:  # the normal pointing away from the transducer
+    if (mx * ct + my * st) - along * st < 0.0:  # turn the normal to point away from the transducer
         ct, st = -ct, -st
     mx, my = mx + shift * ct, my + shift * st  # from the face towards the sonar to the axis
     ax, ay = mx + lo * ux, my + lo * uy

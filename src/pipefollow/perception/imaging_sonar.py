@@ -26,7 +26,8 @@ A lit sample at slant range ``r`` and depression ``δ`` adds to the range bin of
 the pipe), ``θ`` the angle between the surface normal and the direction to the transducer
 (Lambert's law), ``a`` the sample's surface length, ``G`` the vertical beam pattern (Gaussian,
 −3 dB at ``±vertical/2`` off the tilt, two-way). A bin's intensity is its energy divided by the
-bin's width plus the noise floor ``floor`` (a share of the seabed's mean at the tilt), times an
+bin's width plus the noise floor ``floor`` (times ``sin² tilt``, the Lambert echo at the tilt; the
+seabed's mean a bin there is ``sin² tilt / cos tilt``, so 0.05 is 3.5 % of it), times an
 independent standard exponential (fully developed speckle: a Rayleigh amplitude). The image is
 what the sonar's time-varied gain shows: spreading and absorption are taken as compensated.
 
@@ -47,7 +48,8 @@ range_resolution   0.025 m      BlueView M900-130: 2.5 cm (datasheet); Oculus M7
 range_min/max      2.2–4.4 m    slant ranges of the seabed 0.9–3.9 m ahead from 2 m
 pipe_strength      5            a steel or concrete-coated pipe's echo over sand (an order
                                 of magnitude in target strength per unit area; assumed)
-floor              0.05         the noise floor in the shadows (share of the seabed's mean)
+floor              0.05         the noise floor in the shadows (× sin² tilt: 3.5 % of the
+                                seabed's mean at the tilt)
 =================  ===========  ==============================================================
 
 Randomness: :func:`render_image` draws ``n_beams × n_bins`` standard exponentials (the speckle)
@@ -83,7 +85,7 @@ class ImagingSonar(NamedTuple):
     range_max: float = 4.4  # its farthest (m), (range_min, 100]
     range_resolution: float = 0.025  # the range bins' width (m), (0, 1]
     pipe_strength: float = 5.0  # the pipe's backscatter over the seabed's, (0, 1000]
-    floor: float = 0.05  # the noise floor (share of the seabed's mean at the tilt), [0, 10]
+    floor: float = 0.05  # the noise floor, times sin² tilt (module docstring), [0, 10]
     step: float = 0.01  # the height field's sampling along a beam (m), (0, 0.1]
 
 
@@ -168,13 +170,19 @@ def render_image(
     """One ping from ``pose`` = (x, y, ψ) over the pipeline ``points`` (module docstring).
 
     ``angles`` (:func:`bearings`) and ``out`` (an ``(n_beams, n_bins)`` array for the mean) may be
-    passed to save their allocation.
+    passed to save their allocation; the returned image's ``mean`` is then ``out`` itself, which the
+    next call with it overwrites.
     """
     s = sonar
     if angles is None:
         angles = bearings(s)
     nb = n_bins(s)
     mean = np.empty((s.n_beams, nb)) if out is None else out
+    if angles.shape != (s.n_beams,) or mean.shape != (s.n_beams, nb):
+        raise ImagingSonarError(
+            f"angles must have shape ({s.n_beams},) and out ({s.n_beams}, {nb}) for this sonar, "
+            f"got {angles.shape} and {mean.shape}"
+        )
     x, y, psi = pose
     _render(
         np.ascontiguousarray(points, dtype=np.float64), np.ascontiguousarray(cum, dtype=np.float64),
@@ -250,7 +258,7 @@ def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, b
     seg = np.empty((64, 5))
     n = _near(points, cum, x, y, psi, rho_max + 2.0 * diameter, along, buried_from, buried_to, seg)
     k_beam = 4.0 * math.log(2.0) / (vertical * vertical)  # G(δ)² = exp(-k (δ - tilt)²), two-way
-    ref = math.sin(tilt) ** 2  # the seabed's mean at the tilt (Lambert), the floor's reference
+    ref = math.sin(tilt) ** 2  # the Lambert echo at the tilt, the floor's reference
     # the height field's samples: from where a pipe could shadow the image's nearest range
     rho_min = math.sqrt(max(r_min * r_min - altitude * altitude, 0.0))
     q0 = int(max(rho_min - 4.0 * diameter, step) / step)

@@ -1,10 +1,11 @@
 """A map of what a forward-looking sonar saw, and the pipe it shows in the camera's footprint.
 
-The imaging sonar (:mod:`pipefollow.perception.imaging_sonar`) sees a strip of seabed about
-1.2–3.9 m ahead; the camera's footprint reaches from under the AUV's nose to 3 m ahead. What the
-sonar saw a few pings ago lies in the footprint now. :class:`ImagingMap` keeps the highlights
-(:attr:`~pipefollow.perception.imaging_detect.ImageFix.points`) of the last ``memory`` pings in
-the earth frame, placed by the pose of their ping, and at each decision runs the detector's line
+The imaging sonar (:mod:`pipefollow.perception.imaging_sonar`) images the seabed 0.9–3.9 m
+ahead, its vertical beam mostly 1.4–2.9 m; the camera's footprint reaches from under the AUV's
+nose to 3 m ahead. What the sonar saw a few pings ago lies in the footprint now.
+:class:`ImagingMap` keeps the highlights
+(:attr:`~pipefollow.perception.imaging_detect.ImageFix.points`) of the last ``memory`` pings in the
+earth frame, placed by the pose of their ping, and at each decision runs the detector's line
 search (:func:`~pipefollow.perception.imaging_detect.line_piece`) on those that now lie in the
 footprint (within :data:`MARGIN`): the strongest line, and a second one among the others that
 meets it at more than :data:`BEND_DEG` within :data:`LINK_M` of both pieces (a bend: two legs).
@@ -98,16 +99,23 @@ class ImagingMap:
         self._count = _add_points(
             self._points, self._count, fix.points, float(x), float(y), float(psi), self._ping
         )
-        self.last = self.view(pose, fix.found)
+        self.last = self._view(pose, fix.found, self._last)
         return self.last
 
     def view(self, pose: tuple[float, float, float], detected: bool = True) -> SonarView:
-        """The pipe the highlights show in the camera's footprint from ``pose`` (class docstring)."""
+        """The pipe the highlights show in the camera's footprint from ``pose`` (class docstring).
+
+        A look from any pose: the map's memory of the last view's way and near end, which
+        :meth:`update` keeps, is not changed.
+        """
+        return self._view(pose, detected, self._last.copy())
+
+    def _view(self, pose, detected: bool, last: np.ndarray) -> SonarView:
         x, y, psi = pose
         cam = self.camera
         r = _map_view(self._points, self._count, self._ping - self.memory, float(x), float(y), float(psi),
-                        cam.half_width, cam.depth, self._settings, self._last)  # fmt: skip
-        n, x1, y1, x2, yn, lateral, angle = r
+                      cam.half_width, cam.depth, self._settings, last)  # fmt: skip
+        n, x1, y1, x2, yn, lateral, angle = r  # n: the highlights the view was found in (SonarView.pings)
         if n == 0:
             return SonarView(False, 0.0, 0.0, 0.0, 0.0, lateral, angle, detected, 0)
         return SonarView(True, x1, y1, x2, yn, lateral, angle, detected, n)
@@ -213,6 +221,19 @@ def _to_segment(px, py, ax, ay, bx, by):
     return math.hypot(ax + t * ux - px, ay + t * uy - py)
 
 
+# detect_image's settings an ImagingSensor takes (``detect=``)
+DETECT_SETTINGS = (
+    "threshold",
+    "smooth",
+    "min_cells",
+    "min_length",
+    "inlier",
+    "smooth_beams",
+    "max_pieces",
+    "face",
+)
+
+
 class ImagingSensor:
     """The forward-looking imaging sonar of one vehicle: render, detect and map once per decision.
 
@@ -237,6 +258,9 @@ class ImagingSensor:
         self.diameter, self.burial = float(diameter), float(burial)
         self.track = ImagingMap(memory, camera, diameter, self.sonar.along)
         self.detect = dict(detect or {})  # detect_image's settings
+        unknown = sorted(set(self.detect) - set(DETECT_SETTINGS))
+        if unknown:
+            raise ValueError(f"unknown detect setting(s) {unknown}; allowed: {', '.join(DETECT_SETTINGS)}")
         self._angles, self._ranges = bearings(self.sonar), bin_ranges(self.sonar)
         self._mean = np.empty((self.sonar.n_beams, self._ranges.size))
         self.image = None

@@ -148,6 +148,8 @@ def check_ranges(s, ranges: dict, whole: tuple, error: type[ValueError], what: s
         value = getattr(s, name)
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise error(f"{what} setting {name} must be a number, got {value!r}")
+        if not math.isfinite(value):
+            raise error(f"{what} setting {name} must be a finite number, got {value}")
         if name in whole and value != int(value):
             raise error(f"{what} setting {name} must be a whole number, got {value}")
         low_ok = value >= lo if closed else value > lo

@@ -56,7 +56,7 @@ class SonarView(NamedTuple):
     lateral: float  # the line's lateral offset at the AUV's centre (forward 0), even outside the footprint
     angle: float  # its angle to the track (rad, positive turning to starboard ahead)
     detected: bool  # the current ping found the pipe (anywhere in the swath)
-    pings: int  # detections the line was fitted to
+    pings: int  # detections the line was fitted to (the imaging sonar's map: highlights in the footprint)
 
 
 NO_VIEW = SonarView(False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, 0)

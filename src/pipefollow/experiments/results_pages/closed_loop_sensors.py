@@ -67,7 +67,8 @@ reach them.
 * **The heuristic's loss to the ideal camera** (mean, over the waters; per suite): {heuristic_loss}.
 * **With the pipe half buried against clear water** (the same controller through the same sensor,
   paired per pipe), of {n_buried} cells: {buried_worse} worse half buried (interval below 0),
-  {buried_better} better, the rest undecided; through the fused sensor {fused_buried}.
+  {buried_better} better, the rest undecided; through the camera fused with the multibeam sonar
+  {fused_buried}.
 * **The best controller per sensor** (the highest mean return over the suites and waters):
   {best}.
 

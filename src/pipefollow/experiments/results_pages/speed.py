@@ -81,7 +81,7 @@ RUN_TEXT = """\
 TITLES = {
     "run": "The simulator, the learners and the reproduction",
     "vision": "The vision camera",
-    "sonar": "The multibeam sonar",
+    "sonar": "The sonars: the multibeam profiler and the imaging sonar",
     "compare": "Comparing policies",
 }
 
