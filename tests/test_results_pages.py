@@ -526,7 +526,7 @@ def test_the_sensor_section_sets_each_water_against_the_same_controller_in_clear
     assert costs[1]["sonar"] == f"+2.0 [{MINUS}1.0, +5.0]"  # undecided
     assert "of 2 cells: 1 worse half buried (interval below 0),\n  0 better, the rest undecided" in text
     # without a fused cell the fused count says so
-    assert "through the fused sensor —." in text
+    assert "through the camera fused with the multibeam sonar\n  —." in text
     fused = _sensor_row(
         "fused", "half-buried", "ppo", "PPO", "-80.0", "0.6", "2", None, None, ("-3.0", "-6.0", "-0.5")
     )
@@ -534,7 +534,7 @@ def test_the_sensor_section_sets_each_water_against_the_same_controller_in_clear
     text = section(tmp_path)
     assert (
         "of 3 cells: 2 worse half buried" in text
-        and "through the fused sensor `heldout` 1 of 1 worse." in text
+        and "through the camera fused with the multibeam sonar\n  `heldout` 1 of 1 worse." in text
     )
 
 
