@@ -30,6 +30,7 @@ end as the far one; no memory of the last near end).
 
 from __future__ import annotations
 
+import inspect
 import math
 
 import numpy as np
@@ -58,7 +59,7 @@ from pipefollow.perception.imaging_sonar import (
 from pipefollow.perception.sonar import check_pipe
 from pipefollow.perception.sonar_detect import SonarFix
 from pipefollow.perception.sonar_track import NO_VIEW, SonarView
-from pipefollow.sim.camera import PAPER_CAMERA, CameraParams
+from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, to_camera
 from pipefollow.sim.disturbance import NO_BURIAL
 
 # the map's settings, chosen on the training suites (docs/decisions.md, "A forward-looking imaging sonar")
@@ -144,7 +145,7 @@ def _map_view(E, count, oldest, x, y, psi, half_width, depth, st, last):
     m = E.shape[0]
     cs, sn = math.cos(psi), math.sin(psi)
     live = min(count, m)
-    px, py, pa = np.empty(live), np.empty(live), np.empty(live)
+    px, py = np.empty(live), np.empty(live)
     n = 0
     for i in range(live):
         k = (count - 1 - i) % m
@@ -153,7 +154,7 @@ def _map_view(E, count, oldest, x, y, psi, half_width, depth, st, last):
         dx, dy = E[k, 0] - x, E[k, 1] - y
         l, f = -sn * dx + cs * dy, cs * dx + sn * dy
         if abs(l) <= half_width + margin and -margin <= f <= depth + margin:
-            px[n], py[n], pa[n] = l, f, E[k, 2]
+            px[n], py[n] = l, f
             n += 1
     used = np.zeros(n, dtype=np.bool_)
     fa, ax1, ay1, ax2, ay2, ma = line_piece(
@@ -179,11 +180,11 @@ def _map_view(E, count, oldest, x, y, psi, half_width, depth, st, last):
             db = _to_segment(cx, cy, bx1, by1, bx2, by2)
             two = da <= link and db <= link
     if two:
-        # the leg nearer the AUV's centre is the near one; each leg's end away from the corner
-        ox, oy = 0.0, 0.0  # the leg nearer the last near end (else the AUV's centre) is the near one
+        # the leg nearer the last near end (else the AUV's centre) is the near one; each leg's end
+        # away from the corner
+        ox, oy = 0.0, 0.0
         if last[2] == last[2]:
-            dx, dy = last[2] - x, last[3] - y
-            ox, oy = -sn * dx + cs * dy, cs * dx + sn * dy
+            ox, oy = to_camera(last[2], last[3], x, y, psi)
         if _to_segment(ox, oy, bx1, by1, bx2, by2) < _to_segment(ox, oy, ax1, ay1, ax2, ay2):
             ax1, ay1, ax2, ay2, bx1, by1, bx2, by2 = bx1, by1, bx2, by2, ax1, ay1, ax2, ay2
         if math.hypot(ax1 - cx, ay1 - cy) > math.hypot(ax2 - cx, ay2 - cy):
@@ -221,16 +222,11 @@ def _to_segment(px, py, ax, ay, bx, by):
     return math.hypot(ax + t * ux - px, ay + t * uy - py)
 
 
-# detect_image's settings an ImagingSensor takes (``detect=``)
-DETECT_SETTINGS = (
-    "threshold",
-    "smooth",
-    "min_cells",
-    "min_length",
-    "inlier",
-    "smooth_beams",
-    "max_pieces",
-    "face",
+# detect_image's settings an ImagingSensor takes (``detect=``): its arguments but those the sensor passes
+DETECT_SETTINGS = tuple(
+    k
+    for k in inspect.signature(detect_image).parameters
+    if k not in ("image", "diameter", "angles", "ranges")
 )
 
 
