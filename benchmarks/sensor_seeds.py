@@ -52,10 +52,10 @@ def main() -> None:
     ap.add_argument("--pipes", type=int, default=None, help="the first N pipes of each suite [all]")
     ap.add_argument("--goal", type=float, default=25.0, help="the loss a pipe a run must not exceed")
     args = ap.parse_args()
+    from pipefollow.perception.camera import SONAR_ALONE
+
     camera = {
-        "camera": "ideal"
-        if args.sensor in ("sonar", "fls")
-        else args.camera,  # a sonar alone: no camera image
+        "camera": "ideal" if args.sensor in SONAR_ALONE else args.camera,  # a sonar alone: no camera image
         "sensor": args.sensor,
         "water": {"preset": args.water, "burial": args.burial},
     }

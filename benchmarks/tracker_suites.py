@@ -31,13 +31,14 @@ def judge(
     """One suite's line (module docstring) as a dict."""
     from pipefollow.evaluation.benchmark import LOST_IN_VIEW, benchmark
     from pipefollow.learners.heuristic import Heuristic
+    from pipefollow.perception.camera import SONAR_ALONE
     from pipefollow.sim.suites import LEVELS, SUITES, TRAIN_STREAM, Suite, get_suite
 
     if suite_name not in SUITES and suite_name in LEVELS:  # a level without a training family
         suite = Suite(suite_name, suite_name, TRAIN_STREAM, None, "the level's training-stream pipes")
     else:
         suite = get_suite(suite_name)
-    camera = "ideal" if sensor in ("sonar", "fls") else camera  # a sonar alone: no camera image
+    camera = "ideal" if sensor in SONAR_ALONE else camera  # a sonar alone: no camera image
     cam = {"camera": camera, "sensor": sensor, "water": {"preset": water, "burial": burial}}
     kw = {"controller": "heuristic", "n_pipes": n_pipes, "noise_seed": noise_seed}
     run = benchmark(Heuristic(), suite, camera=cam, **kw)
