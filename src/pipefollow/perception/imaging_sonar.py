@@ -21,9 +21,11 @@ in ``buried_from``/``buried_to`` are fully buried).
 
 Echo. Marching outwards, a sample is lit if no nearer sample rises higher in the transducer's
 view (its depression angle is not above the lowest so far): the others lie in the acoustic shadow.
-A lit sample at slant range ``r`` and depression ``δ`` adds to the range bin of ``r`` the energy
-``μ · cos²θ · a · G(δ)²``: ``μ`` the backscatter strength (1 for the seabed, ``pipe_strength`` for
-the pipe), ``θ`` the angle between the surface normal and the direction to the transducer
+A lit sample at slant range ``r`` and depression ``δ`` spreads the energy
+``μ · cos²θ · a · G(δ)²`` evenly over the slant ranges its ``step`` of ``ρ`` spans, each range bin
+taking the share inside it (so a flat seabed's bins show no ripple from the sampling): ``μ``
+the backscatter strength (1 for the seabed, ``pipe_strength`` for the pipe), ``θ`` the angle
+between the surface normal and the direction to the transducer
 (Lambert's law), ``a`` the sample's surface length, ``G`` the vertical beam pattern (Gaussian,
 −3 dB at ``±vertical/2`` off the tilt, two-way). A bin's intensity is its energy divided by the
 bin's width plus the noise floor ``floor`` (times ``sin² tilt``, the Lambert echo at the tilt; the
@@ -263,20 +265,19 @@ def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, b
     rho_min = math.sqrt(max(r_min * r_min - altitude * altitude, 0.0))
     q0 = int(max(rho_min - 4.0 * diameter, step) / step)
     n_samples = int(math.ceil(rho_max / step)) + 1
-    # the flat seabed's bin and energy at each sample, the same for every beam
-    flat_bin = np.full(n_samples, -1, dtype=np.int64)
+    # the flat seabed's slant ranges (the sample's span) and energy at each sample, the same for every beam
+    half = 0.5 * step
+    flat_lo, flat_hi = np.zeros(n_samples), np.zeros(n_samples)
     flat_energy = np.zeros(n_samples)
     flat_row = np.zeros(nb)
     for q in range(q0, n_samples):
         rho = q * step
         r = math.hypot(rho, altitude)
-        jb = int((r - r_min) / dr)
-        if 0 <= jb < nb:
-            off = math.atan2(altitude, rho) - tilt
-            cos_i = altitude / r
-            flat_bin[q] = jb
-            flat_energy[q] = cos_i * cos_i * step * math.exp(-k_beam * off * off)
-            flat_row[jb] += flat_energy[q]
+        flat_lo[q], flat_hi[q] = math.hypot(rho - half, altitude), math.hypot(rho + half, altitude)
+        off = math.atan2(altitude, rho) - tilt
+        cos_i = altitude / r
+        flat_energy[q] = cos_i * cos_i * step * math.exp(-k_beam * off * off)
+        _deposit(flat_row, flat_lo[q], flat_hi[q], flat_energy[q], r_min, dr)
     for j in range(nb):
         flat_row[j] = flat_row[j] / dr + floor * ref
     heights = np.zeros(n_samples)
@@ -328,13 +329,12 @@ def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, b
                 continue  # in the shadow of a nearer sample
             lowest = tan_d
             if z <= 0.0:
-                if flat_bin[q] >= 0:
-                    mean[i, flat_bin[q]] += flat_energy[q]
+                _deposit(mean[i], flat_lo[q], flat_hi[q], flat_energy[q], r_min, dr)
                 continue
             heights[q] = 0.0
             r = math.hypot(rho, drop)
-            jb = int((r - r_min) / dr)
-            if jb < 0 or jb >= nb:
+            r_lo, r_hi = math.hypot(rho - half, drop), math.hypot(rho + half, drop)
+            if r_hi <= r_min or r_lo >= r_max:
                 continue
             slope = slopes[q]
             # the surface's normal (-slope, 1)/√(1+slope²) against the way to the transducer (-ρ, drop)/r
@@ -343,12 +343,33 @@ def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, b
             if cos_i <= 0.0:
                 continue
             off = math.atan2(drop, rho) - tilt
-            mean[i, jb] += strength * cos_i * cos_i * step * norm * math.exp(-k_beam * off * off)
+            energy = strength * cos_i * cos_i * step * norm * math.exp(-k_beam * off * off)
+            _deposit(mean[i], r_lo, r_hi, energy, r_min, dr)
         for q in range(first, min(last + 1, n_samples)):
             heights[q] = 0.0
         for j in range(nb):
             mean[i, j] = mean[i, j] / dr + floor * ref
     return n
+
+
+@njit(cache=True)
+def _deposit(row, r_lo, r_hi, energy, r_min, dr):
+    """Add a sample's ``energy``, spread evenly over its slant ranges ``r_lo``–``r_hi``, to ``row``'s bins.
+
+    Each bin takes the share of the span inside it; what falls outside the image is dropped.
+    """
+    nb = row.shape[0]
+    u0, u1 = (r_lo - r_min) / dr, (r_hi - r_min) / dr
+    width = u1 - u0
+    if width <= 0.0:
+        j = int(math.floor(u0))
+        if 0 <= j < nb:
+            row[j] += energy
+        return
+    for j in range(max(int(math.floor(u0)), 0), min(int(math.floor(u1)) + 1, nb)):
+        share = min(u1, j + 1.0) - max(u0, float(j))
+        if share > 0.0:
+            row[j] += energy * share / width
 
 
 __all__ = [

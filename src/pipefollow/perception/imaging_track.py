@@ -19,7 +19,8 @@ footprint and its far end where it leaves:
 * one line: the way of the last view (remembered as a direction in the earth frame) if there was
   one; else its end nearer the AUV's centre is the near end.
 
-The ends are clamped to the footprint. docs/decisions.md ("A forward-looking imaging sonar") has
+Each end is clipped to the footprint along its line (a leg's towards the corner), which keeps
+the line's direction. docs/decisions.md ("A forward-looking imaging sonar") has
 the readings measured beside this one (a map of each ping's straight piece; the newer highlights'
 end as the far one; no memory of the last near end).
 
@@ -59,7 +60,7 @@ from pipefollow.perception.imaging_sonar import (
 from pipefollow.perception.sonar import check_pipe
 from pipefollow.perception.sonar_detect import SonarFix
 from pipefollow.perception.sonar_track import NO_VIEW, SonarView
-from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, to_camera
+from pipefollow.sim.camera import PAPER_CAMERA, CameraParams, clip_segment, to_camera
 from pipefollow.sim.disturbance import NO_BURIAL
 
 # the map's settings, chosen on the training suites (docs/decisions.md, "A forward-looking imaging sonar")
@@ -203,14 +204,34 @@ def _map_view(E, count, oldest, x, y, psi, half_width, depth, st, last):
             gl, gf = -sn * last[0] + cs * last[1], cs * last[0] + sn * last[1]  # the last way in this frame
             if (fx - nx) * gl + (fy - ny) * gf < 0.0:
                 nx, ny, fx, fy = fx, fy, nx, ny
-    nx, ny = min(max(nx, -half_width), half_width), min(max(ny, 0.0), depth)
-    fx, fy = min(max(fx, -half_width), half_width), min(max(fy, 0.0), depth)
+    # each end clipped to the footprint along its own leg (towards the corner) or the line
+    if two:
+        nx, ny = _clip_end(nx, ny, cx, cy, half_width, depth)
+        fx, fy = _clip_end(fx, fy, cx, cy, half_width, depth)
+    else:
+        near = _clip_end(nx, ny, fx, fy, half_width, depth)
+        fx, fy = _clip_end(fx, fy, nx, ny, half_width, depth)
+        nx, ny = near
     el, ef = fx - nx, fy - ny  # the way near → far, and the near end, in the earth frame
     last[0], last[1] = cs * ef - sn * el, sn * ef + cs * el
     last[2], last[3] = x + cs * ny - sn * nx, y + sn * ny + cs * nx
     angle = math.atan2(fx - nx, fy - ny)
     lateral = nx - ny * (fx - nx) / (fy - ny) if abs(fy - ny) > 1e-9 else nx
     return n, fx, fy, nx, ny, lateral, angle
+
+
+@njit(cache=True)
+def _clip_end(px, py, qx, qy, half_width, depth):
+    """The end ``p`` of the segment ``q``–``p`` clipped to the footprint |x| ≤ half_width, 0 ≤ y ≤ depth.
+
+    ``p`` if it lies inside; else where the segment, followed from ``q``, last leaves the footprint;
+    ``p`` clamped coordinate by coordinate if the segment misses the footprint (a line within the
+    margin only).
+    """
+    t0, t1 = clip_segment(qx, qy, px, py, -half_width, half_width, 0.0, depth)
+    if t0 > t1:
+        return min(max(px, -half_width), half_width), min(max(py, 0.0), depth)
+    return qx + t1 * (px - qx), qy + t1 * (py - qy)
 
 
 @njit(cache=True)

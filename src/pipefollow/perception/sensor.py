@@ -166,8 +166,13 @@ class SonarSensors:
         return sim_reward
 
     def _feed(self, view) -> None:
-        """The sonar's view as the camera's measurement where the camera finds no pipe (or none yet)."""
-        self.vision.fallback = _as_detection(view) if view.in_view else None
+        """The sonar's view as the camera's measurement where the camera finds no pipe (or none yet).
+
+        Only a view of a ping that found the pipe: the imaging sonar's map shows what earlier pings
+        saw after a miss too, and the tracker would take that memory as a new measurement each
+        frame (the profiler's view, fed without carry, is shown only when its ping found the pipe).
+        """
+        self.vision.fallback = _as_detection(view) if view.in_view and view.detected else None
 
     def _aid(self, tracker: PipeTracker) -> np.ndarray:
         """After the camera's frame: the ping's fix on the tracked pipe; the sonar's view if murky or none.
