@@ -2,9 +2,15 @@ r"""The pipe in one forward-looking sonar image: straight pieces on the seabed, 
 
 :func:`detect_image` finds a pipe in one ping of :mod:`pipefollow.perception.imaging_sonar`:
 
-1. each range bin's intensities divided by the seabed's mean at that range, taken robustly as
-   their median over the beams over ln 2 (an exponential's median is ln 2 of its mean; the pipe
-   fills few beams at any one range), then averaged over ``smooth`` range bins (and
+1. each range bin's intensities divided by the seabed's mean at that range, taken robustly from
+   its *lit* cells: those whose means over ``smooth`` range bins (up to the cell and from it)
+   reach :data:`LIT` of the centred mean's :data:`REF_Q` quantile over the beams (acoustic
+   shadow lies near the noise floor, a few
+   hundredths of the seabed's echo), their median over ln 2 (an exponential's median is ln 2 of
+   its mean; the pipe fills few beams at any one range). Not the median of every beam: where the
+   pipe's shadow covers half the beams at a range (a pipe near the transducer, a bend across the
+   sector) that median falls towards the noise floor and the whole range bin's seabed turns into
+   highlights (docs/decisions.md). Then each cell averaged over ``smooth`` range bins (and
    ``smooth_beams`` beams); a cell whose mean exceeds ``threshold`` is a *highlight* (over a
    uniform seabed the mean of three standard exponentials exceeds 5 with probability 4·10⁻⁵:
    about 0.5 false cells in a ping of 128 × 88 cells; none of 300 pings of an empty seabed gave
@@ -46,7 +52,9 @@ HOUGH_BIN = 0.04  # m
 # the track 2 m ahead (20 pings each) the line lay about R nearer the sonar for a pipe lying on the
 # seabed, 0.4 R half buried
 FACE = 0.8
+LIT = 0.1  # a lit cell's range-smoothed echo, at least, in REF_Q quantiles (step 1)
 LN2 = math.log(2.0)
+REF_Q = 0.9  # the quantile over the beams of the range-smoothed echo that LIT is a share of
 MAX_CELLS = 2048  # highlights kept (the first in beam order beyond this)
 SUPPRESS = 0.3  # m: highlights this near a piece found are its own (the highlight is wider than its line)
 MAX_PIECES = 1  # straight pieces sought in one image
@@ -108,8 +116,7 @@ def _highlights(intensity, angles, rho, along, threshold, smooth, smooth_beams, 
     """Step 1–2 of the module docstring: the highlights' seabed positions into ``px, py``; how many."""
     nbeam, nb = intensity.shape
     level = np.empty(nb)
-    for j in range(nb):
-        level[j] = max(np.median(intensity[:, j]) / LN2, 1e-12)  # an exponential's mean is its median / ln 2
+    seabed_level(intensity, smooth, level)
     n = 0
     half = smooth // 2
     for i in range(nbeam):
@@ -128,6 +135,42 @@ def _highlights(intensity, angles, rho, along, threshold, smooth, smooth_beams, 
                 px[n], py[n] = x, y
                 n += 1
     return n
+
+
+@njit(cache=True)
+def seabed_level(intensity, smooth, level):
+    """Each range bin's seabed mean into ``level``, from its lit cells (step 1 of the module docstring).
+
+    A cell is lit when its echo averaged over the ``smooth`` range bins up to it and over those
+    from it both reach :data:`LIT` of the :data:`REF_Q` quantile of the centred averages (one-sided
+    windows: a shadowed cell next to a lit range bin is not taken for lit). A bin with fewer than
+    8 lit cells takes that quantile itself.
+    """
+    nbeam, nb = intensity.shape
+    half = smooth // 2
+    centred, low = np.empty(nbeam), np.empty(nbeam)
+    lit = np.empty(nbeam)
+    for j in range(nb):
+        lo, hi = max(j - half, 0), min(j - half + smooth, nb)
+        before, after = max(j - smooth + 1, 0), min(j + smooth, nb)
+        for i in range(nbeam):
+            total = 0.0
+            for k in range(lo, hi):
+                total += intensity[i, k]
+            centred[i] = total / (hi - lo)
+            a = b = 0.0
+            for k in range(before, j + 1):
+                a += intensity[i, k]
+            for k in range(j, after):
+                b += intensity[i, k]
+            low[i] = min(a / (j + 1 - before), b / (after - j))
+        ref = np.quantile(centred, REF_Q)
+        m = 0
+        for i in range(nbeam):
+            if low[i] >= LIT * ref:
+                lit[m] = intensity[i, j]
+                m += 1
+        level[j] = max(np.median(lit[:m]) / LN2 if m >= 8 else ref, 1e-12)
 
 
 @njit(cache=True)
@@ -225,4 +268,4 @@ def _detect(intensity, angles, rho, along, st, pieces, px, py):
     return count, n
 
 
-__all__ = ["ImageFix", "detect_image", "line_piece"]
+__all__ = ["ImageFix", "detect_image", "line_piece", "seabed_level"]
