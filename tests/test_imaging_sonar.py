@@ -74,7 +74,7 @@ def test_the_seabed_level_ignores_the_shadowed_beams():
     for share in (0.0, 0.5, 0.8):
         img = shadowed_image(rng, share)
         level = np.empty(img.intensity.shape[1])
-        seabed_level(img.intensity, 3, level)
+        seabed_level(img.intensity, level)
         assert np.median(level) == pytest.approx(2.0, rel=0.1)
         # measured: the shadowed bins' mean level 1.02-1.09 of the seabed's, none below 0.66
         assert 0.85 < level[:10].mean() / 2.0 < 1.2 and level[:10].min() / 2.0 > 0.5, share
@@ -83,7 +83,28 @@ def test_the_seabed_level_ignores_the_shadowed_beams():
             assert np.median(img.intensity[:, :10], axis=0).mean() / math.log(2.0) < 0.5 * 2.0
 
 
-@pytest.mark.parametrize("share", [0.5, 0.8])
+def test_a_range_bin_with_too_few_lit_cells_takes_the_nearest_level():
+    """16 beams, ten of them shadowed in bins 0-3 and 8-11: six lit cells there, fewer than eight."""
+    rng = np.random.default_rng(13)
+    mean = np.full((16, 40), 2.0)
+    mean[:10, :4] = mean[:10, 8:12] = 0.07
+    level = np.empty(40)
+    seabed_level(mean * rng.standard_exponential(mean.shape), level)
+    assert np.all(level[:4] == level[4])
+    assert level[8] == level[9] == level[7] and level[10] == level[11] == level[12]  # the nearer own bin
+    assert level[4] == pytest.approx(2.0, rel=0.6)  # one bin's estimate from 16 cells
+
+
+def test_the_seabed_level_of_a_small_sonar():
+    """16 beams: a bin's level from its own lit cells (at least half the beams), near the mean."""
+    rng = np.random.default_rng(14)
+    intensity = 2.0 * rng.standard_exponential((16, 400))
+    level = np.empty(400)
+    seabed_level(intensity, level)
+    assert level.mean() == pytest.approx(2.0, rel=0.1)
+
+
+@pytest.mark.parametrize("share", [0.4, 0.5, 0.8])
 def test_no_piece_where_most_beams_are_in_shadow(share):
     """Measured: no piece in 20 pings at 40-80 % (a piece in each with the median of every beam as level)."""
     rng = np.random.default_rng(12)
@@ -238,6 +259,13 @@ def test_sensor_sees_a_straight_pipe_ahead():
     view = sensor.step(points, cum, (0.0, 0.0, 0.0), rng)
     assert view.in_view and sensor.fix.found
     assert view.x1 == pytest.approx(-0.4, abs=0.08) and view.x2 == pytest.approx(-0.4, abs=0.08)
+
+
+@pytest.mark.parametrize("setting", ["smooth", "smooth_beams", "min_cells", "max_pieces"])
+def test_bad_detect_settings_are_one_line_errors(setting):
+    img = render_image(FAR, FAR_CUM, (0.0, 0.0, 0.0), np.random.default_rng(0))
+    with pytest.raises(ValueError, match=f"detect setting {setting} must be a whole number ≥ 1, got 0$"):
+        detect_image(img, **{setting: 0})
 
 
 @pytest.mark.parametrize(

@@ -3,18 +3,20 @@ r"""The pipe in one forward-looking sonar image: straight pieces on the seabed, 
 :func:`detect_image` finds a pipe in one ping of :mod:`pipefollow.perception.imaging_sonar`:
 
 1. each range bin's intensities divided by the seabed's mean at that range, taken robustly from
-   its *lit* cells: those whose means over ``smooth`` range bins (up to the cell and from it)
-   reach :data:`LIT` of the centred mean's :data:`REF_Q` quantile over the beams (acoustic
-   shadow lies near the noise floor, a few
-   hundredths of the seabed's echo), their median over ln 2 (an exponential's median is ln 2 of
-   its mean; the pipe fills few beams at any one range). Not the median of every beam: where the
-   pipe's shadow covers half the beams at a range (a pipe near the transducer, a bend across the
-   sector) that median falls towards the noise floor and the whole range bin's seabed turns into
-   highlights (docs/decisions.md). Then each cell averaged over ``smooth`` range bins (and
+   its *lit* cells: those whose means over :data:`LIT_BINS` range bins (up to the cell and from
+   it) reach :data:`LIT` of the centred mean's :data:`REF_Q` quantile over the beams (acoustic
+   shadow lies near the noise floor, a few hundredths of the seabed's echo), their median over
+   ln 2 (an exponential's median is ln 2 of its mean; the pipe fills few beams at any one range;
+   dropping the lowest lit cells reads about 5 % high on a uniform seabed). A bin with fewer than
+   :data:`MIN_LIT` lit cells takes the nearest such bin's level (:func:`seabed_level`). Not the
+   median of every beam: where the pipe's shadow covers half the beams at a range (a pipe near the
+   transducer, a bend across the sector) that median falls towards the noise floor and the whole
+   range bin's seabed turns into highlights (docs/decisions.md). Then each cell averaged over
+   ``smooth`` range bins (and
    ``smooth_beams`` beams); a cell whose mean exceeds ``threshold`` is a *highlight* (over a
    uniform seabed the mean of three standard exponentials exceeds 5 with probability 4·10⁻⁵:
-   about 0.5 false cells in a ping of 128 × 88 cells; none of 300 pings of an empty seabed gave
-   a piece, ``tests/test_imaging_sonar.py``);
+   about 0.5 false cells in a ping of 128 × 88 cells, fewer with the level 5 % high; none of 300
+   pings of an empty seabed gave a piece, ``tests/test_imaging_sonar.py``);
 2. each highlight's position on the seabed, its echo taken from the height of a pipe's axis on the
    seabed (``D/2``): ``ρ = √(r² − (altitude − D/2)²)`` along its beam's bearing;
 3. the straight line through most highlights by a Hough transform (directions every
@@ -52,9 +54,11 @@ HOUGH_BIN = 0.04  # m
 # the track 2 m ahead (20 pings each) the line lay about R nearer the sonar for a pipe lying on the
 # seabed, 0.4 R half buried
 FACE = 0.8
-LIT = 0.1  # a lit cell's range-smoothed echo, at least, in REF_Q quantiles (step 1)
+LIT = 0.1  # a lit cell's range-averaged echo, at least, in REF_Q quantiles (step 1)
+LIT_BINS = 3  # range bins averaged to tell a lit cell from a shadowed one
+MIN_LIT = 8  # lit cells a range bin needs for its own level
 LN2 = math.log(2.0)
-REF_Q = 0.9  # the quantile over the beams of the range-smoothed echo that LIT is a share of
+REF_Q = 0.9  # the quantile over the beams of the range-averaged echo that LIT is a share of
 MAX_CELLS = 2048  # highlights kept (the first in beam order beyond this)
 SUPPRESS = 0.3  # m: highlights this near a piece found are its own (the highlight is wider than its line)
 MAX_PIECES = 1  # straight pieces sought in one image
@@ -91,6 +95,10 @@ def detect_image(
     face: float = FACE,
 ) -> ImageFix:
     """The pipe's piece in one image (module docstring); ``angles``/``ranges`` save recomputing them."""
+    for name, value in (("smooth", smooth), ("smooth_beams", smooth_beams), ("min_cells", min_cells),
+                        ("max_pieces", max_pieces)):  # fmt: skip
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ValueError(f"detect setting {name} must be a whole number ≥ 1, got {value!r}")
     s = image.sonar
     if angles is None:
         angles = bearings(s)
@@ -116,7 +124,7 @@ def _highlights(intensity, angles, rho, along, threshold, smooth, smooth_beams, 
     """Step 1–2 of the module docstring: the highlights' seabed positions into ``px, py``; how many."""
     nbeam, nb = intensity.shape
     level = np.empty(nb)
-    seabed_level(intensity, smooth, level)
+    seabed_level(intensity, level)
     n = 0
     half = smooth // 2
     for i in range(nbeam):
@@ -138,21 +146,25 @@ def _highlights(intensity, angles, rho, along, threshold, smooth, smooth_beams, 
 
 
 @njit(cache=True)
-def seabed_level(intensity, smooth, level):
+def seabed_level(intensity, level):
     """Each range bin's seabed mean into ``level``, from its lit cells (step 1 of the module docstring).
 
-    A cell is lit when its echo averaged over the ``smooth`` range bins up to it and over those
-    from it both reach :data:`LIT` of the :data:`REF_Q` quantile of the centred averages (one-sided
-    windows: a shadowed cell next to a lit range bin is not taken for lit). A bin with fewer than
-    8 lit cells takes that quantile itself.
+    A cell is lit when its echo averaged over the :data:`LIT_BINS` range bins up to it and over
+    those from it both reach :data:`LIT` of the :data:`REF_Q` quantile of the centred averages
+    (one-sided windows: a shadowed cell next to a lit range bin is not taken for lit; a shadow
+    shorter than :data:`LIT_BINS` bins is not told from the seabed). A bin with
+    fewer than :data:`MIN_LIT` lit cells (or half its beams, if fewer), nearly all in shadow,
+    takes the level of the nearest bin that has them; the median of every beam / ln 2 if none has.
     """
     nbeam, nb = intensity.shape
-    half = smooth // 2
+    half = LIT_BINS // 2
+    need = max(min(MIN_LIT, nbeam // 2), 1)
     centred, low = np.empty(nbeam), np.empty(nbeam)
     lit = np.empty(nbeam)
+    found = False
     for j in range(nb):
-        lo, hi = max(j - half, 0), min(j - half + smooth, nb)
-        before, after = max(j - smooth + 1, 0), min(j + smooth, nb)
+        lo, hi = max(j - half, 0), min(j - half + LIT_BINS, nb)
+        before, after = max(j - LIT_BINS + 1, 0), min(j + LIT_BINS, nb)
         for i in range(nbeam):
             total = 0.0
             for k in range(lo, hi):
@@ -170,7 +182,25 @@ def seabed_level(intensity, smooth, level):
             if low[i] >= LIT * ref:
                 lit[m] = intensity[i, j]
                 m += 1
-        level[j] = max(np.median(lit[:m]) / LN2 if m >= 8 else ref, 1e-12)
+        if m >= need:
+            level[j] = max(np.median(lit[:m]) / LN2, 1e-12)
+            found = True
+        else:
+            level[j] = math.nan
+    own = level == level  # the bins with enough lit cells
+    for j in range(nb):  # the others: the nearest such bin's level
+        if own[j]:
+            continue
+        if not found:
+            level[j] = max(np.median(intensity[:, j]) / LN2, 1e-12)
+            continue
+        for d in range(1, nb):
+            if j - d >= 0 and own[j - d]:
+                level[j] = level[j - d]
+                break
+            if j + d < nb and own[j + d]:
+                level[j] = level[j + d]
+                break
 
 
 @njit(cache=True)

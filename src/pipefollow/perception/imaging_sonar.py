@@ -22,8 +22,9 @@ in ``buried_from``/``buried_to`` are fully buried).
 Echo. Marching outwards, a sample is lit if no nearer sample rises higher in the transducer's
 view (its depression angle is not above the lowest so far): the others lie in the acoustic shadow.
 A lit sample at slant range ``r`` and depression ``δ`` spreads the energy
-``μ · cos²θ · a · G(δ)²`` evenly over the slant ranges its ``step`` of ``ρ`` spans, each range bin
-taking the share inside it (so a flat seabed's bins show no ripple from the sampling): ``μ``
+``μ · cos²θ · a · G(δ)²`` evenly over the slant ranges its ``step`` of ``ρ`` spans at the sample's
+height, each range bin taking the share inside it (so a flat seabed's bins show no ripple from the
+sampling; on the pipe's sloping face the span ignores the slope): ``μ``
 the backscatter strength (1 for the seabed, ``pipe_strength`` for the pipe), ``θ`` the angle
 between the surface normal and the direction to the transducer
 (Lambert's law), ``a`` the sample's surface length, ``G`` the vertical beam pattern (Gaussian,

@@ -20,7 +20,8 @@ footprint and its far end where it leaves:
   one; else its end nearer the AUV's centre is the near end.
 
 Each end is clipped to the footprint along its line (a leg's towards the corner), which keeps
-the line's direction. docs/decisions.md ("A forward-looking imaging sonar") has
+the line's direction (clamped coordinate by coordinate if the line misses the footprint, within
+:data:`MARGIN` of it). docs/decisions.md ("A forward-looking imaging sonar") has
 the readings measured beside this one (a map of each ping's straight piece; the newer highlights'
 end as the far one; no memory of the last near end).
 

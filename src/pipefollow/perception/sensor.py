@@ -32,9 +32,12 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
 
 ``"fls"`` and ``"fused-fls"`` are ``"sonar"`` and ``"fused"`` with the forward-looking imaging sonar
 (:class:`~pipefollow.perception.imaging_track.ImagingSensor`: a sector image ahead, its highlights
-kept in a map of the last pings) in the profiler's place, everything else as above; its view is
-shown the way of the tracked line in a murky frame as the profiler's is (docs/decisions.md, "A
-forward-looking imaging sonar").
+kept in a map of the last pings) in the profiler's place, everything else as above, but for two
+things: the map's view is the camera's measurement only after a ping that found the pipe (after a
+miss the map still shows what earlier pings saw, which is no new measurement), and in a murky
+frame that remembered view is still the observation while it crosses the footprint (the profiler's
+view, fed without carry, shows nothing after a miss). Its view is shown the way of the tracked line
+in a murky frame as the profiler's is (docs/decisions.md, "A forward-looking imaging sonar").
 
 The sonar draws its noise (128 normals a ping; the imaging sonar an exponential a cell) from a
 generator of its own, spawned from the environment's at each reset (:func:`spawn`, which draws
