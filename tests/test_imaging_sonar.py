@@ -301,3 +301,34 @@ def test_bad_map_sensor_and_render_arguments_are_one_line_errors():
         ImagingSensor(detect={"thresh": 4.0})
     with pytest.raises(ImagingSonarError, match="out"):
         render_image(FAR, FAR_CUM, (0.0, 0.0, 0.0), np.random.default_rng(0), out=np.empty((3, 3)))
+
+
+def test_the_level_s_selections_equal_numpy_s_median_and_quantile():
+    from pipefollow.perception.imaging_detect import _median, _quantile
+
+    rng = np.random.default_rng(15)
+    for n in (1, 2, 3, 8, 127, 128):
+        x = rng.standard_exponential(n)
+        x[: n // 3] = x[0]  # ties
+        assert _median(x.copy(), n) == pytest.approx(np.median(x), rel=1e-12)
+        assert _quantile(x.copy(), n, 0.9) == pytest.approx(np.quantile(x, 0.9), rel=1e-12)
+
+
+def test_a_sample_s_shares_are_what_deposit_adds():
+    from pipefollow.perception.imaging_sonar import _deposit, _shares
+
+    rng = np.random.default_rng(16)
+    for _ in range(200):
+        lo = rng.uniform(2.1, 4.5)
+        hi = lo + rng.uniform(0.0, 0.03)
+        row, out = np.zeros(88), np.zeros(2)
+        _deposit(row, lo, hi, 1.3, 2.2, 0.025)
+        first, count = _shares(lo, hi, 1.3, 2.2, 0.025, 88, out)
+        if count == 3:  # three bins or more: left to _deposit
+            assert first == -1 and np.count_nonzero(row) >= 3
+            continue
+        mine = np.zeros(88)
+        for j in range(count):
+            mine[first + j] += out[j]
+        np.testing.assert_array_equal(mine, row)
+    assert _shares(2.3, 2.4, 1.0, 2.2, 0.025, 88, np.zeros(2)) == (-1, 3)  # four bins: left to _deposit

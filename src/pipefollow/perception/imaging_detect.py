@@ -159,31 +159,38 @@ def seabed_level(intensity, level):
     nbeam, nb = intensity.shape
     half = LIT_BINS // 2
     need = max(min(MIN_LIT, nbeam // 2), 1)
-    centred, low = np.empty(nbeam), np.empty(nbeam)
+    by_bin = np.empty((nb, nbeam))  # (bin, beam): a bin's beams side by side, read beam by beam
+    for i in range(nbeam):
+        for k in range(nb):
+            by_bin[k, i] = intensity[i, k]
+    centred, low, work = np.zeros(nbeam), np.zeros(nbeam), np.empty(nbeam)
+    a, b = np.zeros(nbeam), np.zeros(nbeam)
     lit = np.empty(nbeam)
     found = False
     for j in range(nb):
         lo, hi = max(j - half, 0), min(j - half + LIT_BINS, nb)
         before, after = max(j - LIT_BINS + 1, 0), min(j + LIT_BINS, nb)
+        centred[:] = 0.0
+        a[:] = 0.0
+        b[:] = 0.0
+        for k in range(lo, hi):  # each beam's sums over the bins in order, as a beam-by-beam loop would
+            centred += by_bin[k]
+        for k in range(before, j + 1):
+            a += by_bin[k]
+        for k in range(j, after):
+            b += by_bin[k]
         for i in range(nbeam):
-            total = 0.0
-            for k in range(lo, hi):
-                total += intensity[i, k]
-            centred[i] = total / (hi - lo)
-            a = b = 0.0
-            for k in range(before, j + 1):
-                a += intensity[i, k]
-            for k in range(j, after):
-                b += intensity[i, k]
-            low[i] = min(a / (j + 1 - before), b / (after - j))
-        ref = np.quantile(centred, REF_Q)
+            centred[i] = centred[i] / (hi - lo)
+            low[i] = min(a[i] / (j + 1 - before), b[i] / (after - j))
+        work[:] = centred
+        ref = _quantile(work, nbeam, REF_Q)
         m = 0
         for i in range(nbeam):
             if low[i] >= LIT * ref:
-                lit[m] = intensity[i, j]
+                lit[m] = by_bin[j, i]
                 m += 1
         if m >= need:
-            level[j] = max(np.median(lit[:m]) / LN2, 1e-12)
+            level[j] = max(_median(lit, m) / LN2, 1e-12)
             found = True
         else:
             level[j] = math.nan
@@ -201,6 +208,66 @@ def seabed_level(intensity, level):
             if j + d < nb and own[j + d]:
                 level[j] = level[j + d]
                 break
+
+
+@njit(cache=True)
+def _select(w, n, k):
+    """The ``k``-th smallest of ``w[:n]`` (0-based), ``w`` partitioned about it (Hoare's selection)."""
+    lo, hi = 0, n - 1
+    while lo < hi:
+        pivot = w[(lo + hi) // 2]
+        i, j = lo, hi
+        while i <= j:
+            while w[i] < pivot:
+                i += 1
+            while w[j] > pivot:
+                j -= 1
+            if i <= j:
+                w[i], w[j] = w[j], w[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            hi = j
+        elif k >= i:
+            lo = i
+        else:
+            break
+    return w[k]
+
+
+@njit(cache=True)
+def _two(w, n, k):
+    """The ``k``-th and ``k+1``-th smallest of ``w[:n]``."""
+    a = _select(w, n, k)
+    b = w[k + 1]
+    for i in range(k + 2, n):
+        b = min(b, w[i])
+    return a, b
+
+
+@njit(cache=True)
+def _median(w, n):
+    """``np.median(w[:n])`` as numba computes it (the same arithmetic), without its copies; mutates ``w``."""
+    half = n >> 1
+    if n & 1 == 0:
+        a, b = _two(w, n, half - 1)
+        return (a + b) / 2
+    return _select(w, n, half)
+
+
+@njit(cache=True)
+def _quantile(w, n, q):
+    """``np.quantile(w[:n], q)``, 0 < q < 1, with numba's arithmetic but without its copies.
+
+    Linear between the closest ranks, as numba computes it; mutates ``w``.
+    """
+    if n == 1:
+        return w[0]
+    rank = 1 + (n - 1) * ((q * 100.0) / 100.0)
+    f = math.floor(rank)
+    m = rank - f
+    lower, upper = _two(w, n, int(f - 1))
+    return lower * (1 - m) + upper * m
 
 
 @njit(cache=True)

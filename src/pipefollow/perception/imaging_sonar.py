@@ -267,9 +267,13 @@ def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, b
     q0 = int(max(rho_min - 4.0 * diameter, step) / step)
     n_samples = int(math.ceil(rho_max / step)) + 1
     # the flat seabed's slant ranges (the sample's span) and energy at each sample, the same for every beam
+    # (each sample's shares of its bins, as _deposit gives them, kept for the beams that cross the pipe)
     half = 0.5 * step
     flat_lo, flat_hi = np.zeros(n_samples), np.zeros(n_samples)
     flat_energy = np.zeros(n_samples)
+    flat_bin = np.full(n_samples, -1, dtype=np.int64)  # the first bin; -1 for none
+    flat_count = np.zeros(n_samples, dtype=np.int64)  # the bins it spans in the image (> 2: _deposit)
+    flat_share = np.zeros((n_samples, 2))
     flat_row = np.zeros(nb)
     for q in range(q0, n_samples):
         rho = q * step
@@ -278,6 +282,9 @@ def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, b
         off = math.atan2(altitude, rho) - tilt
         cos_i = altitude / r
         flat_energy[q] = cos_i * cos_i * step * math.exp(-k_beam * off * off)
+        flat_bin[q], flat_count[q] = _shares(
+            flat_lo[q], flat_hi[q], flat_energy[q], r_min, dr, nb, flat_share[q]
+        )
         _deposit(flat_row, flat_lo[q], flat_hi[q], flat_energy[q], r_min, dr)
     for j in range(nb):
         flat_row[j] = flat_row[j] / dr + floor * ref
@@ -330,7 +337,14 @@ def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, b
                 continue  # in the shadow of a nearer sample
             lowest = tan_d
             if z <= 0.0:
-                _deposit(mean[i], flat_lo[q], flat_hi[q], flat_energy[q], r_min, dr)
+                c = flat_count[q]
+                if c > 2:
+                    _deposit(mean[i], flat_lo[q], flat_hi[q], flat_energy[q], r_min, dr)
+                elif c > 0:
+                    jb = flat_bin[q]
+                    mean[i, jb] += flat_share[q, 0]
+                    if c == 2:
+                        mean[i, jb + 1] += flat_share[q, 1]
                 continue
             heights[q] = 0.0
             r = math.hypot(rho, drop)
@@ -351,6 +365,30 @@ def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, b
         for j in range(nb):
             mean[i, j] = mean[i, j] / dr + floor * ref
     return n
+
+
+@njit(cache=True)
+def _shares(r_lo, r_hi, energy, r_min, dr, nb, out):
+    """What :func:`_deposit` adds to a row for spans of at most two bins: ``(first bin, bins)``.
+
+    The amounts go into ``out``; more than two bins (a coarse ``step``) give ``(-1, 3)``, left to
+    :func:`_deposit`.
+    """
+    u0, u1 = (r_lo - r_min) / dr, (r_hi - r_min) / dr
+    width = u1 - u0
+    if width <= 0.0:
+        j = int(math.floor(u0))
+        if 0 <= j < nb:
+            out[0] = energy
+            return j, 1
+        return -1, 0
+    first, end = max(int(math.floor(u0)), 0), min(int(math.floor(u1)) + 1, nb)
+    if end - first > 2:
+        return -1, 3
+    for j in range(first, end):
+        share = min(u1, j + 1.0) - max(u0, float(j))
+        out[j - first] = energy * share / width if share > 0.0 else 0.0
+    return (first, end - first) if end > first else (-1, 0)
 
 
 @njit(cache=True)
