@@ -166,7 +166,6 @@ def seabed_level(intensity, level):
     centred, low, work = np.zeros(nbeam), np.zeros(nbeam), np.empty(nbeam)
     a, b = np.zeros(nbeam), np.zeros(nbeam)
     lit = np.empty(nbeam)
-    found = False
     for j in range(nb):
         lo, hi = max(j - half, 0), min(j - half + LIT_BINS, nb)
         before, after = max(j - LIT_BINS + 1, 0), min(j + LIT_BINS, nb)
@@ -189,12 +188,9 @@ def seabed_level(intensity, level):
             if low[i] >= LIT * ref:
                 lit[m] = by_bin[j, i]
                 m += 1
-        if m >= need:
-            level[j] = max(_median(lit, m) / LN2, 1e-12)
-            found = True
-        else:
-            level[j] = math.nan
+        level[j] = max(_median(lit, m) / LN2, 1e-12) if m >= need else math.nan
     own = level == level  # the bins with enough lit cells
+    found = own.any()
     for j in range(nb):  # the others: the nearest such bin's level
         if own[j]:
             continue

@@ -285,7 +285,8 @@ def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, b
         flat_bin[q], flat_count[q] = _shares(
             flat_lo[q], flat_hi[q], flat_energy[q], r_min, dr, nb, flat_share[q]
         )
-        _deposit(flat_row, flat_lo[q], flat_hi[q], flat_energy[q], r_min, dr)
+        _add_sample(flat_row, flat_bin[q], flat_count[q], flat_share[q], flat_lo[q], flat_hi[q],
+                    flat_energy[q], r_min, dr)  # fmt: skip
     for j in range(nb):
         flat_row[j] = flat_row[j] / dr + floor * ref
     heights = np.zeros(n_samples)
@@ -337,7 +338,7 @@ def _render(points, cum, x, y, psi, angles, st, diameter, burial, buried_from, b
                 continue  # in the shadow of a nearer sample
             lowest = tan_d
             if z <= 0.0:
-                c = flat_count[q]
+                c = flat_count[q]  # _add_sample written out: a call here more than doubled the render
                 if c > 2:
                     _deposit(mean[i], flat_lo[q], flat_hi[q], flat_energy[q], r_min, dr)
                 elif c > 0:
@@ -389,6 +390,17 @@ def _shares(r_lo, r_hi, energy, r_min, dr, nb, out):
         share = min(u1, j + 1.0) - max(u0, float(j))
         out[j - first] = energy * share / width if share > 0.0 else 0.0
     return (first, end - first) if end > first else (-1, 0)
+
+
+@njit(cache=True)
+def _add_sample(row, first, count, share, r_lo, r_hi, energy, r_min, dr):
+    """A flat-seabed sample added to ``row`` from its :func:`_shares` (``_deposit`` past two bins)."""
+    if count > 2:
+        _deposit(row, r_lo, r_hi, energy, r_min, dr)
+    elif count > 0:
+        row[first] += share[0]
+        if count == 2:
+            row[first + 1] += share[1]
 
 
 @njit(cache=True)
