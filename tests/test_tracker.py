@@ -316,6 +316,24 @@ def test_a_far_end_beyond_a_bend_does_not_turn_a_parallel_line_back():
     assert out[ts.OUT_Y1] == pytest.approx(3.0) and out[ts.OUT_Y_NEAR] == pytest.approx(0.0)
 
 
+@pytest.mark.parametrize("order", ["far first", "near first"])
+def test_a_hooks_next_leg_running_back_beside_the_first_runs_towards_the_far_end_beyond_the_bend(order):
+    # the tracked line runs straight ahead; a bend leaves the far end beyond it at (-1.0, 0.5). The
+    # next leg seen alone runs from the corner (0.0, 3.0) back to that far end, 21.8 degrees from
+    # the tracked line's way reversed: near parallel to the line, yet the pipe runs on towards the
+    # far end beyond the bend (taking the line's way, the vehicle followed the hook's leg backwards)
+    t = quiet_tracker()
+    _, pose = straight_detections(t, 6, offset=0.0)
+    t.step(pose, True, (-1.0, 0.5, 0.0, 0.0))
+    assert t.event == ts.BEND
+    corner, far = (0.0, 3.0), (-1.0, 0.5)
+    out = t.step(pose, True, (*far, *corner) if order == "far first" else (*corner, *far))
+    assert t.event == ts.REPLACED
+    assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx(far, abs=1e-6)
+    assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(corner, abs=1e-6)
+    assert direction_of(out) == pytest.approx(math.atan2(-1.0, -2.5), abs=1e-9)
+
+
 @pytest.mark.parametrize("swapped", [False, True])
 def test_after_a_lost_line_a_piece_it_crosses_runs_from_the_end_nearer_the_vehicle(swapped):
     # the line is lost; the pipe is seen again crossing the carried line halfway along the piece:
@@ -344,7 +362,9 @@ def test_a_pipe_crossed_where_the_line_grazes_the_side_runs_from_the_near_border
     # the tracked line grazes the starboard side: it enters the view there at (1.0, 1.0) and runs
     # ahead to (0.9, 3.0). The pipe seen now comes from under the vehicle at (0.7, 0.0), off the
     # line, and leaves the view where the line enters it: no bend ahead (the end off the line lies
-    # 0.98 m behind the other along the line), so the piece runs from (0.7, 0.0), the line's way
+    # 0.98 m behind the other along the line), so the piece runs from (0.7, 0.0), the line's way.
+    # It leaves the view by the side, so the piece seen is the pipe in view: the line starts again
+    # from it (its direction atan2(0.3, 1.0), not the old line's atan2(-0.1, 2.0))
     t = quiet_tracker()
     pose = still_detections(t, (0.9, 3.0, 1.0, 1.0))
     th = math.atan2(-0.1, 2.0)
@@ -353,9 +373,8 @@ def test_a_pipe_crossed_where_the_line_grazes_the_side_runs_from_the_near_border
     out = t.step(pose, True, (*near, *far) if swapped else (*far, *near))
     assert t.event == ts.ACCEPTED and t.state[ts.HAS_FAR] == 0.0
     assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(near)
-    # the far end where the line leaves the view (the pipe seen to go on along it): ahead of the near end
-    assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx((0.9, 3.0), abs=1e-6)
-    assert abs(t.state[ts.TH] - th) < 0.5 * math.pi
+    assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx(far, abs=1e-6)
+    assert t.state[ts.TH] == pytest.approx(math.atan2(0.3, 1.0), abs=1e-9)
 
 
 @pytest.mark.parametrize("far", [(1.0, 0.15), (1.0, 0.08), (1.0, 0.0)])

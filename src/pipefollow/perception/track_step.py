@@ -159,22 +159,24 @@ def _reversed(T, x1, y1, x2, y_near, th, d, mode, point_sd):
 
     A line fixed in the world keeps its direction: a new line takes the last line's way, never the
     detector's order of its ends (which swaps where the pipe crosses the view), unless a bend lies
-    between them. Near parallel (within :data:`PARALLEL`): the last line's way. Otherwise the last
-    line meets the new one at a corner, from which the pipe runs on: towards the far end seen beyond
-    the bend (``TOWARDS_FAR``), else away from the crossing. A crossing *on* the piece seen is no
-    corner (the pipe runs on both sides of it): the last line was wrong. Contradicted in view
-    (``CONTRADICTED``) it was seen a frame or two before, and the new line takes its nearer way;
-    lost or out of view (``AFTER_LINE``) it was carried blind, and the pipe comes from the piece's
-    end nearer the vehicle.
+    between them. The leg after a bend (``TOWARDS_FAR``) runs towards the far end seen beyond the
+    bend, near parallel to the last line or not (a hook's next leg runs back beside the first).
+    Otherwise, near parallel (within :data:`PARALLEL`): the last line's way; else the last line
+    meets the new one at a corner, from which the pipe runs on, away from the crossing. A crossing
+    *on* the piece seen is no corner (the pipe runs on both sides of it): the last line was wrong.
+    Contradicted in view (``CONTRADICTED``) it was seen a frame or two before, and the new line
+    takes its nearer way; lost or out of view (``AFTER_LINE``) it was carried blind, and the pipe
+    comes from the piece's end nearer the vehicle.
     """
     if mode == AS_GIVEN or T[HAD_LINE] == 0.0:
         return False
+    if mode == TOWARDS_FAR and T[HAS_FAR] != 0.0:
+        # the pipe goes on towards the far end seen beyond the bend: the end nearer it is the far one
+        # (also when the next leg runs back near parallel: a hook's, whose way is not the last line's)
+        return math.hypot(x2 - T[FAR_X], y_near - T[FAR_Y]) < math.hypot(x1 - T[FAR_X], y1 - T[FAR_Y])
     nearer_way = abs(wrap(th - T[TH])) > 0.5 * math.pi
     if abs(math.sin(T[TH] - th)) < PARALLEL:
         return nearer_way
-    if mode == TOWARDS_FAR and T[HAS_FAR] != 0.0:
-        # the pipe goes on towards the far end seen beyond the bend: the end nearer it is the far one
-        return math.hypot(x2 - T[FAR_X], y_near - T[FAR_Y]) < math.hypot(x1 - T[FAR_X], y1 - T[FAR_Y])
     t_c = crossing(th, d, T[TH], T[D])  # along the new line
     if math.isnan(t_c):
         return nearer_way
@@ -275,15 +277,22 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, frame=CLEAR_F
                 t_in, _ = in_footprint(T[TH], T[D], -REACH, REACH, hw, depth)
                 ex, ey = on_line(T[TH], T[D], t_in)
                 if math.hypot(x2 - ex, y_near - ey) < math.hypot(x1 - ex, y1 - ey):
-                    crossed = _crossed(T, x1, y1, x2, y_near, tp[_CROSS_BORDER], tp[_BEND_BEHIND])
-                    point_correct(T, TH, nu_a, j_a, s_a)
                     taken = True
-                    if crossed:
+                    if _crossed(T, x1, y1, x2, y_near, tp[_CROSS_BORDER], tp[_BEND_BEHIND]):
                         # the pipe comes from the end off the line: the end on it is the far one
-                        T[EVENT] = ACCEPTED
                         x1, y1, x2, y_near = x2, y_near, x1, y1
-                        _take_end(T, x1, y1, hw, depth, border)
+                        if min(hw - abs(x1), depth - y1) <= border:
+                            # ... and the pipe leaves the view there, by a side or the far border: the
+                            # piece seen is the pipe in view, and the line starts again from it (only
+                            # corrected through the end on it, the line kept a corner's chord while
+                            # the vehicle turned onto the next leg)
+                            _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, AS_GIVEN)
+                        else:
+                            point_correct(T, TH, nu_a, j_a, s_a)
+                            _take_end(T, x1, y1, hw, depth, border)
+                        T[EVENT] = ACCEPTED
                     else:
+                        point_correct(T, TH, nu_a, j_a, s_a)
                         T[EVENT] = BEND
                         T[HAS_FAR], T[FAR_X], T[FAR_Y], T[FAR_AGE] = 1.0, x1, y1, 0.0
                         # the line ends at the corner, about where the far end lies along it (its
