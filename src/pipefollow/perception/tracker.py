@@ -33,13 +33,16 @@ end beyond the bend, and the line ends at the corner (taken where the far end li
 so its extension beyond is not shown once the far end is out of view; unless, with no bend being
 followed, the end off the line lies within :attr:`TrackParams.cross_border` of the view's near
 border and behind the other along the line's way: then the vehicle crosses the pipe where the
-line grazes the view's side, and the end off the line is the near one (``track_step._crossed``).
+line grazes the view's side, and the end off the line is the near one (``track_step._crossed``);
+if the pipe leaves the view at the end on the line (a side or the far border), the line starts
+again from the piece seen, else that end corrects it.
 Otherwise the detection is rejected: it starts (or feeds) a candidate line that replaces the line when seen
 :attr:`TrackParams.confirm` times, and at once if it starts where the line enters the view (an
 arc the line cannot follow), ends where the far end beyond a bend was seen (the next leg), or if
-the line is out of view. A new line keeps the pipe's way (``track_step._reversed``): the last
-line's when the two are near parallel, else away from the corner where they meet, towards the
-far end beyond the bend for the next leg; never the detector's order of the ends, which swaps.
+the line is out of view. A new line keeps the pipe's way (``track_step._reversed``): the next
+leg after a bend runs towards the far end seen beyond it (also a hook's leg running back near
+parallel); otherwise the last line's way when the two are near parallel, else away from the
+corner where they meet; never the detector's order of the ends, which swaps.
 Through missed detections the prediction goes on and its uncertainty grows; beyond
 ``max_misses`` frames (``edge_misses`` while the line's piece in view is shorter than
 ``edge_piece``: the detector misses short pieces at the view's edge, though not in a murky frame;
