@@ -377,6 +377,25 @@ def test_a_pipe_crossed_where_the_line_grazes_the_side_runs_from_the_near_border
     assert t.state[ts.TH] == pytest.approx(math.atan2(0.3, 1.0), abs=1e-9)
 
 
+@pytest.mark.parametrize("swapped", [False, True])
+def test_a_crossed_piece_whose_end_on_the_line_lies_inside_the_view_keeps_the_line(swapped):
+    # the tracked line enters the view by the port side at (-1.0, 1.0) and runs to (-0.5, 3.0). The
+    # pipe seen comes from under the vehicle at (-0.3, 0.0), off the line, 1.2 m behind the other
+    # end along it, and that end, (-0.9, 1.4), lies on the line 0.1 m inside the side: the pipe goes
+    # on along the line past it, so the line is kept (corrected through that end), not started again
+    # from the piece (whose direction would be atan2(-0.6, 1.4))
+    t = quiet_tracker()
+    pose = still_detections(t, (-0.5, 3.0, -1.0, 1.0))
+    th = math.atan2(0.5, 2.0)
+    assert t.state[ts.TH] == pytest.approx(th, abs=1e-9)
+    near, far = (-0.3, 0.0), (-0.9, 1.4)
+    out = t.step(pose, True, (*near, *far) if swapped else (*far, *near))
+    assert t.event == ts.ACCEPTED and t.state[ts.HAS_FAR] == 0.0
+    assert t.state[ts.TH] == pytest.approx(th, abs=1e-6)
+    assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(near)
+    assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx(far, abs=1e-6)
+
+
 @pytest.mark.parametrize("far", [(1.0, 0.15), (1.0, 0.08), (1.0, 0.0)])
 def test_a_hooks_far_end_behind_the_near_end_is_a_bend_unless_it_lies_on_the_near_border(far):
     # the tracked line runs from (0, 0) ahead to port, to (-1.0, 1.5); the pipe seen now turns back

@@ -181,7 +181,8 @@ class SonarSensors:
         """After the camera's frame: the ping's fix on the tracked pipe; the sonar's view if murky or none.
 
         The fix is a point on the tracked pipe (:data:`FIX_SD`) only in a frame whose camera
-        detection the tracker did not take (none, rejected, or one that started the line again):
+        detection the tracker did not take (none, rejected, or one that started a new or replacing
+        line; a piece the vehicle crosses that restarts the line counts as taken):
         a detection it took already places the line, and adding the fix there made clear water
         worse (docs/decisions.md). In a frame too murky to search, and while the track shows no
         pipe, the sonar's own view is this decision's observation if it has the pipe in the

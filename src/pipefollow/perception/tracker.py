@@ -32,8 +32,9 @@ line enters the view: the pipe bends in view; that end updates the line and the 
 end beyond the bend, and the line ends at the corner (taken where the far end lies along it),
 so its extension beyond is not shown once the far end is out of view; unless, with no bend being
 followed, the end off the line lies within :attr:`TrackParams.cross_border` of the view's near
-border and behind the other along the line's way: then the vehicle crosses the pipe where the
-line grazes the view's side, and the end off the line is the near one (``track_step._crossed``);
+border and more than :attr:`TrackParams.bend_behind` behind the other along the line's way:
+then the vehicle crosses the pipe where the line grazes the view's side, and the end off the
+line is the near one (``track_step._crossed``);
 if the pipe leaves the view at the end on the line (a side or the far border), the line starts
 again from the piece seen, else that end corrects it.
 Otherwise the detection is rejected: it starts (or feeds) a candidate line that replaces the line when seen
