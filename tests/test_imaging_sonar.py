@@ -215,6 +215,26 @@ def test_map_joins_two_legs_at_a_bend():
     assert (v.x1, v.y1) == pytest.approx((0.9, 2.0), abs=0.03)
 
 
+def test_map_starts_on_the_line_under_the_auv_not_the_strongest():
+    """Two lines that meet at no bend: with no last view the one passing nearer the AUV is shown.
+
+    The AUV's leg runs from under it to 1.2 m ahead; a longer leg beyond a hook's corner (its
+    lines cross 1.5 m past the first leg's piece, beyond ``LINK_M``) has more highlights, so it is
+    the strongest line. A first view shows the AUV's leg; once a view was shown, the strongest
+    line again (the camera's tracker keeps the leg it started on).
+    """
+    legs = highlights(((0.0, 0.3), (0.0, 1.2)), ((-1.0, 1.2), (0.2, 3.0)))
+    m = axis_map()
+    v = m.update((0.0, 0.0, 0.0), legs)
+    assert v.in_view
+    assert (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.0, 1.2, 0.0, 0.3), abs=0.03)
+    v = m.update((0.0, 0.0, 0.0), legs)
+    assert (v.x1, v.x2) != pytest.approx((0.0, 0.0), abs=0.1)  # the strongest, the other leg
+    m.reset()
+    v = m.update((0.0, 0.0, 0.0), legs)
+    assert (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.0, 1.2, 0.0, 0.3), abs=0.03)
+
+
 def test_map_keeps_the_last_way():
     """A line across the track keeps the way it was first shown in, whichever end is nearer the AUV."""
     m = axis_map()

@@ -17,7 +17,9 @@ footprint and its far end where it leaves:
   frame; the AUV's centre in the first view), the near end its end away from the corner, the far
   end the other leg's end away from it;
 * one line: the way of the last view (remembered as a direction in the earth frame) if there was
-  one; else its end nearer the AUV's centre is the near end.
+  one; else its end nearer the AUV's centre is the near end. The line is the strongest; with no
+  last view (the first, or after a view without the pipe) and a second line found, the one of the
+  two that passes nearer the AUV's centre (at a hook the strongest can be the leg beyond the corner).
 
 Each end is clipped to the footprint along its line (a leg's towards the corner), which keeps
 the line's direction (clamped coordinate by coordinate if the line misses the footprint, within
@@ -198,6 +200,11 @@ def _map_view(E, count, oldest, x, y, psi, half_width, depth, st, last):
         else:
             fx, fy = bx2, by2
     else:
+        if fb and la > 0.0 and lb > 0.0 and last[2] != last[2]:
+            # no last view (the first, or after one without the pipe): the pipe the AUV is on passes
+            # nearest its centre; the strongest line can be another leg (a hook's, beyond the corner)
+            if _to_segment(0.0, 0.0, bx1, by1, bx2, by2) < _to_segment(0.0, 0.0, ax1, ay1, ax2, ay2):
+                ax1, ay1, ax2, ay2 = bx1, by1, bx2, by2
         nx, ny, fx, fy = ax2, ay2, ax1, ay1
         if math.hypot(ax2, ay2) > math.hypot(ax1, ay1):  # the end nearer the AUV's centre is the near end ...
             nx, ny, fx, fy = ax1, ay1, ax2, ay2
