@@ -19,7 +19,7 @@ from pipefollow.perception.imaging_sonar import (
     n_bins,
     render_image,
 )
-from pipefollow.perception.imaging_track import ImagingMap, ImagingSensor
+from pipefollow.perception.imaging_track import LINK_M, ImagingMap, ImagingSensor
 
 FAR = np.array([[0.0, 100.0], [50.0, 100.0]])  # a pipe 100 m to port: an empty seabed
 FAR_CUM = np.array([0.0, 50.0])
@@ -223,13 +223,14 @@ def test_map_starts_on_the_line_under_the_auv_not_the_strongest():
     the strongest line. A first view shows the AUV's leg; once a view was shown, the strongest
     line again (the camera's tracker keeps the leg it started on).
     """
+    assert LINK_M < 1.5  # the lines cross at (0, 2.7), 1.5 m past the first leg's piece: no bend
     legs = highlights(((0.0, 0.3), (0.0, 1.2)), ((-1.0, 1.2), (0.2, 3.0)))
     m = axis_map()
     v = m.update((0.0, 0.0, 0.0), legs)
     assert v.in_view
     assert (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.0, 1.2, 0.0, 0.3), abs=0.03)
-    v = m.update((0.0, 0.0, 0.0), legs)
-    assert (v.x1, v.x2) != pytest.approx((0.0, 0.0), abs=0.1)  # the strongest, the other leg
+    v = m.update((0.0, 0.0, 0.0), legs)  # the strongest, the other leg, in the last view's way
+    assert (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.2, 3.0, -1.0, 1.2), abs=0.05)
     m.reset()
     v = m.update((0.0, 0.0, 0.0), legs)
     assert (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.0, 1.2, 0.0, 0.3), abs=0.03)
