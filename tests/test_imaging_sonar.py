@@ -221,7 +221,8 @@ def test_map_starts_on_the_line_under_the_auv_not_the_strongest():
     The AUV's leg runs from under it to 1.2 m ahead; a longer leg beyond a hook's corner (its
     lines cross 1.5 m past the first leg's piece, beyond ``LINK_M``) has more highlights, so it is
     the strongest line. A first view shows the AUV's leg; once a view was shown, the strongest
-    line again (the camera's tracker keeps the leg it started on).
+    line again (the camera's tracker keeps the leg it started on); after a view without the pipe,
+    the AUV's leg again.
     """
     assert LINK_M < 1.5  # the lines cross at (0, 2.7), 1.5 m past the first leg's piece: no bend
     legs = highlights(((0.0, 0.3), (0.0, 1.2)), ((-1.0, 1.2), (0.2, 3.0)))
@@ -231,6 +232,10 @@ def test_map_starts_on_the_line_under_the_auv_not_the_strongest():
     assert (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.0, 1.2, 0.0, 0.3), abs=0.03)
     v = m.update((0.0, 0.0, 0.0), legs)  # the strongest, the other leg, in the last view's way
     assert (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.2, 3.0, -1.0, 1.2), abs=0.05)
+    # a view without the pipe (from 100 m away) forgets the last view: the next starts on the AUV's again
+    assert not m.update((100.0, 100.0, 0.0), ImageFix(False)).in_view
+    v = m.update((0.0, 0.0, 0.0), ImageFix(False))
+    assert (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.0, 1.2, 0.0, 0.3), abs=0.03)
     m.reset()
     v = m.update((0.0, 0.0, 0.0), legs)
     assert (v.x1, v.y1, v.x2, v.y_near) == pytest.approx((0.0, 1.2, 0.0, 0.3), abs=0.03)
