@@ -163,7 +163,7 @@ def seabed_level(intensity, level):
     for i in range(nbeam):
         for k in range(nb):
             by_bin[k, i] = intensity[i, k]
-    centred, low, work = np.zeros(nbeam), np.zeros(nbeam), np.empty(nbeam)
+    centred, low = np.zeros(nbeam), np.zeros(nbeam)  # centred, rebuilt each bin, is the quantile's workspace
     a, b = np.zeros(nbeam), np.zeros(nbeam)
     lit = np.empty(nbeam)
     for j in range(nb):
@@ -181,8 +181,7 @@ def seabed_level(intensity, level):
         for i in range(nbeam):
             centred[i] = centred[i] / (hi - lo)
             low[i] = min(a[i] / (j + 1 - before), b[i] / (after - j))
-        work[:] = centred
-        ref = _quantile(work, nbeam, REF_Q)
+        ref = _quantile(centred, nbeam, REF_Q)
         m = 0
         for i in range(nbeam):
             if low[i] >= LIT * ref:
