@@ -19,6 +19,15 @@ from __future__ import annotations
 import argparse
 
 
+def suite_of(suite_name: str):
+    """A held-out suite, a training family, or a level without one from the training stream (``sharp``)."""
+    from pipefollow.sim.suites import LEVELS, SUITES, TRAIN_STREAM, Suite, get_suite
+
+    if suite_name not in SUITES and suite_name in LEVELS:  # a level without a training family
+        return Suite(suite_name, suite_name, TRAIN_STREAM, None, "the level's training-stream pipes")
+    return get_suite(suite_name)
+
+
 def judge(
     suite_name: str,
     n_pipes: int | None,
@@ -32,12 +41,8 @@ def judge(
     from pipefollow.evaluation.benchmark import LOST_IN_VIEW, benchmark
     from pipefollow.learners.heuristic import Heuristic
     from pipefollow.perception.camera import SONAR_ALONE
-    from pipefollow.sim.suites import LEVELS, SUITES, TRAIN_STREAM, Suite, get_suite
 
-    if suite_name not in SUITES and suite_name in LEVELS:  # a level without a training family
-        suite = Suite(suite_name, suite_name, TRAIN_STREAM, None, "the level's training-stream pipes")
-    else:
-        suite = get_suite(suite_name)
+    suite = suite_of(suite_name)
     camera = "ideal" if sensor in SONAR_ALONE else camera  # a sonar alone: no camera image
     cam = {"camera": camera, "sensor": sensor, "water": {"preset": water, "burial": burial}}
     kw = {"controller": "heuristic", "n_pipes": n_pipes, "noise_seed": noise_seed}

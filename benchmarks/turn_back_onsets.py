@@ -57,12 +57,10 @@ def onsets(suite_name: str, n_pipes: int, sensor: str, water: str, noise_seed: i
     from pipefollow.learners.heuristic import heuristic_action
     from pipefollow.sim import decision as sim
     from pipefollow.sim import episode as ep
-    from pipefollow.sim.suites import LEVELS, SUITES, TRAIN_STREAM, Suite, get_suite, min_length_for
+    from pipefollow.sim.suites import min_length_for
+    from tracker_suites import suite_of
 
-    if suite_name not in SUITES and suite_name in LEVELS:
-        suite = Suite(suite_name, suite_name, TRAIN_STREAM, None, "the level's training-stream pipes")
-    else:
-        suite = get_suite(suite_name)
+    suite = suite_of(suite_name)
     seconds = 60.0
     out = []
     for k, pipe in enumerate(suite.pipes(n_pipes, min_length_for(seconds))):
