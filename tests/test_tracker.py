@@ -414,3 +414,29 @@ def test_a_hooks_far_end_behind_the_near_end_is_a_bend_unless_it_lies_on_the_nea
         assert t.event == ts.ACCEPTED
         assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(far)
         assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx((-1.0, 1.5), abs=1e-6)
+
+
+@pytest.mark.parametrize("swapped", [False, True])
+@pytest.mark.parametrize("frame", [ts.CLEAR_FRAME, ts.UNSEARCHED_FRAME])
+def test_a_line_running_back_joined_from_the_near_border_in_a_sonar_frame_is_where_the_pipe_comes_from(
+    frame, swapped
+):
+    # the tracked line runs back towards the vehicle, from (0.2, 3.0) to the starboard side at
+    # (1.0, 1.0) (a hook's next leg, as a sonar looking ahead sees it before the corner). The piece
+    # seen now joins it at the side from under the vehicle, (0.0, 0.0). In a searched frame that is
+    # a bend whose far end lies under the vehicle, as before; in a frame left to the sonar it is the
+    # first leg, where the pipe comes from: the piece runs from (0.0, 0.0) and, leaving the view by
+    # the side, starts the line again (direction atan2(1.0, 1.0) = 45°)
+    t = quiet_tracker()
+    pose = still_detections(t, (1.0, 1.0, 0.2, 3.0))
+    assert t.state[ts.TH] == pytest.approx(math.atan2(0.8, -2.0), abs=1e-9)
+    near, far = (0.0, 0.0), (1.0, 1.0)
+    out = t.step(pose, True, (*near, *far) if swapped else (*far, *near), frame=frame)
+    if frame == ts.CLEAR_FRAME:
+        assert t.event == ts.BEND
+        assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx(near)
+    else:
+        assert t.event == ts.ACCEPTED and t.state[ts.HAS_FAR] == 0.0
+        assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(near)
+        assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx(far, abs=1e-6)
+        assert t.state[ts.TH] == pytest.approx(math.radians(45.0), abs=1e-9)

@@ -189,7 +189,7 @@ def _reversed(T, x1, y1, x2, y_near, th, d, mode, point_sd):
 
 
 @njit(cache=True)
-def _crossed(T, x1, y1, x2, y_near, border, behind):
+def _crossed(T, x1, y1, x2, y_near, border, behind, frame):
     """Whether a detection with its near end ``(x2, y_near)`` on the line and ``(x1, y1)`` off it is no bend.
 
     The end off the line lies within ``border`` (m, ``TrackParams.cross_border``) of the view's
@@ -198,8 +198,19 @@ def _crossed(T, x1, y1, x2, y_near, border, behind):
     grazes the view's side and enters it there, and the pipe comes from under the vehicle, off the
     line; a hook's far end beyond its corner, which may also lie behind, leaves by the sides
     (docs/decisions.md, "The way of a piece the vehicle crosses").
+
+    In a frame too murky to search (``UNSEARCHED_FRAME``: the measurement is the sonar's) the end
+    off the line on the near border is where the pipe comes from also when the line runs back
+    towards the vehicle (its way more than 90° from ahead): a sonar that looks ahead (the imaging
+    sonar's map) sees a hook's next leg before the corner reaches the footprint, the tracker can
+    hold that leg while the vehicle is still on the first, and the first then joins it from under
+    the vehicle (docs/decisions.md, "A hook's next leg seen early").
     """
-    return T[HAS_FAR] == 0.0 and y1 < border and along(T[TH], x1, y1) < along(T[TH], x2, y_near) - behind
+    if T[HAS_FAR] != 0.0 or y1 >= border:
+        return False
+    if frame == UNSEARCHED_FRAME and math.cos(T[TH]) < 0.0:
+        return True
+    return along(T[TH], x1, y1) < along(T[TH], x2, y_near) - behind
 
 
 @njit(cache=True)
@@ -278,7 +289,7 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, frame=CLEAR_F
                 ex, ey = on_line(T[TH], T[D], t_in)
                 if math.hypot(x2 - ex, y_near - ey) < math.hypot(x1 - ex, y1 - ey):
                     taken = True
-                    if _crossed(T, x1, y1, x2, y_near, tp[_CROSS_BORDER], tp[_BEND_BEHIND]):
+                    if _crossed(T, x1, y1, x2, y_near, tp[_CROSS_BORDER], tp[_BEND_BEHIND], frame):
                         # the pipe comes from the end off the line: the end on it is the far one
                         x1, y1, x2, y_near = x2, y_near, x1, y1
                         if min(hw - abs(x1), depth - y1) <= border:
