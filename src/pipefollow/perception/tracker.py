@@ -34,7 +34,9 @@ so its extension beyond is not shown once the far end is out of view; unless, wi
 followed, the end off the line lies within :attr:`TrackParams.cross_border` of the view's near
 border and more than :attr:`TrackParams.bend_behind` behind the other along the line's way:
 then the vehicle crosses the pipe where the line grazes the view's side, and the end off the
-line is the near one (``track_step._crossed``);
+line is the near one (``track_step._crossed``; in a frame left to the sonar, ``UNSEARCHED_FRAME``,
+also when the line runs back towards the vehicle, however far behind: a hook's next leg the
+imaging sonar showed before its corner reached the footprint);
 if the pipe leaves the view at the end on the line (a side or the far border), the line starts
 again from the piece seen, else that end corrects it.
 Otherwise the detection is rejected: it starts (or feeds) a candidate line that replaces the line when seen
