@@ -484,3 +484,43 @@ def test_the_camera_alone_tells_the_tracker_its_murky_frames():
         assert all(frame == expected for frame, expected in seen)
         kinds = {frame for frame, _ in seen}
         assert kinds == {CLEAR_FRAME} if water == "clear" else MURKY_FRAME in kinds
+
+
+@pytest.mark.parametrize("sensor", ["fused-fls", "fused"])
+def test_the_imaging_sonar_s_fix_does_not_move_a_line_that_rejected_its_view(sensor):
+    """In a frame left to the sonar, the ping's fix corrects the line unless, with the imaging sonar,
+    the map's view was this frame's measurement and the line rejected it (the same ping's strongest
+    piece then is no second opinion: at a hook it pulled the line towards the other leg)."""
+    from pipefollow.perception.line_ekf import on_line
+    from pipefollow.perception.sonar_detect import SonarFix
+    from pipefollow.perception.track_step import (
+        ACTIVE,
+        EVENT,
+        NO_DETECTION,
+        REJECTED,
+        TH,
+        UNSEARCHED_FRAME,
+        D,
+    )
+
+    env = PipelineFollowingEnv(STRAIGHT, 10.0, camera="vision", sensor=sensor, water="turbid")
+    obs, _ = env.reset(seed=0)
+    for _ in range(3):
+        obs, *_ = env.step(act(obs))
+    fused = env._vision
+    tracker = fused.vision.tracker
+    assert tracker.state[ACTIVE] == 1.0
+    fused.vision.frame = UNSEARCHED_FRAME
+    x, y = on_line(tracker.state[TH], tracker.state[D], 2.0)
+    fused.sonar.fix = SonarFix(True, lateral=x + 0.05, forward=y, confidence=1.0)  # 5 cm off the line
+    line = tracker.state[[TH, D]].copy()
+    tracker.state[EVENT] = REJECTED
+    fused._aid(tracker)
+    if sensor == "fused-fls":
+        assert (tracker.state[TH], tracker.state[D]) == tuple(line)
+    else:  # the profiler's fix is a point of its own fan: taken
+        assert tracker.state[D] != line[1]
+    tracker.state[[TH, D]] = line
+    tracker.state[EVENT] = NO_DETECTION  # no measurement this frame: the fix is taken
+    fused._aid(tracker)
+    assert 0.0 < abs(tracker.state[D] - line[1]) < 0.05  # towards the fix, by less than its offset

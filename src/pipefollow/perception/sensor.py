@@ -72,6 +72,7 @@ from pipefollow.perception.track_step import (
     OUT_X2,
     OUT_Y1,
     OUT_Y_NEAR,
+    REJECTED,
     UNSEARCHED_FRAME,
 )
 from pipefollow.perception.tracker import PipeTracker
@@ -112,6 +113,7 @@ class SonarSensors:
         self.camera = camera
         self.lost_reward = lost_reward
         self.fused = settings.sensor in FUSED
+        self.imaging = settings.sensor in IMAGING
         # the camera: its image (observation="image"), and with "fused" its detections too
         self.vision = VisionCamera(settings, camera, lost_reward) if settings.renders else None
         # the sonar's line shown CARRY pings past a miss, but not as the measurement of a rendered
@@ -184,15 +186,22 @@ class SonarSensors:
         detection the tracker did not take (none, rejected, or one that started a new or replacing
         line; a piece the vehicle crosses that restarts the line counts as taken):
         a detection it took already places the line, and adding the fix there made clear water
-        worse (docs/decisions.md). In a frame too murky to search, and while the track shows no
-        pipe, the sonar's own view is this decision's observation if it has the pipe in the
-        footprint (the track stays as it is: it carries the line through the sonar's misses); else,
-        the track showing none, the search turns towards the ping's fix if it found the pipe
-        outside the footprint.
+        worse (docs/decisions.md). With the imaging sonar, not in a frame too murky to search whose
+        measurement, the map's view, the tracker rejected: the ping's fix, the middle of its
+        strongest piece, then pulled the line towards a hook's other leg (docs/decisions.md, "The
+        imaging sonar's fix after its view was rejected").
+
+        In a frame too murky to search, and while the track shows no pipe, the sonar's own view is
+        this decision's observation if it has the pipe in the footprint (the track stays as it is:
+        it carries the line through the sonar's misses); else, the track showing none, the search
+        turns towards the ping's fix if it found the pipe outside the footprint.
         """
         fix = self.sonar.fix
         out = tracker.out
-        if fix.found and tracker.event not in (ACCEPTED, BEND):
+        # in a frame left to the imaging sonar whose view (the measurement) the line rejected, the same
+        # ping's fix is no second opinion: its strongest piece, at a hook as likely the other leg
+        view_rejected = self.imaging and self.vision.frame == UNSEARCHED_FRAME and tracker.event == REJECTED
+        if fix.found and tracker.event not in (ACCEPTED, BEND) and not view_rejected:
             out = tracker.point(fix.lateral, fix.forward, FIX_SD)
         view = self.sonar.view
         if self.vision.frame == UNSEARCHED_FRAME and view.in_view:  # a frame too murky to search
