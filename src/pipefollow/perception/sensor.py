@@ -32,11 +32,13 @@ exactly as before this module existed. ``sensor="sonar"`` and ``sensor="fused"``
 
 ``"fls"`` and ``"fused-fls"`` are ``"sonar"`` and ``"fused"`` with the forward-looking imaging sonar
 (:class:`~pipefollow.perception.imaging_track.ImagingSensor`: a sector image ahead, its highlights
-kept in a map of the last pings) in the profiler's place, everything else as above, but for two
+kept in a map of the last pings) in the profiler's place, everything else as above, but for three
 things: the map's view is the camera's measurement only after a ping that found the pipe (after a
-miss the map still shows what earlier pings saw, which is no new measurement), and in a murky
+miss the map still shows what earlier pings saw, which is no new measurement); in a murky
 frame that remembered view is still the observation while it crosses the footprint (the profiler's
-view, fed without carry, shows nothing after a miss). Its view is shown the way of the tracked line
+view, fed without carry, shows nothing after a miss); and in a murky frame whose measurement, the
+map's view, the tracker rejected, the ping's fix does not correct the line (docs/decisions.md, "The
+imaging sonar's fix after its view was rejected"). Its view is shown the way of the tracked line
 in a murky frame as the profiler's is (docs/decisions.md, "A forward-looking imaging sonar").
 
 The sonar draws its noise (128 normals a ping; the imaging sonar an exponential a cell) from a
