@@ -493,15 +493,7 @@ def test_the_imaging_sonar_s_fix_does_not_move_a_line_that_rejected_its_view(sen
     piece then is no second opinion: at a hook it pulled the line towards the other leg)."""
     from pipefollow.perception.line_ekf import on_line
     from pipefollow.perception.sonar_detect import SonarFix
-    from pipefollow.perception.track_step import (
-        ACTIVE,
-        EVENT,
-        NO_DETECTION,
-        REJECTED,
-        TH,
-        UNSEARCHED_FRAME,
-        D,
-    )
+    from pipefollow.perception.track_step import EVENT, NO_DETECTION, REJECTED, UNSEARCHED_FRAME
 
     env = PipelineFollowingEnv(STRAIGHT, 10.0, camera="vision", sensor=sensor, water="turbid")
     obs, _ = env.reset(seed=0)
@@ -523,4 +515,10 @@ def test_the_imaging_sonar_s_fix_does_not_move_a_line_that_rejected_its_view(sen
     tracker.state[[TH, D]] = line
     tracker.state[EVENT] = NO_DETECTION  # no measurement this frame: the fix is taken
     fused._aid(tracker)
-    assert 0.0 < abs(tracker.state[D] - line[1]) < 0.05  # towards the fix, by less than its offset
+
+    def offset(th, d):  # the fix's signed distance from the line (θ, d)
+        return (x + 0.05) * math.cos(th) - y * math.sin(th) - d
+
+    before, after = offset(*line), offset(tracker.state[TH], tracker.state[D])
+    assert before == pytest.approx(0.05 * math.cos(line[0]))
+    assert 0.0 < after < before  # the line moved towards the fix, not past it

@@ -188,10 +188,10 @@ class SonarSensors:
         detection the tracker did not take (none, rejected, or one that started a new or replacing
         line; a piece the vehicle crosses that restarts the line counts as taken):
         a detection it took already places the line, and adding the fix there made clear water
-        worse (docs/decisions.md). With the imaging sonar, not in a frame too murky to search whose
-        measurement, the map's view, the tracker rejected: the ping's fix, the middle of its
-        strongest piece, then pulled the line towards a hook's other leg (docs/decisions.md, "The
-        imaging sonar's fix after its view was rejected").
+        worse (docs/decisions.md). With the imaging sonar, not in a frame too murky to search either
+        when the tracker rejected that frame's measurement (the map's view): the ping's fix, the
+        middle of its strongest piece, then pulled the line towards a hook's other leg
+        (docs/decisions.md, "The imaging sonar's fix after its view was rejected").
 
         In a frame too murky to search, and while the track shows no pipe, the sonar's own view is
         this decision's observation if it has the pipe in the footprint (the track stays as it is:
