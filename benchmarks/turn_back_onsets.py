@@ -34,7 +34,10 @@ def _direction(x1: float, y1: float, x2: float, y_near: float) -> float:
 
 
 def _apart(a: float, b: float) -> float:
-    return abs(math.remainder(a - b, 2.0 * math.pi))
+    """How far apart two directions are (rad, 0–π)."""
+    from pipefollow.sim.controller import wrap_angle
+
+    return abs(wrap_angle(a - b))
 
 
 def _sonar_view(sensors, exact: float) -> str:
