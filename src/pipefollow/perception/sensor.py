@@ -122,7 +122,7 @@ class SonarSensors:
         # camera (fused): its tracker carries its line itself
         carry = 0 if self.fused and settings.detects else CARRY
         diameter, burial = settings.water.pipe_diameter, sonar_burial(settings.water)
-        if settings.sensor in IMAGING:  # the forward-looking imaging sonar and its map
+        if self.imaging:  # the forward-looking imaging sonar and its map
             self.sonar = ImagingSensor(diameter=diameter, burial=burial, camera=camera)
         else:
             self.sonar = SonarSensor(diameter=diameter, burial=burial, camera=camera, carry=carry)
