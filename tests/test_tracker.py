@@ -418,25 +418,53 @@ def test_a_hooks_far_end_behind_the_near_end_is_a_bend_unless_it_lies_on_the_nea
 
 @pytest.mark.parametrize("swapped", [False, True])
 @pytest.mark.parametrize("frame", [ts.CLEAR_FRAME, ts.UNSEARCHED_FRAME])
-def test_a_line_running_back_joined_from_the_near_border_in_a_sonar_frame_is_where_the_pipe_comes_from(
+def test_a_line_running_back_joined_from_the_near_border_is_where_the_pipe_comes_from(
     frame, swapped
 ):
     # the tracked line runs back towards the vehicle, from (0.2, 3.0) to the starboard side at
     # (1.0, 1.0) (a hook's next leg, as a sonar looking ahead sees it before the corner). The piece
-    # seen now joins it at the side from under the vehicle, (0.0, 0.0). In a searched frame that is
-    # a bend whose far end lies under the vehicle, as before; in a frame left to the sonar it is the
-    # first leg, where the pipe comes from: the piece runs from (0.0, 0.0) and, leaving the view by
-    # the side, starts the line again (direction atan2(1.0, 1.0) = 45°)
+    # seen now joins it at the side from under the vehicle, (0.0, 0.0): the first leg, where the pipe
+    # comes from. In a frame left to the sonar the end off the line on the near border says so
+    # (_crossed); in a searched frame, as well, the end on the line where the line leaves the view
+    # (_leaves_on_line; before it, a bend whose far end lay under the vehicle). The piece runs from
+    # (0.0, 0.0) and, leaving the view by the side, starts the line again (direction 45°)
     t = quiet_tracker()
     pose = still_detections(t, (1.0, 1.0, 0.2, 3.0))
     assert t.state[ts.TH] == pytest.approx(math.atan2(0.8, -2.0), abs=1e-9)
     near, far = (0.0, 0.0), (1.0, 1.0)
     out = t.step(pose, True, (*near, *far) if swapped else (*far, *near), frame=frame)
-    if frame == ts.CLEAR_FRAME:
-        assert t.event == ts.BEND
-        assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx(near)
-    else:
-        assert t.event == ts.ACCEPTED and t.state[ts.HAS_FAR] == 0.0
-        assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(near)
-        assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx(far, abs=1e-6)
-        assert t.state[ts.TH] == pytest.approx(math.radians(45.0), abs=1e-9)
+    assert t.event == ts.ACCEPTED and t.state[ts.HAS_FAR] == 0.0
+    assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(near)
+    assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx(far, abs=1e-6)
+    assert t.state[ts.TH] == pytest.approx(math.radians(45.0), abs=1e-9)
+
+
+@pytest.mark.parametrize("swapped", [False, True])
+def test_a_corner_the_vehicle_is_over_runs_from_its_end_inside_the_view_to_where_the_line_leaves(swapped):
+    # the tracked line (a hook's next leg) enters the view at (-0.5, 0.0) and leaves it by the port
+    # side at (-1.0, 0.3). The piece seen runs from that exit to (0.6, 0.2), inside the view: the
+    # corner the vehicle is over (its first leg, under the vehicle, not seen). Its end on the line
+    # is nearer the line's entry (0.58 m) than the other (1.12 m), which made it a bend's near end
+    # with its far end at the corner; but it lies where the line leaves the view, so the pipe
+    # comes from the corner and the piece, leaving by the side, starts the line again
+    t = quiet_tracker()
+    pose = still_detections(t, (-1.0, 0.3, -0.5, 0.0))
+    assert t.state[ts.TH] == pytest.approx(math.atan2(-0.5, 0.3), abs=1e-9)
+    near, far = (0.6, 0.2), (-1.0, 0.3)
+    out = t.step(pose, True, (*near, *far) if swapped else (*far, *near))
+    assert t.event == ts.ACCEPTED and t.state[ts.HAS_FAR] == 0.0
+    assert (out[ts.OUT_X2], out[ts.OUT_Y_NEAR]) == pytest.approx(near)
+    assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx(far, abs=1e-6)
+    assert t.state[ts.TH] == pytest.approx(math.atan2(-1.6, 0.1), abs=1e-9)
+
+
+@pytest.mark.parametrize("off", [(-0.2, 3.0), (0.95, 1.5)])
+def test_a_piece_from_where_the_line_leaves_back_to_the_far_border_or_a_side_is_a_bend(off):
+    # the same line; the piece runs from its exit to the far border or the starboard side, where a
+    # pipe that left the view by the line's exit may come back in: a bend beyond the view, the end
+    # on the line the near one and the other the far end beyond the bend, as before
+    t = quiet_tracker()
+    pose = still_detections(t, (-1.0, 0.3, -0.5, 0.0))
+    out = t.step(pose, True, (*off, -1.0, 0.3))
+    assert t.event == ts.BEND
+    assert (out[ts.OUT_X1], out[ts.OUT_Y1]) == pytest.approx(off)

@@ -65,6 +65,10 @@ class TrackParams(NamedTuple):
     # ``border`` and a quarter of the 0.25-m pipe, as a half-buried pipe's visible half ends beside
     # its axis (docs/decisions.md, "Half buried at sharp turns")
     cross_border: float = 0.12
+    # m: an end on the line this near (along it) where the line leaves the view, at a side or the far
+    # border, is where the pipe leaves the view, no bend's near end (docs/decisions.md, "A corner
+    # the vehicle is over")
+    exit_reach: float = 0.3
 
 
 TRACK = TrackParams()
@@ -80,6 +84,7 @@ _NEAR_REACH, _EDGE_MISSES, _EDGE_PIECE, _UNSEARCHED_MISSES, _BEND_BEHIND, _CROSS
     _AT[n]
     for n in ("near_reach", "edge_misses", "edge_piece", "unsearched_misses", "bend_behind", "cross_border")
 )
+_EXIT_REACH = _AT["exit_reach"]
 
 # what the frame is to the tracker (track_step's ``frame``): searched by the detector in a clear
 # frame; searched in a murky one (below visibility.EDGE_CONTRAST: its misses are not of short
@@ -214,6 +219,29 @@ def _crossed(T, x1, y1, x2, y_near, border, behind, frame):
 
 
 @njit(cache=True)
+def _leaves_on_line(T, x1, y1, x2, y_near, hw, depth, border, inner, reach):
+    """Whether a piece with an end ``(x2, y_near)`` on the line, ``(x1, y1)`` off it, runs from the off end.
+
+    A bend's near end is where the pipe enters the view along the line. An end on the line at a side
+    or the far border (within ``border``, m), within ``reach`` (m, ``TrackParams.exit_reach``) of
+    where the line leaves the view and in the half of the line's piece in view nearer that exit, is
+    where the pipe leaves the view. If the end off the line lies inside the view (more than
+    ``inner``, m, from a side and the far border; a pipe that left by the line's exit may come back
+    in there), the pipe comes from it: a corner the vehicle is over, whose first leg the detector
+    did not follow under the vehicle (a half-buried hook), or a hook's first leg joining its next
+    leg, which the tracker took before the corner (docs/decisions.md, "A corner the vehicle is
+    over").
+    """
+    if min(hw - abs(x2), depth - y_near) > border or min(hw - abs(x1), depth - y1) <= inner:
+        return False
+    a, b = in_footprint(T[TH], T[D], -REACH, REACH, hw, depth)
+    if a > b:
+        return False
+    t = along(T[TH], x2, y_near)
+    return t > 0.5 * (a + b) and abs(t - b) < reach
+
+
+@njit(cache=True)
 def _start_line(T, x1, y1, x2, y_near, point_sd, hw, depth, border, mode):
     """The line through a detection, its direction chosen by ``mode`` (:func:`_reversed`)."""
     th, d, r_tt, r_td, r_dd = measured_line(x2, y_near, x1, y1, point_sd)
@@ -289,7 +317,11 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, frame=CLEAR_F
                 ex, ey = on_line(T[TH], T[D], t_in)
                 if math.hypot(x2 - ex, y_near - ey) < math.hypot(x1 - ex, y1 - ey):
                     taken = True
-                    if _crossed(T, x1, y1, x2, y_near, tp[_CROSS_BORDER], tp[_BEND_BEHIND], frame):
+                    if _crossed(
+                        T, x1, y1, x2, y_near, tp[_CROSS_BORDER], tp[_BEND_BEHIND], frame
+                    ) or _leaves_on_line(
+                        T, x1, y1, x2, y_near, hw, depth, border, tp[_CROSS_BORDER], tp[_EXIT_REACH]
+                    ):
                         # the pipe comes from the end off the line: the end on it is the far one
                         x1, y1, x2, y_near = x2, y_near, x1, y1
                         if min(hw - abs(x1), depth - y1) <= border:
