@@ -418,9 +418,7 @@ def test_a_hooks_far_end_behind_the_near_end_is_a_bend_unless_it_lies_on_the_nea
 
 @pytest.mark.parametrize("swapped", [False, True])
 @pytest.mark.parametrize("frame", [ts.CLEAR_FRAME, ts.UNSEARCHED_FRAME])
-def test_a_line_running_back_joined_from_the_near_border_is_where_the_pipe_comes_from(
-    frame, swapped
-):
+def test_a_line_running_back_joined_from_the_near_border_is_where_the_pipe_comes_from(frame, swapped):
     # the tracked line runs back towards the vehicle, from (0.2, 3.0) to the starboard side at
     # (1.0, 1.0) (a hook's next leg, as a sonar looking ahead sees it before the corner). The piece
     # seen now joins it at the side from under the vehicle, (0.0, 0.0): the first leg, where the pipe

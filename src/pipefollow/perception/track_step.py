@@ -63,7 +63,8 @@ class TrackParams(NamedTuple):
     bend_behind: float = 0.3
     # m: the end off the line of a piece the vehicle crosses lies this near the view's near border:
     # ``border`` and a quarter of the 0.25-m pipe, as a half-buried pipe's visible half ends beside
-    # its axis (docs/decisions.md, "Half buried at sharp turns")
+    # its axis (docs/decisions.md, "Half buried at sharp turns"); an end farther than this from the
+    # sides and the far border lies inside the view (``_leaves_on_line``)
     cross_border: float = 0.12
     # m: an end on the line this near (along it) where the line leaves the view, at a side or the far
     # border, is where the pipe leaves the view, no bend's near end (docs/decisions.md, "A corner

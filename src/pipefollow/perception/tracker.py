@@ -36,9 +36,13 @@ border and more than :attr:`TrackParams.bend_behind` behind the other along the 
 then the vehicle crosses the pipe where the line grazes the view's side, and the end off the
 line is the near one (``track_step._crossed``; in a frame left to the sonar, ``UNSEARCHED_FRAME``,
 also when the line runs back towards the vehicle, however far behind: a hook's next leg the
-imaging sonar showed before its corner reached the footprint);
-if the pipe leaves the view at the end on the line (a side or the far border), the line starts
-again from the piece seen, else that end corrects it.
+imaging sonar showed before its corner reached the footprint). The end off the line is the near
+one as well when the end on it lies where the line leaves the view by a side or the far border
+(within :attr:`TrackParams.exit_reach` of that exit, in the exit's half of the line's piece in
+view) and the other end inside the view (``track_step._leaves_on_line``): a bend's near end is
+where the pipe enters the view, so the pipe comes from that other end, a corner the vehicle is
+over. If the pipe leaves the view at the end on the line (a side or the far border), the line
+starts again from the piece seen, else that end corrects it.
 Otherwise the detection is rejected: it starts (or feeds) a candidate line that replaces the line when seen
 :attr:`TrackParams.confirm` times, and at once if it starts where the line enters the view (an
 arc the line cannot follow), ends where the far end beyond a bend was seen (the next leg), or if
