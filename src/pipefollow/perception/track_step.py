@@ -220,26 +220,28 @@ def _crossed(T, x1, y1, x2, y_near, border, behind, frame):
 
 
 @njit(cache=True)
-def _leaves_on_line(T, x1, y1, x2, y_near, hw, depth, border, inner, reach):
+def _leaves_on_line(T, x1, y1, x2, y_near, a, b, hw, depth, tp):
     """Whether a piece with an end ``(x2, y_near)`` on the line, ``(x1, y1)`` off it, runs from the off end.
 
+    ``[a, b]`` is the line's part in the footprint along it (:func:`in_footprint`; ``a > b``: none),
+    ``tp`` the settings (:func:`pack_params`).
+
     A bend's near end is where the pipe enters the view along the line. An end on the line at a side
-    or the far border (within ``border``, m), within ``reach`` (m, ``TrackParams.exit_reach``) of
-    where the line leaves the view and in the half of the line's piece in view nearer that exit, is
-    where the pipe leaves the view. If the end off the line lies inside the view (more than
-    ``inner``, m, from a side and the far border; a pipe that left by the line's exit may come back
-    in there), the pipe comes from it: a corner the vehicle is over, whose first leg the detector
-    did not follow under the vehicle (a half-buried hook), or a hook's first leg joining its next
-    leg, which the tracker took before the corner (docs/decisions.md, "A corner the vehicle is
-    over").
+    or the far border (within ``TrackParams.border``), within ``TrackParams.exit_reach`` of where
+    the line leaves the view and in the half of the line's piece in view nearer that exit, is where
+    the pipe leaves the view. If the end off the line lies inside the view (more than
+    ``TrackParams.cross_border`` from a side and the far border; a pipe that left by the line's exit
+    may come back in there), the pipe comes from it: a corner the vehicle is over, whose first leg
+    the detector did not follow under the vehicle (a half-buried hook), or a hook's first leg
+    joining its next leg, which the tracker took before the corner (docs/decisions.md, "A corner
+    the vehicle is over").
     """
-    if min(hw - abs(x2), depth - y_near) > border or min(hw - abs(x1), depth - y1) <= inner:
+    if a > b or min(hw - abs(x2), depth - y_near) > tp[_BORDER]:
         return False
-    a, b = in_footprint(T[TH], T[D], -REACH, REACH, hw, depth)
-    if a > b:
+    if min(hw - abs(x1), depth - y1) <= tp[_CROSS_BORDER]:
         return False
     t = along(T[TH], x2, y_near)
-    return t > 0.5 * (a + b) and abs(t - b) < reach
+    return t > 0.5 * (a + b) and abs(t - b) < tp[_EXIT_REACH]
 
 
 @njit(cache=True)
@@ -314,15 +316,13 @@ def track_step(T, found, det, motion, nav_var, tp, hw, depth, out, frame=CLEAR_F
                 if ok_b:
                     x1, y1, x2, y_near = x2, y_near, x1, y1
                     nu_a, j_a, s_a = nu_b, j_b, s_b
-                t_in, _ = in_footprint(T[TH], T[D], -REACH, REACH, hw, depth)
+                t_in, t_out = in_footprint(T[TH], T[D], -REACH, REACH, hw, depth)
                 ex, ey = on_line(T[TH], T[D], t_in)
                 if math.hypot(x2 - ex, y_near - ey) < math.hypot(x1 - ex, y1 - ey):
                     taken = True
                     if _crossed(
                         T, x1, y1, x2, y_near, tp[_CROSS_BORDER], tp[_BEND_BEHIND], frame
-                    ) or _leaves_on_line(
-                        T, x1, y1, x2, y_near, hw, depth, border, tp[_CROSS_BORDER], tp[_EXIT_REACH]
-                    ):
+                    ) or _leaves_on_line(T, x1, y1, x2, y_near, t_in, t_out, hw, depth, tp):
                         # the pipe comes from the end off the line: the end on it is the far one
                         x1, y1, x2, y_near = x2, y_near, x1, y1
                         if min(hw - abs(x1), depth - y1) <= border:
